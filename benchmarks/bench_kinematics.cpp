@@ -1,0 +1,165 @@
+// Speed of the header-only core on the default robot at the default accuracy.
+//   build/benchmarks/bench_kinematics [--benchmark_repetitions=5 --benchmark_report_aggregates_only]
+#include <random>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "pcr/kinematics.hpp"
+
+namespace {
+
+using namespace pcr;
+
+JointVector random_joints(std::mt19937& rng, const RobotParams<double>& robot) {
+  JointVector q(robot.num_limbs);
+  for (int i = 0; i < robot.num_limbs; ++i) {
+    std::uniform_real_distribution<double> u(robot.limb(i).q_min, robot.limb(i).q_max);
+    q(i) = u(rng);
+  }
+  return q;
+}
+
+/// Converged solutions spread over the central part of the stroke box.
+std::vector<ForwardSolution> reachable_solutions(int count) {
+  const RobotParams<double> robot = femto_3pf();
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> u(-0.004, 0.004);
+  std::vector<ForwardSolution> out;
+  while (static_cast<int>(out.size()) < count) {
+    JointVector q(3);
+    q << u(rng), u(rng), u(rng);
+    ForwardSolution fk = forward_kinematics(robot, q);
+    if (fk.summary.converged() && fk.summary.max_strain < 0.01) out.push_back(fk);
+  }
+  return out;
+}
+
+void BM_ResidualOnly(benchmark::State& state) {
+  const RobotParams<double> robot = femto_3pf();
+  const ForwardSolution fk = reachable_solutions(1)[0];
+  ShootingPoint<double> point;
+  point.pose = fk.pose;
+  for (int i = 0; i < 3; ++i) {
+    point.q[i] = fk.q(i);
+    point.wrenches[i] = fk.wrenches[i];
+  }
+  const ShootingScale scale = shooting_scale(robot);
+  ResidualVector<double> r;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        shooting_residual(robot, point, PlatformLoad<double>(), scale, SolverOptions().rod_steps, r));
+  }
+}
+BENCHMARK(BM_ResidualOnly);
+
+void BM_ResidualAndJacobian(benchmark::State& state) {
+  const RobotParams<double> robot = femto_3pf();
+  const ForwardSolution fk = reachable_solutions(1)[0];
+  ShootingPoint<double> point;
+  point.pose = fk.pose;
+  for (int i = 0; i < 3; ++i) {
+    point.q[i] = fk.q(i);
+    point.wrenches[i] = fk.wrenches[i];
+  }
+  const ShootingScale scale = shooting_scale(robot);
+  ResidualVector<double> r;
+  ShootingMatrix partials;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(shooting_residual(robot, point, PlatformLoad<double>(), scale,
+                                               SolverOptions().rod_steps, r, &partials));
+  }
+}
+BENCHMARK(BM_ResidualAndJacobian);
+
+// FK from the solution of joints 10 um away (each joint), as in a control loop.
+void BM_ForwardWarm(benchmark::State& state) {
+  const RobotParams<double> robot = femto_3pf();
+  const std::vector<ForwardSolution> solutions = reachable_solutions(64);
+  std::size_t k = 0;
+  long iterations = 0;
+  for (auto _ : state) {
+    const ForwardSolution& warm = solutions[k++ % solutions.size()];
+    JointVector q = warm.q;
+    q.array() += 10e-6;
+    const ForwardSolution fk = forward_kinematics(robot, q, warm);
+    iterations += fk.summary.iterations;
+    benchmark::DoNotOptimize(fk.pose.x);
+  }
+  state.counters["newton_iterations"] =
+      benchmark::Counter(static_cast<double>(iterations), benchmark::Counter::kAvgIterations);
+}
+BENCHMARK(BM_ForwardWarm);
+
+// IK from the solution of the pose 10 um / 1 mrad away.
+void BM_InverseWarm(benchmark::State& state) {
+  const RobotParams<double> robot = femto_3pf();
+  const std::vector<ForwardSolution> solutions = reachable_solutions(64);
+  std::vector<InverseSolution> warm;
+  for (const ForwardSolution& fk : solutions) warm.push_back(as_inverse_warm_start(fk));
+  std::size_t k = 0;
+  long iterations = 0;
+  for (auto _ : state) {
+    const InverseSolution& start = warm[k++ % warm.size()];
+    const Pose2<double> target{start.pose.x + 7.07e-6, start.pose.y + 7.07e-6,
+                               start.pose.theta + 1e-3};
+    const InverseSolution ik = inverse_kinematics(robot, target, start);
+    iterations += ik.summary.iterations;
+    benchmark::DoNotOptimize(ik.q(0));
+  }
+  state.counters["newton_iterations"] =
+      benchmark::Counter(static_cast<double>(iterations), benchmark::Counter::kAvgIterations);
+}
+BENCHMARK(BM_InverseWarm);
+
+void BM_ForwardCold(benchmark::State& state) {
+  const RobotParams<double> robot = femto_3pf();
+  std::mt19937 rng(1);
+  for (auto _ : state) {
+    const ForwardSolution fk = forward_kinematics(robot, random_joints(rng, robot));
+    benchmark::DoNotOptimize(fk.pose.x);
+  }
+}
+BENCHMARK(BM_ForwardCold);
+
+void BM_InverseCold(benchmark::State& state) {
+  const RobotParams<double> robot = femto_3pf();
+  const std::vector<ForwardSolution> solutions = reachable_solutions(64);
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const InverseSolution ik = inverse_kinematics(robot, solutions[k++ % solutions.size()].pose);
+    benchmark::DoNotOptimize(ik.q(0));
+  }
+}
+BENCHMARK(BM_InverseCold);
+
+// Outcome of cold FK over 1000 random configurations of the whole stroke box.
+void BM_ColdSurvey(benchmark::State& state) {
+  const RobotParams<double> robot = femto_3pf();
+  double direct = 0, continued = 0, singular = 0, over_strain = 0, failed = 0;
+  for (auto _ : state) {
+    std::mt19937 rng(2021);
+    direct = continued = singular = over_strain = failed = 0;
+    for (int k = 0; k < 1000; ++k) {
+      const ForwardSolution fk = forward_kinematics(robot, random_joints(rng, robot));
+      if (fk.summary.converged()) {
+        (fk.summary.continuation_steps == 0 ? direct : continued) += 1;
+        if (fk.summary.max_strain > 0.01) over_strain += 1;
+      } else if (fk.summary.status == SolveStatus::kSingular) {
+        singular += 1;
+      } else {
+        failed += 1;
+      }
+    }
+  }
+  state.counters["direct"] = direct;
+  state.counters["continuation"] = continued;
+  state.counters["converged_over_1pct_strain"] = over_strain;
+  state.counters["singular"] = singular;
+  state.counters["other_failures"] = failed;
+}
+BENCHMARK(BM_ColdSurvey)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,564 @@
+#pragma once
+// Forward and inverse kinematics by Newton shooting (Mauze et al. 2021, Section 2.2).
+//
+// Real-time safe: no heap allocation, no exceptions, a bounded number of iterations. Numerical
+// outcomes are reported in a SolverSummary, never thrown.
+//
+//   FK: unknowns = proximal wrenches (3n) + platform pose (3), inputs = joints q (n).
+//   IK: unknowns = proximal wrenches (3n) + joints (n) [+ theta when n = 2], inputs = pose.
+// IK is square for n = 3 (full pose) and for n = 2 (x, y imposed, theta free); other n are refused.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include "pcr/robot.hpp"
+#include "pcr/shooting.hpp"
+
+namespace pcr {
+
+enum class SolveStatus {
+  kConverged,      ///< the scaled residual is below the tolerance
+  kMaxIterations,  ///< the iteration or continuation budget ran out
+  kSingular,       ///< no solution on this branch: the Jacobian became singular along the path
+  kNonFinite,      ///< the residual became NaN or infinite
+  kOutOfRange,     ///< IK converged, but a joint value lies outside its stroke
+  kUnsupported,    ///< the request is not a square problem (IK with n > 3 limbs)
+  kInvalidInput,   ///< wrong sizes, NaN inputs, or a robot with fewer than 2 / more than kMaxLimbs limbs
+};
+
+inline const char* to_string(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::kConverged: return "converged";
+    case SolveStatus::kMaxIterations: return "max_iterations";
+    case SolveStatus::kSingular: return "singular";
+    case SolveStatus::kNonFinite: return "non_finite";
+    case SolveStatus::kOutOfRange: return "out_of_range";
+    case SolveStatus::kUnsupported: return "unsupported";
+    case SolveStatus::kInvalidInput: return "invalid_input";
+  }
+  return "unknown";
+}
+
+struct SolverOptions {
+  /// RK4 steps per rod. 64 keeps the platform pose within 1 nm / 1 urad of the converged ODE
+  /// solution for bending strains up to 1% (tests/test_reference.cpp measures it).
+  int rod_steps = 64;
+  /// Newton iterations per solve (each sub-solve of a continuation has its own budget).
+  int max_iterations = 20;
+  /// Convergence: max-norm of the scaled residual (lengths / L, forces / (EI / L^2)).
+  double tolerance = 1e-12;
+  /// Step halvings of the backtracking line search.
+  int max_line_search = 12;
+  /// When a direct solve fails, step the input from the last solution in smaller increments.
+  bool continuation = true;
+  /// Sub-solves a continuation may use in total.
+  int max_continuation_steps = 64;
+  /// Smallest continuation increment, as a fraction of the whole path.
+  double min_continuation_step = 1.0 / 1024.0;
+};
+
+struct SolverSummary {
+  SolveStatus status = SolveStatus::kMaxIterations;
+  int iterations = 0;             ///< Newton iterations, all sub-solves included
+  int residual_evaluations = 0;   ///< residual (+ Jacobian) evaluations
+  int continuation_steps = 0;     ///< sub-solves of the continuation; 0 for a direct solve
+  double initial_residual_norm = std::numeric_limits<double>::quiet_NaN();  ///< scaled max-norm
+  double final_residual_norm = std::numeric_limits<double>::quiet_NaN();    ///< scaled max-norm
+  double max_strain = std::numeric_limits<double>::quiet_NaN();  ///< max |kappa| d / 2 over the rods
+  bool converged() const { return status == SolveStatus::kConverged; }
+};
+
+struct ForwardSolution {
+  JointVector q;                                     ///< the joints solved for (m)
+  Pose2<double> pose;                                ///< platform pose ^W T_P
+  std::array<Wrench<double>, kMaxLimbs> wrenches{};  ///< proximal wrench (n, m)(0) of each rod
+  SolverSummary summary;
+};
+
+struct InverseSolution {
+  Pose2<double> pose;                                ///< the pose (theta solved for when n = 2)
+  JointVector q;                                     ///< joint values (m)
+  std::array<Wrench<double>, kMaxLimbs> wrenches{};  ///< proximal wrench (n, m)(0) of each rod
+  SolverSummary summary;
+};
+
+namespace internal {
+
+inline bool all_finite(const ShootingVector& v) { return v.allFinite(); }
+
+/// One shooting problem (FK or IK) along a straight input path u(t) = u0 + t (u1 - u0).
+class ShootingProblem {
+ public:
+  enum class Kind { kForward, kInverse };
+
+  ShootingProblem(Kind kind, const RobotParams<double>& robot, const PlatformLoad<double>& load,
+                  const SolverOptions& options)
+      : kind_(kind), robot_(robot), load_(load), options_(options),
+        scale_(shooting_scale(robot)), n_(robot.num_limbs) {}
+
+  int size() const { return kind_ == Kind::kForward ? 3 * n_ + 3 : 4 * n_ + (n_ == 2 ? 1 : 0); }
+  int num_inputs() const { return kind_ == Kind::kForward ? n_ : 3; }
+  const ShootingScale& scale() const { return scale_; }
+
+  void set_input(const ShootingVector& u) { input_ = u; }
+
+  /// Newton homotopy: solve r(z) = offset instead of r(z) = 0 (empty offset: none).
+  void set_residual_offset(const ShootingVector& offset) { offset_ = offset; }
+
+  /// Unknowns in scaled units from physical values.
+  ShootingVector pack(const ShootingPoint<double>& p) const {
+    ShootingVector z(size());
+    for (int i = 0; i < n_; ++i) {
+      z(3 * i + 0) = p.wrenches[i].nx / scale_.force;
+      z(3 * i + 1) = p.wrenches[i].ny / scale_.force;
+      z(3 * i + 2) = p.wrenches[i].m / scale_.moment();
+    }
+    if (kind_ == Kind::kForward) {
+      z(3 * n_ + 0) = p.pose.x / scale_.length;
+      z(3 * n_ + 1) = p.pose.y / scale_.length;
+      z(3 * n_ + 2) = p.pose.theta;
+    } else {
+      for (int i = 0; i < n_; ++i) z(3 * n_ + i) = p.q[i] / scale_.length;
+      if (n_ == 2) z(4 * n_) = p.pose.theta;
+    }
+    return z;
+  }
+
+  ShootingPoint<double> unpack(const ShootingVector& z) const {
+    ShootingPoint<double> p;
+    for (int i = 0; i < n_; ++i) {
+      p.wrenches[i] = Wrench<double>{z(3 * i) * scale_.force, z(3 * i + 1) * scale_.force,
+                                     z(3 * i + 2) * scale_.moment()};
+    }
+    if (kind_ == Kind::kForward) {
+      for (int i = 0; i < n_; ++i) p.q[i] = input_(i);
+      p.pose = Pose2<double>{z(3 * n_) * scale_.length, z(3 * n_ + 1) * scale_.length,
+                             z(3 * n_ + 2)};
+    } else {
+      for (int i = 0; i < n_; ++i) p.q[i] = z(3 * n_ + i) * scale_.length;
+      p.pose = Pose2<double>{input_(0), input_(1), n_ == 2 ? z(4 * n_) : input_(2)};
+    }
+    return p;
+  }
+
+  /// Residual and, on request, the Jacobian w.r.t. the scaled unknowns. Returns max strain.
+  double evaluate(const ShootingVector& z, ShootingVector& r, JacobianMatrix* jacobian) const {
+    const ShootingPoint<double> p = unpack(z);
+    ResidualVector<double> res;
+    const double strain = shooting_residual(robot_, p, load_, scale_, options_.rod_steps, res,
+                                            jacobian ? &partials_ : nullptr);
+    r = res;
+    if (offset_.size() == r.size()) r -= offset_;
+    if (jacobian) {
+      const int m = 3 * n_ + 3;
+      if (kind_ == Kind::kForward) {
+        *jacobian = partials_.leftCols(m);
+      } else {
+        jacobian->resize(m, size());
+        jacobian->leftCols(3 * n_) = partials_.leftCols(3 * n_);
+        jacobian->middleCols(3 * n_, n_) = partials_.middleCols(3 * n_ + 3, n_);
+        if (n_ == 2) jacobian->col(4 * n_) = partials_.col(3 * n_ + 2);
+      }
+    }
+    return strain;
+  }
+
+  /// d residual / dt along the input path, for the continuation's tangent predictor.
+  ShootingVector input_derivative(const ShootingVector& du) const {
+    const int m = 3 * n_ + 3;
+    if (kind_ == Kind::kForward) return partials_.middleCols(3 * n_ + 3, n_) * (du / scale_.length);
+    ShootingVector d = partials_.col(3 * n_) * (du(0) / scale_.length) +
+                       partials_.col(3 * n_ + 1) * (du(1) / scale_.length);
+    if (n_ != 2) d += partials_.col(3 * n_ + 2) * du(2);
+    return d.head(m);
+  }
+
+ private:
+  Kind kind_;
+  const RobotParams<double>& robot_;
+  const PlatformLoad<double>& load_;
+  const SolverOptions& options_;
+  ShootingScale scale_;
+  int n_;
+  ShootingVector input_;
+  ShootingVector offset_;
+  mutable ShootingMatrix partials_;
+};
+
+inline double max_norm(const ShootingVector& r) { return r.lpNorm<Eigen::Infinity>(); }
+
+struct NewtonResult {
+  SolveStatus status = SolveStatus::kMaxIterations;
+  double initial_norm = std::numeric_limits<double>::quiet_NaN();
+  double final_norm = std::numeric_limits<double>::quiet_NaN();
+  double max_strain = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Damped Newton from z (updated in place). A stall at a non-zero minimum of |r| means the
+/// Jacobian is singular there (J^T r = 0 with r != 0): reported as kSingular.
+inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector& z,
+                                 const SolverOptions& options, SolverSummary& summary) {
+  NewtonResult result;
+  ShootingVector r, r_trial, z_trial, step;
+  JacobianMatrix J, J_trial;
+  result.max_strain = problem.evaluate(z, r, &J);
+  ++summary.residual_evaluations;
+  double norm = max_norm(r);
+  result.initial_norm = norm;
+  result.final_norm = norm;
+  if (!std::isfinite(norm)) {
+    result.status = SolveStatus::kNonFinite;
+    return result;
+  }
+  Eigen::PartialPivLU<JacobianMatrix> lu;
+  for (int iter = 0; iter <= options.max_iterations; ++iter) {
+    if (norm <= options.tolerance) {
+      result.status = SolveStatus::kConverged;
+      return result;
+    }
+    if (iter == options.max_iterations) break;
+    ++summary.iterations;
+    lu.compute(J);
+    if (!(lu.rcond() > 1e-14)) {
+      result.status = SolveStatus::kSingular;
+      return result;
+    }
+    step = -lu.solve(r);
+    // Backtracking on the Euclidean norm, whose decrease the Newton direction guarantees.
+    const double norm2 = r.squaredNorm();
+    double t = 1.0;
+    bool accepted = false;
+    double strain = result.max_strain;
+    for (int ls = 0; ls <= options.max_line_search; ++ls, t *= 0.5) {
+      z_trial = z + t * step;
+      strain = problem.evaluate(z_trial, r_trial, &J_trial);
+      ++summary.residual_evaluations;
+      const double trial2 = r_trial.squaredNorm();
+      if (std::isfinite(trial2) && trial2 <= (1.0 - 1e-4 * t) * norm2) {
+        accepted = true;
+        break;
+      }
+      // Rounding floor: a full step that cannot decrease an already tiny residual.
+      if (std::isfinite(trial2) && ls == 0 && max_norm(r_trial) <= options.tolerance) {
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) {
+      // No descent along the Newton direction: a minimum of |r| with r != 0 has J^T r = 0.
+      const ShootingVector gradient = J.transpose() * r;
+      const double scale = J.norm() * r.norm();
+      result.status = gradient.norm() <= 1e-6 * scale || lu.rcond() < 1e-8
+                          ? SolveStatus::kSingular
+                          : SolveStatus::kMaxIterations;
+      return result;
+    }
+    z = z_trial;
+    r = r_trial;
+    J = J_trial;
+    norm = max_norm(r);
+    result.final_norm = norm;
+    result.max_strain = strain;
+  }
+  result.status = SolveStatus::kMaxIterations;
+  return result;
+}
+
+/// Reciprocal condition number of the Jacobian at z (for the singularity test of a path).
+inline double jacobian_rcond(const ShootingProblem& problem, const ShootingVector& z,
+                             SolverSummary& summary) {
+  ShootingVector r;
+  JacobianMatrix J;
+  problem.evaluate(z, r, &J);
+  ++summary.residual_evaluations;
+  const Eigen::PartialPivLU<JacobianMatrix> lu(J);
+  const double rcond = lu.rcond();
+  return std::isfinite(rcond) ? rcond : 0.0;
+}
+
+/// Solves at the end of the input path from a solution z0 at its start: directly, then by
+/// continuation with a secant predictor and step halving. When the continuation stalls, the
+/// Jacobian's conditioning along the solved part of the path tells a singularity ahead (no
+/// solution on this branch: rcond^2, linear in t near a fold, extrapolates to zero before the
+/// end of the path) from a plain failure to converge.
+inline SolveStatus solve_along_path(ShootingProblem& problem, const ShootingVector& u0,
+                                    const ShootingVector& u1, ShootingVector& z,
+                                    const SolverOptions& options, SolverSummary& summary) {
+  const ShootingVector z0 = z;
+  problem.set_input(u1);
+  NewtonResult direct = newton_solve(problem, z, options, summary);
+  summary.initial_residual_norm = direct.initial_norm;
+  summary.final_residual_norm = direct.final_norm;
+  summary.max_strain = direct.max_strain;
+  if (direct.status == SolveStatus::kConverged || !options.continuation) return direct.status;
+
+  ShootingVector z_last = z0, z_prev = z0;
+  double t = 0.0, t_prev = 0.0, dt = 0.5;
+  // (t, rcond) at the last two solved points of the path.
+  problem.set_input(u0);
+  double rc_last = jacobian_rcond(problem, z0, summary), rc_prev = rc_last;
+  double t_rc_last = 0.0, t_rc_prev = 0.0;
+  const auto singular_ahead = [&]() {
+    if (rc_last <= 1e-12) return true;
+    if (t_rc_last <= t_rc_prev) return false;
+    const double slope = (rc_last * rc_last - rc_prev * rc_prev) / (t_rc_last - t_rc_prev);
+    return slope < 0.0 && t_rc_last - rc_last * rc_last / slope <= 1.0;
+  };
+  while (t < 1.0) {
+    if (summary.continuation_steps >= options.max_continuation_steps) {
+      return singular_ahead() ? SolveStatus::kSingular : SolveStatus::kMaxIterations;
+    }
+    ++summary.continuation_steps;
+    const double t_next = std::min(1.0, t + dt);
+    problem.set_input(u0 + t_next * (u1 - u0));
+    // Secant predictor from the last two solutions on the path.
+    z = z_last;
+    if (t > t_prev) z += (z_last - z_prev) * ((t_next - t) / (t - t_prev));
+    NewtonResult sub = newton_solve(problem, z, options, summary);
+    if (sub.status == SolveStatus::kConverged) {
+      z_prev = z_last;
+      t_prev = t;
+      z_last = z;
+      t = t_next;
+      dt = std::min(2.0 * dt, 0.5);
+      summary.final_residual_norm = sub.final_norm;
+      summary.max_strain = sub.max_strain;
+      if (t < 1.0) {
+        rc_prev = rc_last;
+        t_rc_prev = t_rc_last;
+        rc_last = jacobian_rcond(problem, z, summary);
+        t_rc_last = t;
+      }
+      continue;
+    }
+    dt *= 0.5;
+    if (dt < options.min_continuation_step) {
+      z = z_last;
+      problem.set_input(u0 + t * (u1 - u0));
+      summary.final_residual_norm = sub.final_norm;
+      return singular_ahead() || sub.status == SolveStatus::kSingular ? SolveStatus::kSingular
+                                                                      : sub.status;
+    }
+  }
+  return SolveStatus::kConverged;
+}
+
+inline bool valid_robot(const RobotParams<double>& robot) {
+  return robot.num_limbs >= 2 && robot.num_limbs <= kMaxLimbs;
+}
+
+template <class Solution>
+void copy_wrenches(const ShootingPoint<double>& p, int n, Solution& solution) {
+  for (int i = 0; i < n; ++i) solution.wrenches[i] = p.wrenches[i];
+}
+
+/// The solution at q = 0 from the unloaded straight guess (exact for a stress-free robot).
+inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& options,
+                                    SolverSummary& summary, SolveStatus& status) {
+  ShootingVector u = ShootingVector::Zero(fk.num_inputs());
+  fk.set_input(u);
+  ShootingVector z = ShootingVector::Zero(fk.size());
+  NewtonResult home = newton_solve(fk, z, options, summary);
+  summary.initial_residual_norm = home.initial_norm;
+  if (home.status != SolveStatus::kConverged && options.continuation) {
+    // Newton homotopy from the straight guess z0: r(z) = (1 - t) r(z0), t from 0 to 1.
+    ShootingVector r0, z_last = ShootingVector::Zero(fk.size());
+    fk.evaluate(z_last, r0, nullptr);
+    double t = 0.0, dt = 0.25;
+    while (t < 1.0 && summary.continuation_steps < options.max_continuation_steps &&
+           dt >= options.min_continuation_step) {
+      ++summary.continuation_steps;
+      const double t_next = std::min(1.0, t + dt);
+      fk.set_residual_offset((1.0 - t_next) * r0);
+      z = z_last;
+      home = newton_solve(fk, z, options, summary);
+      if (home.status == SolveStatus::kConverged) {
+        z_last = z;
+        t = t_next;
+        dt = std::min(2.0 * dt, 0.5);
+      } else {
+        dt *= 0.5;
+      }
+    }
+    fk.set_residual_offset(ShootingVector());
+    z = z_last;
+    if (t < 1.0 && home.status == SolveStatus::kConverged) home.status = SolveStatus::kMaxIterations;
+  }
+  status = home.status;
+  summary.final_residual_norm = home.final_norm;
+  summary.max_strain = home.max_strain;
+  return z;
+}
+
+}  // namespace internal
+
+/// Forward kinematics warm-started from a previous solution (the normal case in a control loop).
+inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
+                                          const ForwardSolution& warm_start,
+                                          const SolverOptions& options = SolverOptions(),
+                                          const PlatformLoad<double>& load = PlatformLoad<double>()) {
+  using internal::ShootingProblem;
+  ForwardSolution solution;
+  solution.q = q;
+  if (!internal::valid_robot(robot) || q.size() != robot.num_limbs || !q.allFinite() ||
+      warm_start.q.size() != robot.num_limbs) {
+    solution.summary.status = SolveStatus::kInvalidInput;
+    return solution;
+  }
+  const int n = robot.num_limbs;
+  ShootingProblem problem(ShootingProblem::Kind::kForward, robot, load, options);
+  ShootingPoint<double> start;
+  start.pose = warm_start.pose;
+  for (int i = 0; i < n; ++i) {
+    start.q[i] = warm_start.q(i);
+    start.wrenches[i] = warm_start.wrenches[i];
+  }
+  ShootingVector u0 = warm_start.q, u1 = q;
+  problem.set_input(u0);
+  ShootingVector z = problem.pack(start);
+  solution.summary.status =
+      internal::solve_along_path(problem, u0, u1, z, options, solution.summary);
+  // On failure this is the last solved point of the path, with its joints.
+  const ShootingPoint<double> p = problem.unpack(z);
+  for (int i = 0; i < n; ++i) solution.q(i) = p.q[i];
+  solution.pose = p.pose;
+  internal::copy_wrenches(p, n, solution);
+  return solution;
+}
+
+/// The home solution: q = 0, solved from the straight, unloaded guess.
+inline ForwardSolution home_solution(const RobotParams<double>& robot,
+                                     const SolverOptions& options = SolverOptions(),
+                                     const PlatformLoad<double>& load = PlatformLoad<double>()) {
+  ForwardSolution home;
+  if (!internal::valid_robot(robot)) {
+    home.summary.status = SolveStatus::kInvalidInput;
+    return home;
+  }
+  internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load,
+                                    options);
+  SolveStatus status;
+  ShootingVector z = internal::home_unknowns(problem, options, home.summary, status);
+  home.summary.status = status;
+  home.q = JointVector::Zero(robot.num_limbs);
+  const ShootingPoint<double> p = problem.unpack(z);
+  home.pose = p.pose;
+  internal::copy_wrenches(p, robot.num_limbs, home);
+  return home;
+}
+
+/// Forward kinematics from a cold start: the home solution, then a (continued) path to q.
+inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
+                                          const SolverOptions& options = SolverOptions(),
+                                          const PlatformLoad<double>& load = PlatformLoad<double>()) {
+  ForwardSolution home = home_solution(robot, options, load);
+  if (!home.summary.converged()) {
+    home.q = q;
+    return home;
+  }
+  ForwardSolution solution = forward_kinematics(robot, q, home, options, load);
+  solution.summary.iterations += home.summary.iterations;
+  solution.summary.residual_evaluations += home.summary.residual_evaluations;
+  return solution;
+}
+
+/// Inverse kinematics warm-started from a previous solution. For n = 2 only x and y of `pose`
+/// are imposed and theta is solved for.
+inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
+                                          const Pose2<double>& pose,
+                                          const InverseSolution& warm_start,
+                                          const SolverOptions& options = SolverOptions(),
+                                          const PlatformLoad<double>& load = PlatformLoad<double>()) {
+  using internal::ShootingProblem;
+  InverseSolution solution;
+  solution.pose = pose;
+  const int n = robot.num_limbs;
+  if (!internal::valid_robot(robot) || warm_start.q.size() != n ||
+      !std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta)) {
+    solution.summary.status = SolveStatus::kInvalidInput;
+    return solution;
+  }
+  if (n > 3) {
+    solution.summary.status = SolveStatus::kUnsupported;
+    return solution;
+  }
+  ShootingProblem problem(ShootingProblem::Kind::kInverse, robot, load, options);
+  ShootingPoint<double> start;
+  start.pose = warm_start.pose;
+  for (int i = 0; i < n; ++i) {
+    start.q[i] = warm_start.q(i);
+    start.wrenches[i] = warm_start.wrenches[i];
+  }
+  ShootingVector u0(3), u1(3);
+  u0 << warm_start.pose.x, warm_start.pose.y, warm_start.pose.theta;
+  u1 << pose.x, pose.y, n == 2 ? warm_start.pose.theta : pose.theta;
+  problem.set_input(u0);
+  ShootingVector z = problem.pack(start);
+  SolveStatus status = internal::solve_along_path(problem, u0, u1, z, options, solution.summary);
+  const ShootingPoint<double> p = problem.unpack(z);
+  solution.pose = p.pose;
+  solution.q = JointVector(n);
+  for (int i = 0; i < n; ++i) solution.q(i) = p.q[i];
+  internal::copy_wrenches(p, n, solution);
+  if (status == SolveStatus::kConverged) {
+    for (int i = 0; i < n; ++i) {
+      if (p.q[i] < robot.limb(i).q_min || p.q[i] > robot.limb(i).q_max) {
+        status = SolveStatus::kOutOfRange;
+      }
+    }
+  }
+  solution.summary.status = status;
+  return solution;
+}
+
+/// Inverse kinematics from a cold start: from the home solution along a straight pose path.
+inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
+                                          const Pose2<double>& pose,
+                                          const SolverOptions& options = SolverOptions(),
+                                          const PlatformLoad<double>& load = PlatformLoad<double>()) {
+  InverseSolution warm;
+  const ForwardSolution home = home_solution(robot, options, load);
+  if (!home.summary.converged()) {
+    warm.summary = home.summary;
+    warm.pose = pose;
+    return warm;
+  }
+  warm.pose = home.pose;
+  warm.q = home.q;
+  warm.wrenches = home.wrenches;
+  InverseSolution solution = inverse_kinematics(robot, pose, warm, options, load);
+  solution.summary.iterations += home.summary.iterations;
+  solution.summary.residual_evaluations += home.summary.residual_evaluations;
+  return solution;
+}
+
+/// Inverse kinematics warm-started from a forward solution (same unknowns, other inputs).
+inline InverseSolution as_inverse_warm_start(const ForwardSolution& fk) {
+  InverseSolution warm;
+  warm.pose = fk.pose;
+  warm.q = fk.q;
+  warm.wrenches = fk.wrenches;
+  warm.summary = fk.summary;
+  return warm;
+}
+
+/// Calls visit(limb, s, RodState) along every rod of a solved configuration (for plots, strain).
+template <class Visitor>
+void visit_rod_shapes(const RobotParams<double>& robot, const JointVector& q,
+                      const std::array<Wrench<double>, kMaxLimbs>& wrenches, int rod_steps,
+                      Visitor&& visit) {
+  for (int i = 0; i < robot.num_limbs; ++i) {
+    const LimbParams<double>& limb = robot.limb(i);
+    const Vector2<double> start = limb.proximal_position(q(i));
+    const RodState<double> proximal{start.x(), start.y(), limb.alpha, wrenches[i].nx,
+                                    wrenches[i].ny, wrenches[i].m};
+    sample_rod(proximal, limb.bending_stiffness(), limb.length, rod_steps,
+               [&](double s, const RodState<double>& state) { visit(i, s, state); });
+  }
+}
+
+}  // namespace pcr

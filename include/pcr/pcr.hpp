@@ -1,0 +1,10 @@
+#pragma once
+// Umbrella header of the header-only core (Eigen only).
+#include "pcr/kinematics.hpp"
+#include "pcr/robot.hpp"
+#include "pcr/rod.hpp"
+#include "pcr/scalar_traits.hpp"
+#include "pcr/se2.hpp"
+#include "pcr/shooting.hpp"
+#include "pcr/implicit_kinematics.hpp"
+#include "pcr/parameters.hpp"

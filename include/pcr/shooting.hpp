@@ -1,0 +1,186 @@
+#pragma once
+// The shooting residual of a planar PCR: closure of every rod on its distal clamp (Eq. 2) and the
+// static equilibrium of the platform (Eq. 4), 3n + 3 equations, templated on the scalar.
+//
+// Unknowns and residuals are scaled so that Newton sees numbers of order one: lengths by the mean
+// rod length L, forces by F = EI / L^2 (mean EI), moments by F L.
+
+#include <array>
+#include <cmath>
+
+#include <Eigen/Core>
+
+#include "pcr/robot.hpp"
+#include "pcr/rod.hpp"
+#include "pcr/scalar_traits.hpp"
+#include "pcr/se2.hpp"
+
+namespace pcr {
+
+inline constexpr int kMaxResiduals = 3 * kMaxLimbs + 3;
+/// Columns of the full partial-derivative matrix: wrenches (3n), pose (3), joints (n).
+inline constexpr int kMaxPartials = 4 * kMaxLimbs + 3;
+
+using JointVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxLimbs, 1>;
+using ShootingVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxPartials, 1>;
+using ShootingMatrix =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxResiduals, kMaxPartials>;
+/// The square Jacobian of a shooting problem (FK: 3n + 3, IK: 4n [+ 1]).
+using JacobianMatrix =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxResiduals, kMaxResiduals>;
+template <class T>
+using ResidualVector = Eigen::Matrix<T, Eigen::Dynamic, 1, 0, kMaxResiduals, 1>;
+
+/// A planar wrench: force (N) and moment (N m), in W.
+template <class T>
+struct Wrench {
+  T nx{0}, ny{0}, m{0};
+  template <class U>
+  Wrench<U> cast() const {
+    return Wrench<U>{U(nx), U(ny), U(m)};
+  }
+};
+
+/// External load on the platform: a force at the origin of P and a moment, both in W.
+template <class T>
+struct PlatformLoad {
+  Vector2<T> force{T(0), T(0)};  ///< N
+  T moment{0};                   ///< N m
+  template <class U>
+  PlatformLoad<U> cast() const {
+    return PlatformLoad<U>{force.template cast<U>(), U(moment)};
+  }
+};
+
+/// Reference magnitudes of the scaled problem.
+struct ShootingScale {
+  double length{1};  ///< m
+  double force{1};   ///< N
+  double moment() const { return force * length; }
+};
+
+inline ShootingScale shooting_scale(const RobotParams<double>& robot) {
+  double length = 0, ei = 0;
+  for (int i = 0; i < robot.num_limbs; ++i) {
+    length += robot.limb(i).length;
+    ei += robot.limb(i).bending_stiffness();
+  }
+  length /= robot.num_limbs;
+  ei /= robot.num_limbs;
+  return ShootingScale{length, ei / (length * length)};
+}
+
+/// Physical values of every shooting unknown and input.
+template <class T>
+struct ShootingPoint {
+  std::array<T, kMaxLimbs> q{};                   ///< joint values (m)
+  Pose2<T> pose;                                  ///< platform pose ^W T_P
+  std::array<Wrench<T>, kMaxLimbs> wrenches{};    ///< proximal wrench of each rod, (n, m)(0)
+
+  template <class U>
+  ShootingPoint<U> cast() const {
+    ShootingPoint<U> out;
+    for (int i = 0; i < kMaxLimbs; ++i) {
+      out.q[i] = U(q[i]);
+      out.wrenches[i] = wrenches[i].template cast<U>();
+    }
+    out.pose = pose.template cast<U>();
+    return out;
+  }
+};
+
+/// Angle difference wrapped to (-pi, pi], by a whole number of turns chosen on the plain value so
+/// the derivative is exactly that of the difference.
+template <class T>
+T angle_difference(const T& a, const T& b) {
+  const T d = a - b;
+  const double turns = std::round(scalar_value(d) / (2.0 * M_PI));
+  return d - T(turns * 2.0 * M_PI);
+}
+
+/// Evaluates the scaled residual (3n + 3) at a point. With `partials`, also fills
+/// d residual / d (wrenches, pose, q) in scaled units: columns [3i, 3i+3) rod i's wrench,
+/// [3n, 3n+3) the pose (x, y, theta), [3n+3, 4n+3) the joints. Returns the largest bending strain
+/// |m| d / (2 EI) over the rods' RK4 nodes.
+template <class T>
+T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
+                    const PlatformLoad<T>& load, const ShootingScale& scale, int rod_steps,
+                    ResidualVector<T>& residual, ShootingMatrix* partials = nullptr) {
+  using std::cos;
+  using std::sin;
+  const int n = robot.num_limbs;
+  residual.resize(3 * n + 3);
+  const T inv_length = T(1.0 / scale.length);
+  const T inv_force = T(1.0 / scale.force);
+  const T inv_moment = T(1.0 / scale.moment());
+  if (partials) partials->setZero(3 * n + 3, 4 * n + 3);
+
+  const T c = cos(point.pose.theta), s = sin(point.pose.theta);
+  Vector2<T> force_sum = -load.force;
+  T moment_sum = -load.moment;
+  T max_strain(0);
+  for (int i = 0; i < n; ++i) {
+    const LimbParams<T>& limb = robot.limb(i);
+    const Wrench<T>& w = point.wrenches[i];
+    const T ei = limb.bending_stiffness();
+    const Vector2<T> start = limb.proximal_position(point.q[i]);
+    const RodState<T> proximal{start.x(), start.y(), limb.alpha, w.nx, w.ny, w.m};
+    // Distal clamp in W, relative to the platform origin.
+    const Vector2<T> arm(c * limb.B.x() - s * limb.B.y(), s * limb.B.x() + c * limb.B.y());
+    const Vector2<T> clamp = point.pose.translation() + arm;
+
+    RodState<T> tip;
+    T max_m;
+    if (partials) {
+      const RodTip<T> rod = integrate_rod_with_sensitivity(proximal, ei, limb.length, rod_steps);
+      tip = rod.state;
+      max_m = rod.max_abs_moment;
+      // d r / d (scaled wrench): physical derivative times the unknown's scale.
+      const double to_scaled[3] = {scale.force, scale.force, scale.moment()};
+      const double arm_x = scalar_value(arm.x()), arm_y = scalar_value(arm.y());
+      for (int j = 0; j < 3; ++j) {
+        const int col = 3 * i + j;
+        (*partials)(3 * i + 0, col) = scalar_value(rod.sensitivity(0, j)) * to_scaled[j] / scale.length;
+        (*partials)(3 * i + 1, col) = scalar_value(rod.sensitivity(1, j)) * to_scaled[j] / scale.length;
+        (*partials)(3 * i + 2, col) = scalar_value(rod.sensitivity(2, j)) * to_scaled[j];
+        // Moment balance: arm x n + m(l).
+        double dmoment = scalar_value(rod.sensitivity(3, j));
+        if (j == 0) dmoment += -arm_y;
+        if (j == 1) dmoment += arm_x;
+        (*partials)(3 * n + 2, col) = dmoment * to_scaled[j] / scale.moment();
+      }
+      (*partials)(3 * n + 0, 3 * i + 0) = 1.0;
+      (*partials)(3 * n + 1, 3 * i + 1) = 1.0;
+      // Pose: the clamp moves with (x, y) and turns with theta; d arm / d theta = (-arm_y, arm_x).
+      const int pose_col = 3 * n;
+      (*partials)(3 * i + 0, pose_col + 0) = -1.0;
+      (*partials)(3 * i + 1, pose_col + 1) = -1.0;
+      (*partials)(3 * i + 0, pose_col + 2) = arm_y / scale.length;
+      (*partials)(3 * i + 1, pose_col + 2) = -arm_x / scale.length;
+      (*partials)(3 * i + 2, pose_col + 2) = -1.0;
+      const double nx = scalar_value(w.nx), ny = scalar_value(w.ny);
+      // d/dtheta of (arm x n) = (-arm_y, arm_x) x n = -arm_y ny - arm_x nx.
+      (*partials)(3 * n + 2, pose_col + 2) += (-arm_y * ny - arm_x * nx) / scale.moment();
+      // Joints: the whole rod translates along the actuator direction.
+      const Vector2<T> dir = limb.actuator_direction();
+      (*partials)(3 * i + 0, 3 * n + 3 + i) = scalar_value(dir.x());
+      (*partials)(3 * i + 1, 3 * n + 3 + i) = scalar_value(dir.y());
+    } else {
+      tip = integrate_rod(proximal, ei, limb.length, rod_steps, &max_m);
+    }
+
+    residual(3 * i + 0) = (tip.x - clamp.x()) * inv_length;
+    residual(3 * i + 1) = (tip.y - clamp.y()) * inv_length;
+    residual(3 * i + 2) = angle_difference(tip.theta, point.pose.theta + limb.beta);
+    force_sum += Vector2<T>(w.nx, w.ny);
+    moment_sum += arm.x() * w.ny - arm.y() * w.nx + tip.m;
+    const T strain = max_m * limb.diameter / (T(2) * ei);
+    if (strain > max_strain) max_strain = strain;
+  }
+  residual(3 * n + 0) = force_sum.x() * inv_force;
+  residual(3 * n + 1) = force_sum.y() * inv_force;
+  residual(3 * n + 2) = moment_sum * inv_moment;
+  return max_strain;
+}
+
+}  // namespace pcr

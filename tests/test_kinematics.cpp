@@ -1,0 +1,285 @@
+// Forward and inverse kinematics: round trips, exact Jacobians, equilibrium, symmetry,
+// statuses, and the real-time guarantees (no allocation).
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <new>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "pcr/kinematics.hpp"
+
+// Count heap allocations made while `g_counting` is set.
+static std::atomic<bool> g_counting{false};
+static std::atomic<long> g_allocations{0};
+void* operator new(std::size_t size) {
+  if (g_counting) ++g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace pcr {
+namespace {
+
+JointVector joints(std::initializer_list<double> values) {
+  JointVector q(static_cast<int>(values.size()));
+  int i = 0;
+  for (double v : values) q(i++) = v;
+  return q;
+}
+
+std::vector<JointVector> random_configurations(int count, double half_range, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-half_range, half_range);
+  std::vector<JointVector> out;
+  for (int k = 0; k < count; ++k) out.push_back(joints({u(rng), u(rng), u(rng)}));
+  return out;
+}
+
+TEST(Kinematics, HomeIsTheStressFreeStraightConfiguration) {
+  const ForwardSolution home = home_solution(femto_3pf());
+  ASSERT_TRUE(home.summary.converged());
+  EXPECT_NEAR(home.pose.x, 0.0, 1e-15);
+  EXPECT_NEAR(home.pose.y, 0.0, 1e-15);
+  EXPECT_NEAR(home.pose.theta, 0.0, 1e-15);
+  EXPECT_NEAR(home.summary.max_strain, 0.0, 1e-15);
+}
+
+TEST(Kinematics, ForwardInverseRoundTrip) {
+  const RobotParams<double> robot = femto_3pf();
+  int converged = 0;
+  for (const JointVector& q : random_configurations(30, 0.004, 7)) {
+    const ForwardSolution fk = forward_kinematics(robot, q);
+    if (!fk.summary.converged()) continue;
+    ++converged;
+    const InverseSolution ik = inverse_kinematics(robot, fk.pose);
+    ASSERT_TRUE(ik.summary.converged()) << to_string(ik.summary.status);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(ik.q(i), q(i), 1e-12);
+    // And back: FK of the IK joints lands on the commanded pose.
+    const ForwardSolution again = forward_kinematics(robot, ik.q, fk);
+    ASSERT_TRUE(again.summary.converged());
+    EXPECT_LE(std::hypot(again.pose.x - fk.pose.x, again.pose.y - fk.pose.y), 1e-12);
+    EXPECT_NEAR(again.pose.theta, fk.pose.theta, 1e-12);
+  }
+  EXPECT_GE(converged, 20);
+}
+
+TEST(Kinematics, WarmStartConvergesInFewIterations) {
+  const RobotParams<double> robot = femto_3pf();
+  const ForwardSolution fk = forward_kinematics(robot, joints({0.002, -0.001, 0.003}));
+  ASSERT_TRUE(fk.summary.converged());
+  const ForwardSolution near = forward_kinematics(robot, joints({0.00201, -0.001, 0.003}), fk);
+  ASSERT_TRUE(near.summary.converged());
+  EXPECT_LE(near.summary.iterations, 3);
+  EXPECT_EQ(near.summary.continuation_steps, 0);
+}
+
+// d residual / d unknowns of FK and IK against central differences of the residual.
+void check_jacobian(internal::ShootingProblem& problem, const ShootingVector& z) {
+  ShootingVector r;
+  JacobianMatrix J;
+  problem.evaluate(z, r, &J);
+  for (int j = 0; j < z.size(); ++j) {
+    const double h = 1e-6 * std::max(1.0, std::abs(z(j)));
+    ShootingVector zp = z, zm = z, rp, rm;
+    zp(j) += h;
+    zm(j) -= h;
+    problem.evaluate(zp, rp, nullptr);
+    problem.evaluate(zm, rm, nullptr);
+    const ShootingVector fd = (rp - rm) / (2 * h);
+    for (int i = 0; i < r.size(); ++i) {
+      EXPECT_NEAR(J(i, j), fd(i), 1e-6 * std::max(1.0, std::abs(fd(i)))) << i << "," << j;
+    }
+  }
+}
+
+TEST(Kinematics, JacobianMatchesCentralDifferences) {
+  const RobotParams<double> robot = femto_3pf();
+  const SolverOptions options;
+  const PlatformLoad<double> load{Vector2<double>(2e-4, -1e-4), 3e-6};
+  const ForwardSolution fk = forward_kinematics(robot, joints({0.003, -0.002, 0.001}), options, load);
+  ASSERT_TRUE(fk.summary.converged());
+  ShootingPoint<double> point;
+  point.pose = fk.pose;
+  for (int i = 0; i < 3; ++i) {
+    point.q[i] = fk.q(i);
+    point.wrenches[i] = fk.wrenches[i];
+  }
+  // Off the solution too, where the residual is not zero.
+  point.pose.theta += 0.01;
+  point.wrenches[1].m += 1e-6;
+  internal::ShootingProblem forward(internal::ShootingProblem::Kind::kForward, robot, load, options);
+  forward.set_input(fk.q);
+  check_jacobian(forward, forward.pack(point));
+  internal::ShootingProblem inverse(internal::ShootingProblem::Kind::kInverse, robot, load, options);
+  ShootingVector pose(3);
+  pose << fk.pose.x, fk.pose.y, fk.pose.theta;
+  inverse.set_input(pose);
+  check_jacobian(inverse, inverse.pack(point));
+}
+
+// The clamps' reactions balance the external load: sum n_i(0) = f and
+// sum (A_i(q) x n_i(0) + m_i(0)) = p_P x f + m_z about W's origin (the whole robot is in equilibrium).
+TEST(Kinematics, ClampReactionsBalanceTheLoad) {
+  const RobotParams<double> robot = femto_3pf();
+  const PlatformLoad<double> load{Vector2<double>(5e-4, 3e-4), -4e-6};
+  const ForwardSolution fk =
+      forward_kinematics(robot, joints({0.001, 0.002, -0.001}), SolverOptions(), load);
+  ASSERT_TRUE(fk.summary.converged());
+  Vector2<double> force(0, 0);
+  double moment = 0;
+  for (int i = 0; i < 3; ++i) {
+    const Wrench<double>& w = fk.wrenches[i];
+    const Vector2<double> a = robot.limb(i).proximal_position(fk.q(i));
+    force += Vector2<double>(w.nx, w.ny);
+    moment += a.x() * w.ny - a.y() * w.nx + w.m;
+  }
+  const double expected_moment = fk.pose.x * load.force.y() - fk.pose.y * load.force.x() + load.moment;
+  EXPECT_NEAR(force.x(), load.force.x(), 1e-14);
+  EXPECT_NEAR(force.y(), load.force.y(), 1e-14);
+  EXPECT_NEAR(moment, expected_moment, 1e-15);
+}
+
+// Rotating the symmetric robot by 120 degrees maps limb i onto limb i + 1.
+TEST(Kinematics, SymmetricRobotCommutesWithRotation) {
+  const RobotParams<double> robot = femto_3pf();
+  const JointVector q = joints({0.003, -0.001, 0.0015});
+  const JointVector shifted = joints({q(2), q(0), q(1)});
+  const ForwardSolution a = forward_kinematics(robot, q);
+  const ForwardSolution b = forward_kinematics(robot, shifted);
+  ASSERT_TRUE(a.summary.converged() && b.summary.converged());
+  const double c = std::cos(2 * M_PI / 3), s = std::sin(2 * M_PI / 3);
+  EXPECT_NEAR(b.pose.x, c * a.pose.x - s * a.pose.y, 1e-13);
+  EXPECT_NEAR(b.pose.y, s * a.pose.x + c * a.pose.y, 1e-13);
+  EXPECT_NEAR(b.pose.theta, a.pose.theta, 1e-12);
+}
+
+// Without external load the pose does not depend on E (the paper's Table 2), and forces scale with E.
+TEST(Kinematics, YoungModulusHasNoEffectWithoutLoad) {
+  RobotParams<double> robot = femto_3pf();
+  const JointVector q = joints({0.002, 0.004, -0.001});
+  const ForwardSolution a = forward_kinematics(robot, q);
+  for (int i = 0; i < 3; ++i) robot.limb(i).young_modulus *= 2.5;
+  const ForwardSolution b = forward_kinematics(robot, q);
+  ASSERT_TRUE(a.summary.converged() && b.summary.converged());
+  EXPECT_NEAR(a.pose.x, b.pose.x, 1e-15);
+  EXPECT_NEAR(a.pose.y, b.pose.y, 1e-15);
+  EXPECT_NEAR(a.pose.theta, b.pose.theta, 1e-13);
+  EXPECT_NEAR(b.wrenches[0].nx, 2.5 * a.wrenches[0].nx, 1e-12 * std::abs(b.wrenches[0].nx) + 1e-18);
+}
+
+TEST(Kinematics, PullingEveryRodTooFarIsSingularNotAFailure) {
+  const ForwardSolution fk = forward_kinematics(femto_3pf(), joints({-0.006, -0.006, -0.006}));
+  EXPECT_EQ(fk.summary.status, SolveStatus::kSingular);
+  EXPECT_GT(fk.summary.continuation_steps, 0);
+}
+
+TEST(Kinematics, LargeMovesNeedContinuationAndConverge) {
+  const RobotParams<double> robot = femto_3pf();
+  const ForwardSolution fk = forward_kinematics(robot, joints({0.008, -0.004, 0.006}));
+  ASSERT_TRUE(fk.summary.converged()) << to_string(fk.summary.status);
+  const InverseSolution ik = inverse_kinematics(robot, fk.pose);
+  ASSERT_TRUE(ik.summary.converged()) << to_string(ik.summary.status);
+  EXPECT_NEAR(ik.q(0), 0.008, 1e-12);
+}
+
+TEST(Kinematics, InverseReportsJointsOutsideTheStroke) {
+  RobotParams<double> robot = femto_3pf();
+  const ForwardSolution fk = forward_kinematics(robot, joints({0.002, 0.0, 0.0}));
+  for (int i = 0; i < 3; ++i) robot.limb(i).q_max = 0.001;
+  const InverseSolution ik = inverse_kinematics(robot, fk.pose);
+  EXPECT_EQ(ik.summary.status, SolveStatus::kOutOfRange);
+  EXPECT_NEAR(ik.q(0), 0.002, 1e-12);
+}
+
+RobotParams<double> two_limb_robot() {
+  RobotParams<double> robot = femto_3pf();
+  robot.num_limbs = 2;
+  return robot;
+}
+
+TEST(Kinematics, TwoLimbInverseImposesPositionAndSolvesTheta) {
+  const RobotParams<double> robot = two_limb_robot();
+  const ForwardSolution fk = forward_kinematics(robot, joints({0.002, -0.001}));
+  ASSERT_TRUE(fk.summary.converged()) << to_string(fk.summary.status);
+  Pose2<double> target = fk.pose;
+  target.theta = 0.7;  // ignored: theta is free for two limbs
+  const InverseSolution ik = inverse_kinematics(robot, target);
+  ASSERT_TRUE(ik.summary.converged()) << to_string(ik.summary.status);
+  EXPECT_NEAR(ik.q(0), 0.002, 1e-12);
+  EXPECT_NEAR(ik.q(1), -0.001, 1e-12);
+  EXPECT_NEAR(ik.pose.theta, fk.pose.theta, 1e-10);
+}
+
+RobotParams<double> four_limb_robot() {
+  RobotParams<double> robot = femto_3pf();
+  robot.num_limbs = 4;
+  for (int i = 0; i < 4; ++i) {
+    const double phi = -M_PI / 2 + i * M_PI / 2;
+    LimbParams<double>& limb = robot.limb(i);
+    limb = femto_3pf().limb(0);
+    limb.A = 0.05 * Vector2<double>(std::cos(phi), std::sin(phi));
+    limb.alpha = phi + M_PI - 0.3;
+    limb.beta = limb.alpha;
+    limb.B = limb.A + limb.length * Vector2<double>(std::cos(limb.alpha), std::sin(limb.alpha));
+  }
+  return robot;
+}
+
+// Four straight rods at q = 0 carry a self-stress mode (four axial forces, three equilibrium
+// equations) that inextensible straight rods cannot feel: the home Jacobian is singular, and the
+// solver must say so rather than fail silently. IK is not a square problem for four limbs.
+TEST(Kinematics, FourLimbRobotReportsItsLimits) {
+  const RobotParams<double> robot = four_limb_robot();
+  EXPECT_TRUE(home_solution(robot).summary.converged());
+  EXPECT_EQ(forward_kinematics(robot, joints({0.001, 0.0, 0.0, 0.0})).summary.status,
+            SolveStatus::kSingular);
+  InverseSolution warm;
+  warm.q = JointVector::Zero(4);
+  EXPECT_EQ(inverse_kinematics(robot, Pose2<double>{}, warm).summary.status,
+            SolveStatus::kUnsupported);
+}
+
+TEST(Kinematics, InvalidInputsAreReported) {
+  const RobotParams<double> robot = femto_3pf();
+  EXPECT_EQ(forward_kinematics(robot, joints({0.001, 0.002})).summary.status,
+            SolveStatus::kInvalidInput);
+  EXPECT_EQ(forward_kinematics(robot, joints({NAN, 0.0, 0.0})).summary.status,
+            SolveStatus::kInvalidInput);
+  EXPECT_EQ(inverse_kinematics(robot, Pose2<double>{NAN, 0, 0}).summary.status,
+            SolveStatus::kInvalidInput);
+  RobotParams<double> one = robot;
+  one.num_limbs = 1;
+  EXPECT_EQ(home_solution(one).summary.status, SolveStatus::kInvalidInput);
+}
+
+TEST(Kinematics, SolvesNeverAllocate) {
+  const RobotParams<double> robot = femto_3pf();
+  const SolverOptions options;
+  ForwardSolution fk = forward_kinematics(robot, joints({0.001, 0.0, 0.0}));
+  InverseSolution ik = as_inverse_warm_start(fk);
+  g_allocations = 0;
+  g_counting = true;
+  for (int k = 0; k < 50; ++k) {
+    const double phase = 0.1 * k;
+    fk = forward_kinematics(robot, joints({0.001 * std::cos(phase), 0.001 * std::sin(phase), 0.0}), fk);
+    ik = inverse_kinematics(robot, Pose2<double>{1e-3 * std::cos(phase), 1e-3 * std::sin(phase), 0.0}, ik);
+  }
+  const ForwardSolution cold = forward_kinematics(robot, joints({0.006, -0.004, 0.002}));
+  const ForwardSolution beyond = forward_kinematics(robot, joints({-0.006, -0.006, -0.006}));
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_TRUE(fk.summary.converged());
+  EXPECT_TRUE(ik.summary.converged());
+  EXPECT_TRUE(cold.summary.converged());
+  EXPECT_FALSE(beyond.summary.converged());
+}
+
+}  // namespace
+}  // namespace pcr

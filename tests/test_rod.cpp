@@ -1,0 +1,93 @@
+// The RK4 rod integrator against closed forms and finite differences.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "pcr/rod.hpp"
+
+namespace pcr {
+namespace {
+
+constexpr double kLength = 0.03;
+const double kEI = bending_stiffness(69e9, 125e-6);
+
+TEST(Rod, BendingStiffnessOfCircularSection) {
+  const double expected = 69e9 * M_PI * std::pow(125e-6, 4) / 64.0;
+  EXPECT_NEAR(bending_stiffness(69e9, 125e-6), expected, 1e-14 * expected);
+}
+
+TEST(Rod, UnloadedRodIsStraight) {
+  const RodState<double> start{0.01, -0.02, 0.3, 0, 0, 0};
+  const RodState<double> tip = integrate_rod(start, kEI, kLength, 8);
+  EXPECT_NEAR(tip.x, 0.01 + kLength * std::cos(0.3), 1e-17);
+  EXPECT_NEAR(tip.y, -0.02 + kLength * std::sin(0.3), 1e-17);
+  EXPECT_NEAR(tip.theta, 0.3, 1e-16);
+}
+
+// A pure moment bends the rod into a circular arc of radius EI / M (exact: m' = 0 when n = 0).
+TEST(Rod, PureMomentGivesCircularArc) {
+  const double curvature = 100.0;  // 1/m, strain 0.6%
+  const RodState<double> start{0, 0, 0, 0, 0, kEI * curvature};
+  const double angle = curvature * kLength;
+  for (int steps : {32, 64}) {
+    const RodState<double> tip = integrate_rod(start, kEI, kLength, steps);
+    EXPECT_NEAR(tip.theta, angle, 1e-14);
+    EXPECT_NEAR(tip.m, kEI * curvature, 1e-20);
+    // The carried (cos, sin) pair has an RK4 error of order (kappa h)^4 / 120.
+    const double h = kLength / steps;
+    const double bound = kLength * std::pow(curvature * h, 4);
+    EXPECT_NEAR(tip.x, std::sin(angle) / curvature, bound) << steps;
+    EXPECT_NEAR(tip.y, (1 - std::cos(angle)) / curvature, bound) << steps;
+  }
+}
+
+TEST(Rod, ErrorFallsSixteenfoldPerStepDoubling) {
+  const RodState<double> start{0, 0, 0.2, 4e-4, -9e-4, 2e-5};
+  const RodState<double> fine = integrate_rod(start, kEI, kLength, 4096);
+  const auto error = [&](int steps) {
+    const RodState<double> tip = integrate_rod(start, kEI, kLength, steps);
+    return std::hypot(tip.x - fine.x, tip.y - fine.y);
+  };
+  const double ratio = error(16) / error(32);
+  EXPECT_GT(ratio, 12.0);
+  EXPECT_LT(ratio, 20.0);
+}
+
+TEST(Rod, SensitivityMatchesCentralDifferences) {
+  const RodState<double> start{0.001, 0.002, 1.1, 3e-4, -5e-4, 1.5e-5};
+  const RodTip<double> tip = integrate_rod_with_sensitivity(start, kEI, kLength, 64);
+  const double steps[3] = {1e-9, 1e-9, 1e-11};
+  for (int j = 0; j < 3; ++j) {
+    RodState<double> plus = start, minus = start;
+    double* p = j == 0 ? &plus.nx : j == 1 ? &plus.ny : &plus.m;
+    double* m = j == 0 ? &minus.nx : j == 1 ? &minus.ny : &minus.m;
+    *p += steps[j];
+    *m -= steps[j];
+    const RodState<double> a = integrate_rod(plus, kEI, kLength, 64);
+    const RodState<double> b = integrate_rod(minus, kEI, kLength, 64);
+    const double fd[4] = {(a.x - b.x) / (2 * steps[j]), (a.y - b.y) / (2 * steps[j]),
+                          (a.theta - b.theta) / (2 * steps[j]), (a.m - b.m) / (2 * steps[j])};
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_NEAR(tip.sensitivity(k, j), fd[k], 1e-6 * std::abs(fd[k]) + 1e-9)
+          << "row " << k << " column " << j;
+    }
+  }
+  EXPECT_EQ(tip.state.x, integrate_rod(start, kEI, kLength, 64).x);
+}
+
+TEST(Rod, SampledShapeVisitsEveryNode) {
+  const RodState<double> start{0, 0, 0, 0, 0, kEI * 50.0};
+  int count = 0;
+  double last_s = -1;
+  sample_rod(start, kEI, kLength, 16, [&](double s, const RodState<double>& state) {
+    EXPECT_GT(s, last_s);
+    EXPECT_NEAR(state.theta, 50.0 * s, 1e-14);
+    last_s = s;
+    ++count;
+  });
+  EXPECT_EQ(count, 17);
+  EXPECT_NEAR(last_s, kLength, 1e-18);
+}
+
+}  // namespace
+}  // namespace pcr
