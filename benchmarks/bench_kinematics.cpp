@@ -46,9 +46,10 @@ void BM_ResidualOnly(benchmark::State& state) {
   }
   const ShootingScale scale = shooting_scale(robot);
   ResidualVector<double> r;
+  state.counters["rod_steps"] = fk.summary.rod_steps;
   for (auto _ : state) {
     benchmark::DoNotOptimize(
-        shooting_residual(robot, point, PlatformLoad<double>(), scale, SolverOptions().rod_steps, r));
+        shooting_residual(robot, point, PlatformLoad<double>(), scale, fk.summary.rod_steps, r));
   }
 }
 BENCHMARK(BM_ResidualOnly);
@@ -65,9 +66,10 @@ void BM_ResidualAndJacobian(benchmark::State& state) {
   const ShootingScale scale = shooting_scale(robot);
   ResidualVector<double> r;
   ShootingMatrix partials;
+  state.counters["rod_steps"] = fk.summary.rod_steps;
   for (auto _ : state) {
     benchmark::DoNotOptimize(shooting_residual(robot, point, PlatformLoad<double>(), scale,
-                                               SolverOptions().rod_steps, r, &partials));
+                                               fk.summary.rod_steps, r, &partials));
   }
 }
 BENCHMARK(BM_ResidualAndJacobian);

@@ -26,6 +26,7 @@ bool forward_pose_implicit(const RobotParams<T>& robot_t, const PlatformLoad<T>&
   internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load,
                                     options);
   problem.set_input(solution.q);
+  problem.set_rod_steps(solution.summary.rod_steps);
   ShootingPoint<double> point;
   point.pose = solution.pose;
   for (int i = 0; i < n; ++i) {
@@ -42,7 +43,7 @@ bool forward_pose_implicit(const RobotParams<T>& robot_t, const PlatformLoad<T>&
   const auto pose_rows = inverse.middleRows(3 * n, 3);
 
   ResidualVector<T> r_t;
-  shooting_residual(robot_t, point.template cast<T>(), load_t, problem.scale(), options.rod_steps,
+  shooting_residual(robot_t, point.template cast<T>(), load_t, problem.scale(), problem.rod_steps(),
                     r_t);
   T scaled[3];
   for (int k = 0; k < 3; ++k) {

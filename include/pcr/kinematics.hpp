@@ -44,9 +44,14 @@ inline const char* to_string(SolveStatus status) {
 }
 
 struct SolverOptions {
-  /// RK4 steps per rod. 64 keeps the platform pose within 1 nm / 1 urad of the converged ODE
-  /// solution for bending strains up to 1% (tests/test_reference.cpp measures it).
-  int rod_steps = 64;
+  /// RK4 steps per rod; 0 chooses them from the largest curvature of the solution so that the
+  /// RK4 error stays near rod_error_tolerance (tests/test_reference.cpp checks it against CVODE).
+  int rod_steps = 0;
+  /// Target RK4 error on the rods' tips (m) when rod_steps = 0. The error of RK4 on a rod of
+  /// length l and largest curvature kappa, in N steps, is about 2e-3 l (kappa l / N)^4.
+  double rod_error_tolerance = 1e-10;
+  int min_rod_steps = 16;
+  int max_rod_steps = 512;
   /// Newton iterations per solve (each sub-solve of a continuation has its own budget).
   int max_iterations = 20;
   /// Convergence: max-norm of the scaled residual (lengths / L, forces / (EI / L^2)).
@@ -69,6 +74,7 @@ struct SolverSummary {
   double initial_residual_norm = std::numeric_limits<double>::quiet_NaN();  ///< scaled max-norm
   double final_residual_norm = std::numeric_limits<double>::quiet_NaN();    ///< scaled max-norm
   double max_strain = std::numeric_limits<double>::quiet_NaN();  ///< max |kappa| d / 2 over the rods
+  int rod_steps = 0;  ///< RK4 steps per rod of the returned solution
   bool converged() const { return status == SolveStatus::kConverged; }
 };
 
@@ -98,7 +104,35 @@ class ShootingProblem {
   ShootingProblem(Kind kind, const RobotParams<double>& robot, const PlatformLoad<double>& load,
                   const SolverOptions& options)
       : kind_(kind), robot_(robot), load_(load), options_(options),
-        scale_(shooting_scale(robot)), n_(robot.num_limbs) {}
+        scale_(shooting_scale(robot)), n_(robot.num_limbs) {
+    steps_ = options.rod_steps > 0 ? options.rod_steps : options.min_rod_steps;
+    double length = 0, diameter = 1e300;
+    for (int i = 0; i < n_; ++i) {
+      length = std::max(length, robot.limb(i).length);
+      diameter = std::min(diameter, robot.limb(i).diameter);
+    }
+    max_length_ = length;
+    min_diameter_ = diameter;
+  }
+
+  int rod_steps() const { return steps_; }
+  void set_rod_steps(int steps) { steps_ = steps; }
+
+  /// Steps needed for the error target at a solution whose largest bending strain is `strain`.
+  int required_rod_steps(double strain) const {
+    if (options_.rod_steps > 0) return options_.rod_steps;
+    const double kappa_l = 2.0 * strain / min_diameter_ * max_length_;
+    const double k = std::pow(2e-3 * max_length_ / options_.rod_error_tolerance, 0.25);
+    const double steps = k * kappa_l;
+    if (!(steps < options_.max_rod_steps)) return options_.max_rod_steps;  // NaN too
+    // Round up on a ladder of x1.5 / x1.33 steps, so that FK and IK of one configuration, solved
+    // along different paths, settle on the same discrete model.
+    int ladder = options_.min_rod_steps;
+    while (ladder < steps && ladder < options_.max_rod_steps) {
+      ladder = ladder % 3 == 0 ? ladder / 3 * 4 : ladder / 2 * 3;
+    }
+    return std::min(ladder, options_.max_rod_steps);
+  }
 
   int size() const { return kind_ == Kind::kForward ? 3 * n_ + 3 : 4 * n_ + (n_ == 2 ? 1 : 0); }
   int num_inputs() const { return kind_ == Kind::kForward ? n_ : 3; }
@@ -149,7 +183,7 @@ class ShootingProblem {
   double evaluate(const ShootingVector& z, ShootingVector& r, JacobianMatrix* jacobian) const {
     const ShootingPoint<double> p = unpack(z);
     ResidualVector<double> res;
-    const double strain = shooting_residual(robot_, p, load_, scale_, options_.rod_steps, res,
+    const double strain = shooting_residual(robot_, p, load_, scale_, steps_, res,
                                             jacobian ? &partials_ : nullptr);
     r = res;
     if (offset_.size() == r.size()) r -= offset_;
@@ -184,6 +218,9 @@ class ShootingProblem {
   const SolverOptions& options_;
   ShootingScale scale_;
   int n_;
+  int steps_;
+  double max_length_;
+  double min_diameter_;
   ShootingVector input_;
   ShootingVector offset_;
   mutable ShootingMatrix partials_;
@@ -285,9 +322,10 @@ inline double jacobian_rcond(const ShootingProblem& problem, const ShootingVecto
 /// Jacobian's conditioning along the solved part of the path tells a singularity ahead (no
 /// solution on this branch: rcond^2, linear in t near a fold, extrapolates to zero before the
 /// end of the path) from a plain failure to converge.
-inline SolveStatus solve_along_path(ShootingProblem& problem, const ShootingVector& u0,
-                                    const ShootingVector& u1, ShootingVector& z,
-                                    const SolverOptions& options, SolverSummary& summary) {
+inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const ShootingVector& u0,
+                                             const ShootingVector& u1, ShootingVector& z,
+                                             const SolverOptions& options,
+                                             SolverSummary& summary) {
   const ShootingVector z0 = z;
   problem.set_input(u1);
   NewtonResult direct = newton_solve(problem, z, options, summary);
@@ -347,6 +385,35 @@ inline SolveStatus solve_along_path(ShootingProblem& problem, const ShootingVect
   return SolveStatus::kConverged;
 }
 
+/// A converged solution whose curvature calls for another RK4 step count than it was solved with
+/// is solved again (from itself: one or two Newton iterations) at the step count it calls for.
+inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
+                                    const SolverOptions& options, SolverSummary& summary,
+                                    SolveStatus status) {
+  for (int pass = 0; pass < 2 && status == SolveStatus::kConverged; ++pass) {
+    const int needed = problem.required_rod_steps(summary.max_strain);
+    if (needed == problem.rod_steps()) break;
+    problem.set_rod_steps(needed);
+    const NewtonResult refined = newton_solve(problem, z, options, summary);
+    status = refined.status;
+    summary.final_residual_norm = refined.final_norm;
+    summary.max_strain = refined.max_strain;
+  }
+  summary.rod_steps = problem.rod_steps();
+  return status;
+}
+
+/// Solves along the input path with the step count of the start's curvature, then refines it for
+/// the solution's curvature.
+inline SolveStatus solve_along_path(ShootingProblem& problem, const ShootingVector& u0,
+                                    const ShootingVector& u1, ShootingVector& z,
+                                    const SolverOptions& options, SolverSummary& summary,
+                                    double start_strain) {
+  problem.set_rod_steps(problem.required_rod_steps(start_strain));
+  const SolveStatus status = solve_path_at_fixed_steps(problem, u0, u1, z, options, summary);
+  return refine_rod_steps(problem, z, options, summary, status);
+}
+
 inline bool valid_robot(const RobotParams<double>& robot) {
   return robot.num_limbs >= 2 && robot.num_limbs <= kMaxLimbs;
 }
@@ -388,9 +455,9 @@ inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& op
     z = z_last;
     if (t < 1.0 && home.status == SolveStatus::kConverged) home.status = SolveStatus::kMaxIterations;
   }
-  status = home.status;
   summary.final_residual_norm = home.final_norm;
   summary.max_strain = home.max_strain;
+  status = refine_rod_steps(fk, z, options, summary, home.status);
   return z;
 }
 
@@ -421,7 +488,8 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
   problem.set_input(u0);
   ShootingVector z = problem.pack(start);
   solution.summary.status =
-      internal::solve_along_path(problem, u0, u1, z, options, solution.summary);
+      internal::solve_along_path(problem, u0, u1, z, options, solution.summary,
+                                 warm_start.summary.max_strain);
   // On failure this is the last solved point of the path, with its joints.
   const ShootingPoint<double> p = problem.unpack(z);
   for (int i = 0; i < n; ++i) solution.q(i) = p.q[i];
@@ -498,7 +566,8 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
   u1 << pose.x, pose.y, n == 2 ? warm_start.pose.theta : pose.theta;
   problem.set_input(u0);
   ShootingVector z = problem.pack(start);
-  SolveStatus status = internal::solve_along_path(problem, u0, u1, z, options, solution.summary);
+  SolveStatus status = internal::solve_along_path(problem, u0, u1, z, options, solution.summary,
+                                                  warm_start.summary.max_strain);
   const ShootingPoint<double> p = problem.unpack(z);
   solution.pose = p.pose;
   solution.q = JointVector(n);
@@ -530,6 +599,7 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
   warm.pose = home.pose;
   warm.q = home.q;
   warm.wrenches = home.wrenches;
+  warm.summary = home.summary;
   InverseSolution solution = inverse_kinematics(robot, pose, warm, options, load);
   solution.summary.iterations += home.summary.iterations;
   solution.summary.residual_evaluations += home.summary.residual_evaluations;
