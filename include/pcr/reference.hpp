@@ -1,0 +1,83 @@
+#pragma once
+// High-accuracy reference solutions computed with SUNDIALS CVODE (compiled target pcr::reference).
+//
+// The same rod equations as pcr/rod.hpp (Mauze et al. 2021, Eq. 1), with the same sign
+// convention (n(s), m(s) are exerted by the material beyond s on the material before it):
+//
+//   x' = cos(theta), y' = sin(theta), theta' = m / EI, n' = 0, m' = n_x sin(theta) - n_y cos(theta)
+//
+// integrated by CVODE's variable-order, variable-step multistep methods at tight tolerances, and
+// the forward kinematics of pcr/kinematics.hpp solved on the residual those integrations give.
+// These serve to measure the discretisation error of the fixed-step RK4 core and as the
+// "best available" answer; they allocate and may throw, so they are not for the real-time loop.
+// SUNDIALS headers never appear here.
+
+#include <vector>
+
+#include "pcr/kinematics.hpp"
+#include "pcr/robot.hpp"
+#include "pcr/rod.hpp"
+#include "pcr/shooting.hpp"
+
+namespace pcr {
+
+struct ReferenceOptions {
+  enum class Method {
+    kAdams,  ///< Adams-Moulton, orders 1..12: the efficient choice for this non-stiff problem
+    kBdf,    ///< BDF, orders 1..5
+  };
+  Method method = Method::kAdams;
+  /// CVODE's relative tolerance on every state component.
+  double relative_tolerance = 1e-12;
+  /// CVODE's absolute tolerance, relative to each component's natural scale: the rod length for
+  /// x and y, 1 rad for theta, max(EI / l, |m(0)|, |n| l) for m. Dimensionless.
+  double absolute_tolerance = 1e-14;
+  /// Internal CVODE steps allowed per rod before giving up (std::runtime_error).
+  long max_steps = 200000;
+
+  // ---- forward_kinematics_reference ----
+  /// Quasi-Newton iterations on the CVODE residual.
+  int max_iterations = 30;
+  /// Convergence: max-norm of the scaled residual (the same scaling as pcr::shooting_residual).
+  /// CVODE's own error puts a floor of about 1e-11 under it at 1% bending strain (the tip
+  /// moment's relative error times m L / EI ~ 5); 1e-10 is 3 pm on a 30 mm rod.
+  double tolerance = 1e-10;
+  /// RK4 steps per rod of the Jacobian used as Newton matrix (only the speed of convergence
+  /// depends on it, never the solution).
+  int jacobian_rod_steps = 256;
+};
+
+/// Integrates one rod over [0, length] (m) from its proximal state with CVODE; EI in N m^2.
+/// With max_abs_moment, also returns max |m(s)| (N m) over CVODE's internal steps.
+/// Throws std::invalid_argument on non-finite input or non-positive EI / length, and
+/// std::runtime_error when CVODE fails.
+RodState<double> integrate_rod_reference(const RodState<double>& start, double ei, double length,
+                                         const ReferenceOptions& options = ReferenceOptions(),
+                                         double* max_abs_moment = nullptr);
+
+/// The rod state at each of the given arc lengths (m), which must be non-decreasing and lie in
+/// [0, length]; computed by CVODE's dense output, as accurate as the integration itself.
+std::vector<RodState<double>> sample_rod_reference(
+    const RodState<double>& start, double ei, double length, const std::vector<double>& arc_lengths,
+    const ReferenceOptions& options = ReferenceOptions());
+
+/// The scaled shooting residual of pcr::shooting_residual (closure of each rod, Eq. 2, then the
+/// platform equilibrium, Eq. 4), with every rod integrated by CVODE. Returns the largest bending
+/// strain |m| d / (2 EI) over CVODE's internal steps.
+double shooting_residual_reference(const RobotParams<double>& robot,
+                                   const ShootingPoint<double>& point,
+                                   const PlatformLoad<double>& load, const ShootingScale& scale,
+                                   ResidualVector<double>& residual,
+                                   const ReferenceOptions& options = ReferenceOptions());
+
+/// Forward kinematics on the CVODE residual: quasi-Newton from `start` (normally the RK4
+/// forward_kinematics solution at the same q), with the RK4 Jacobian at
+/// options.jacobian_rod_steps as Newton matrix. No continuation: `start` must be close.
+/// The summary reports convergence (a numerical outcome, not thrown); CVODE failures throw
+/// std::runtime_error, wrong sizes std::invalid_argument.
+ForwardSolution forward_kinematics_reference(
+    const RobotParams<double>& robot, const JointVector& q, const ForwardSolution& start,
+    const ReferenceOptions& options = ReferenceOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>());
+
+}  // namespace pcr

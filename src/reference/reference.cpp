@@ -1,0 +1,375 @@
+// CVODE reference integrator of the planar Kirchhoff rod and the forward kinematics built on it.
+
+#include "pcr/reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/LU>
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+namespace pcr {
+namespace {
+
+// CVODE state: (x, y, theta, m). n is constant (n' = 0), so it rides along as a parameter.
+constexpr int kStates = 4;
+
+struct RodData {
+  double nx, ny, inv_ei;
+};
+
+int rod_rhs(sunrealtype /*s*/, N_Vector y, N_Vector ydot, void* user_data) {
+  const auto* data = static_cast<const RodData*>(user_data);
+  const double* Y = N_VGetArrayPointer(y);
+  double* D = N_VGetArrayPointer(ydot);
+  const double c = std::cos(Y[2]), s = std::sin(Y[2]);
+  D[0] = c;
+  D[1] = s;
+  D[2] = Y[3] * data->inv_ei;
+  D[3] = data->nx * s - data->ny * c;
+  return 0;
+}
+
+int rod_jacobian(sunrealtype /*s*/, N_Vector y, N_Vector /*fy*/, SUNMatrix J, void* user_data,
+                 N_Vector, N_Vector, N_Vector) {
+  const auto* data = static_cast<const RodData*>(user_data);
+  const double theta = N_VGetArrayPointer(y)[2];
+  const double c = std::cos(theta), s = std::sin(theta);
+  SUNMatZero(J);
+  SM_ELEMENT_D(J, 0, 2) = -s;
+  SM_ELEMENT_D(J, 1, 2) = c;
+  SM_ELEMENT_D(J, 2, 3) = data->inv_ei;
+  SM_ELEMENT_D(J, 3, 2) = data->nx * c + data->ny * s;
+  return 0;
+}
+
+void capture_error(int error_code, const char* module, const char* function, char* msg,
+                   void* user_data) {
+  auto* out = static_cast<std::string*>(user_data);
+  std::ostringstream text;
+  text << module << "::" << function << " (code " << error_code << "): " << msg;
+  *out = text.str();
+}
+
+// RAII owners of the SUNDIALS objects.
+struct ContextDeleter {
+  void operator()(SUNContext ctx) const { SUNContext_Free(&ctx); }
+};
+struct VectorDeleter {
+  void operator()(_generic_N_Vector* v) const { N_VDestroy(v); }
+};
+struct MatrixDeleter {
+  void operator()(_generic_SUNMatrix* m) const { SUNMatDestroy(m); }
+};
+struct SolverDeleter {
+  void operator()(_generic_SUNLinearSolver* ls) const { SUNLinSolFree(ls); }
+};
+struct CvodeDeleter {
+  void operator()(void* mem) const { CVodeFree(&mem); }
+};
+
+std::string describe(const char* what, double value) {
+  std::ostringstream text;
+  text.precision(17);
+  text << what << " = " << value;
+  return text.str();
+}
+
+void check_rod_input(const RodState<double>& start, double ei, double length) {
+  const double values[] = {start.x, start.y, start.theta, start.nx, start.ny, start.m};
+  const char* names[] = {"start.x", "start.y", "start.theta", "start.nx", "start.ny", "start.m"};
+  for (int i = 0; i < 6; ++i) {
+    if (!std::isfinite(values[i])) {
+      throw std::invalid_argument("pcr::integrate_rod_reference: non-finite " +
+                                  describe(names[i], values[i]));
+    }
+  }
+  if (!(ei > 0.0) || !std::isfinite(ei)) {
+    throw std::invalid_argument("pcr::integrate_rod_reference: EI must be positive, " +
+                                describe("ei", ei));
+  }
+  if (!(length > 0.0) || !std::isfinite(length)) {
+    throw std::invalid_argument("pcr::integrate_rod_reference: length must be positive, " +
+                                describe("length", length));
+  }
+}
+
+// Integrates one rod with CVODE, reporting the state at each requested arc length (sorted, in
+// [0, length]) through `samples` and max |m| at the internal steps.
+RodState<double> integrate(const RodState<double>& start, double ei, double length,
+                           const ReferenceOptions& options, const std::vector<double>& arc_lengths,
+                           std::vector<RodState<double>>* samples, double* max_abs_moment) {
+  check_rod_input(start, ei, length);
+  std::string error;
+  const auto fail = [&](const char* call, int flag) {
+    std::ostringstream text;
+    text << "pcr::integrate_rod_reference: CVODE " << call << " failed (flag " << flag << ")";
+    if (!error.empty()) text << ": " << error;
+    throw std::runtime_error(text.str());
+  };
+  const auto check = [&](const char* call, int flag) {
+    if (flag < 0) fail(call, flag);
+  };
+
+  SUNContext raw_ctx = nullptr;
+  if (SUNContext_Create(nullptr, &raw_ctx) != 0) fail("SUNContext_Create", -1);
+  std::unique_ptr<_SUNContext, ContextDeleter> ctx(raw_ctx);
+
+  std::unique_ptr<_generic_N_Vector, VectorDeleter> y(N_VNew_Serial(kStates, ctx.get()));
+  std::unique_ptr<_generic_N_Vector, VectorDeleter> abstol(N_VNew_Serial(kStates, ctx.get()));
+  std::unique_ptr<_generic_N_Vector, VectorDeleter> dense(N_VNew_Serial(kStates, ctx.get()));
+  if (!y || !abstol || !dense) fail("N_VNew_Serial", -1);
+  double* Y = N_VGetArrayPointer(y.get());
+  Y[0] = start.x;
+  Y[1] = start.y;
+  Y[2] = start.theta;
+  Y[3] = start.m;
+  const double force = std::hypot(start.nx, start.ny);
+  const double moment_scale = std::max({ei / length, std::abs(start.m), force * length});
+  double* A = N_VGetArrayPointer(abstol.get());
+  A[0] = options.absolute_tolerance * length;
+  A[1] = options.absolute_tolerance * length;
+  A[2] = options.absolute_tolerance;
+  A[3] = options.absolute_tolerance * moment_scale;
+
+  const int lmm = options.method == ReferenceOptions::Method::kBdf ? CV_BDF : CV_ADAMS;
+  std::unique_ptr<void, CvodeDeleter> mem(CVodeCreate(lmm, ctx.get()));
+  if (!mem) fail("CVodeCreate", -1);
+  check("CVodeSetErrHandlerFn", CVodeSetErrHandlerFn(mem.get(), capture_error, &error));
+  check("CVodeInit", CVodeInit(mem.get(), rod_rhs, 0.0, y.get()));
+  check("CVodeSVtolerances",
+        CVodeSVtolerances(mem.get(), options.relative_tolerance, abstol.get()));
+  RodData data{start.nx, start.ny, 1.0 / ei};
+  check("CVodeSetUserData", CVodeSetUserData(mem.get(), &data));
+  check("CVodeSetStopTime", CVodeSetStopTime(mem.get(), length));
+
+  std::unique_ptr<_generic_SUNMatrix, MatrixDeleter> matrix(
+      SUNDenseMatrix(kStates, kStates, ctx.get()));
+  if (!matrix) fail("SUNDenseMatrix", -1);
+  std::unique_ptr<_generic_SUNLinearSolver, SolverDeleter> solver(
+      SUNLinSol_Dense(y.get(), matrix.get(), ctx.get()));
+  if (!solver) fail("SUNLinSol_Dense", -1);
+  check("CVodeSetLinearSolver", CVodeSetLinearSolver(mem.get(), solver.get(), matrix.get()));
+  check("CVodeSetJacFn", CVodeSetJacFn(mem.get(), rod_jacobian));
+
+  const auto state_of = [&](const double* v) {
+    return RodState<double>{v[0], v[1], v[2], start.nx, start.ny, v[3]};
+  };
+  std::size_t next_sample = 0;
+  const double* D = N_VGetArrayPointer(dense.get());
+  // Samples at s = 0 need no step.
+  while (samples && next_sample < arc_lengths.size() && arc_lengths[next_sample] <= 0.0) {
+    samples->push_back(start);
+    ++next_sample;
+  }
+  double max_m = std::abs(start.m);
+  double s = 0.0;
+  long steps = 0;
+  while (s < length) {
+    // CV_ONE_STEP bypasses CVodeSetMaxNumSteps (it bounds one CV_NORMAL call): count here.
+    if (++steps > options.max_steps) {
+      error = "more than max_steps = " + std::to_string(options.max_steps) +
+              " internal steps before s = " + std::to_string(length) + " m, at s = " +
+              std::to_string(s) + " m";
+      fail("CVode", CV_TOO_MUCH_WORK);
+    }
+    // One internal step at a time: max |m| is tracked at every step and the samples come from
+    // the dense output of the step that covers them.
+    check("CVode", CVode(mem.get(), length, y.get(), &s, CV_ONE_STEP));
+    max_m = std::max(max_m, std::abs(Y[3]));
+    while (samples && next_sample < arc_lengths.size() &&
+           (arc_lengths[next_sample] <= s || s >= length)) {
+      const double at = std::min(arc_lengths[next_sample], s);
+      check("CVodeGetDky", CVodeGetDky(mem.get(), at, 0, dense.get()));
+      samples->push_back(state_of(D));
+      ++next_sample;
+    }
+  }
+  if (max_abs_moment) *max_abs_moment = max_m;
+  return state_of(Y);
+}
+
+// Scaled unknowns (wrenches, pose) of the forward problem, as in pcr::kinematics.hpp.
+ShootingVector pack_forward(const ShootingPoint<double>& p, int n, const ShootingScale& scale) {
+  ShootingVector z(3 * n + 3);
+  for (int i = 0; i < n; ++i) {
+    z(3 * i + 0) = p.wrenches[i].nx / scale.force;
+    z(3 * i + 1) = p.wrenches[i].ny / scale.force;
+    z(3 * i + 2) = p.wrenches[i].m / scale.moment();
+  }
+  z(3 * n + 0) = p.pose.x / scale.length;
+  z(3 * n + 1) = p.pose.y / scale.length;
+  z(3 * n + 2) = p.pose.theta;
+  return z;
+}
+
+ShootingPoint<double> unpack_forward(const ShootingVector& z, const JointVector& q, int n,
+                                     const ShootingScale& scale) {
+  ShootingPoint<double> p;
+  for (int i = 0; i < n; ++i) {
+    p.q[i] = q(i);
+    p.wrenches[i] = Wrench<double>{z(3 * i) * scale.force, z(3 * i + 1) * scale.force,
+                                   z(3 * i + 2) * scale.moment()};
+  }
+  p.pose = Pose2<double>{z(3 * n) * scale.length, z(3 * n + 1) * scale.length, z(3 * n + 2)};
+  return p;
+}
+
+}  // namespace
+
+RodState<double> integrate_rod_reference(const RodState<double>& start, double ei, double length,
+                                         const ReferenceOptions& options,
+                                         double* max_abs_moment) {
+  return integrate(start, ei, length, options, {}, nullptr, max_abs_moment);
+}
+
+std::vector<RodState<double>> sample_rod_reference(const RodState<double>& start, double ei,
+                                                   double length,
+                                                   const std::vector<double>& arc_lengths,
+                                                   const ReferenceOptions& options) {
+  for (std::size_t i = 0; i < arc_lengths.size(); ++i) {
+    const double s = arc_lengths[i];
+    const std::string name = "arc_lengths[" + std::to_string(i) + "]";
+    if (!(s >= 0.0 && s <= length)) {
+      throw std::invalid_argument("pcr::sample_rod_reference: outside [0, length = " +
+                                  std::to_string(length) + "]: " + describe(name.c_str(), s));
+    }
+    if (i > 0 && s < arc_lengths[i - 1]) {
+      throw std::invalid_argument("pcr::sample_rod_reference: arc lengths must not decrease: " +
+                                  describe(name.c_str(), s));
+    }
+  }
+  std::vector<RodState<double>> samples;
+  samples.reserve(arc_lengths.size());
+  integrate(start, ei, length, options, arc_lengths, &samples, nullptr);
+  return samples;
+}
+
+double shooting_residual_reference(const RobotParams<double>& robot,
+                                   const ShootingPoint<double>& point,
+                                   const PlatformLoad<double>& load, const ShootingScale& scale,
+                                   ResidualVector<double>& residual,
+                                   const ReferenceOptions& options) {
+  // Mirrors pcr::shooting_residual (pcr/shooting.hpp) equation by equation.
+  const int n = robot.num_limbs;
+  if (n < 2 || n > kMaxLimbs) {
+    throw std::invalid_argument("pcr::shooting_residual_reference: " +
+                                describe("robot.num_limbs", n));
+  }
+  residual.resize(3 * n + 3);
+  const double c = std::cos(point.pose.theta), s = std::sin(point.pose.theta);
+  Vector2<double> force_sum = -load.force;
+  double moment_sum = -load.moment;
+  double max_strain = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const LimbParams<double>& limb = robot.limb(i);
+    const Wrench<double>& w = point.wrenches[i];
+    const double ei = limb.bending_stiffness();
+    const Vector2<double> start = limb.proximal_position(point.q[i]);
+    const RodState<double> proximal{start.x(), start.y(), limb.alpha, w.nx, w.ny, w.m};
+    const Vector2<double> arm(c * limb.B.x() - s * limb.B.y(), s * limb.B.x() + c * limb.B.y());
+    const Vector2<double> clamp = point.pose.translation() + arm;
+
+    double max_m = 0.0;
+    const RodState<double> tip = integrate_rod_reference(proximal, ei, limb.length, options, &max_m);
+    residual(3 * i + 0) = (tip.x - clamp.x()) / scale.length;
+    residual(3 * i + 1) = (tip.y - clamp.y()) / scale.length;
+    residual(3 * i + 2) = angle_difference(tip.theta, point.pose.theta + limb.beta);
+    force_sum += Vector2<double>(w.nx, w.ny);
+    moment_sum += arm.x() * w.ny - arm.y() * w.nx + tip.m;
+    max_strain = std::max(max_strain, max_m * limb.diameter / (2.0 * ei));
+  }
+  residual(3 * n + 0) = force_sum.x() / scale.force;
+  residual(3 * n + 1) = force_sum.y() / scale.force;
+  residual(3 * n + 2) = moment_sum / scale.moment();
+  return max_strain;
+}
+
+ForwardSolution forward_kinematics_reference(const RobotParams<double>& robot,
+                                             const JointVector& q, const ForwardSolution& start,
+                                             const ReferenceOptions& options,
+                                             const PlatformLoad<double>& load) {
+  const int n = robot.num_limbs;
+  if (n < 2 || n > kMaxLimbs) {
+    throw std::invalid_argument("pcr::forward_kinematics_reference: " +
+                                describe("robot.num_limbs", n));
+  }
+  if (q.size() != n) {
+    throw std::invalid_argument("pcr::forward_kinematics_reference: q has " +
+                                std::to_string(q.size()) + " entries for " + std::to_string(n) +
+                                " limbs");
+  }
+  if (!q.allFinite()) {
+    throw std::invalid_argument("pcr::forward_kinematics_reference: q is not finite");
+  }
+  const ShootingScale scale = shooting_scale(robot);
+  const int m = 3 * n + 3;
+
+  ShootingPoint<double> start_point;
+  start_point.pose = start.pose;
+  for (int i = 0; i < n; ++i) start_point.wrenches[i] = start.wrenches[i];
+  ShootingVector z = pack_forward(start_point, n, scale);
+
+  ForwardSolution solution;
+  solution.q = q;
+  SolverSummary& summary = solution.summary;
+  ResidualVector<double> r, r_rk4;
+  ShootingMatrix partials;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+
+  // Quasi-Newton: the residual is CVODE's, the matrix the RK4 Jacobian. The fixed point is the
+  // CVODE solution; the iteration contracts by about the RK4 discretisation error of J.
+  ShootingVector best_z = z;
+  double best_norm = std::numeric_limits<double>::infinity();
+  int stalls = 0;
+  summary.status = SolveStatus::kMaxIterations;
+  for (int iter = 0;; ++iter) {
+    ShootingPoint<double> p = unpack_forward(z, q, n, scale);
+    const double strain = shooting_residual_reference(robot, p, load, scale, r, options);
+    ++summary.residual_evaluations;
+    const double norm = r.lpNorm<Eigen::Infinity>();
+    if (iter == 0) summary.initial_residual_norm = norm;
+    if (!std::isfinite(norm)) {
+      summary.status = SolveStatus::kNonFinite;
+      break;
+    }
+    if (norm < best_norm) {
+      best_norm = norm;
+      best_z = z;
+      summary.max_strain = strain;
+      stalls = 0;
+    } else if (++stalls >= 3) {
+      break;  // CVODE's rounding floor, or divergence: keep the best point
+    }
+    if (norm <= options.tolerance) {
+      summary.status = SolveStatus::kConverged;
+      break;
+    }
+    if (iter >= options.max_iterations) break;
+    ++summary.iterations;
+    shooting_residual(robot, p, load, scale, options.jacobian_rod_steps, r_rk4, &partials);
+    lu.compute(Eigen::MatrixXd(partials.leftCols(m)));
+    if (!(std::abs(lu.determinant()) > 0.0) || !(lu.rcond() > 1e-14)) {
+      summary.status = SolveStatus::kSingular;
+      break;
+    }
+    z -= lu.solve(Eigen::VectorXd(r));
+  }
+  summary.final_residual_norm = best_norm;
+  const ShootingPoint<double> p = unpack_forward(best_z, q, n, scale);
+  solution.pose = p.pose;
+  for (int i = 0; i < n; ++i) solution.wrenches[i] = p.wrenches[i];
+  return solution;
+}
+
+}  // namespace pcr
