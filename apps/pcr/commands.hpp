@@ -1,0 +1,101 @@
+#pragma once
+// The `pcr` subcommands. Each lives in apps/pcr/<name>_command.cpp and registers itself on the
+// top-level app; main.cpp calls every register_<name>_command().
+
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "pcr/csv_io.hpp"
+#include "pcr/kinematics.hpp"
+#include "pcr/robot_io.hpp"
+
+void register_fk_command(CLI::App& app);
+void register_ik_command(CLI::App& app);
+void register_robot_command(CLI::App& app);
+void register_workspace_command(CLI::App& app);
+#ifdef PCR_HAS_CALIB
+void register_simulate_command(CLI::App& app);
+void register_sample_command(CLI::App& app);
+void register_sensitivity_command(CLI::App& app);
+#endif
+#ifdef PCR_HAS_VISION
+void register_measure_command(CLI::App& app);
+void register_render_command(CLI::App& app);
+void register_camera_command(CLI::App& app);
+#endif
+
+namespace pcr::cli {
+
+/// Exit status of the run: a subcommand sets 1 when some row failed (main exits with it).
+inline int& exit_status() {
+  static int status = 0;
+  return status;
+}
+
+/// Adds the common `--robot FILE` option (empty: the built-in default robot).
+inline CLI::Option* add_robot_option(CLI::App& command, std::string& path) {
+  return command.add_option("--robot", path,
+                            "pcr-robot JSON description (default: the built-in femto-3pf)");
+}
+
+/// Reads a CSV table from `path`, or from stdin when it is empty or "-".
+inline CsvTable read_table(const std::string& path, const CsvReadOptions& options) {
+  if (path.empty() || path == "-") return parse_csv(std::cin, "<stdin>", options);
+  return read_csv(path, options);
+}
+
+/// Names q1, ..., qn.
+inline std::vector<std::string> joint_names(int n) {
+  std::vector<std::string> names;
+  for (int i = 1; i <= n; ++i) names.push_back("q" + std::to_string(i));
+  return names;
+}
+
+/// The solver options and platform load shared by fk and ik.
+struct SolveArguments {
+  std::string force;  ///< "fx,fy" in N
+  double moment = 0;  ///< N m
+  int steps = SolverOptions().rod_steps;
+
+  void add_to(CLI::App& command) {
+    command.add_option("--force", force, "external force on the platform, fx,fy (N, in W)");
+    command.add_option("--moment", moment, "external moment on the platform, mz (N m)");
+    command.add_option("--steps", steps,
+                       "RK4 steps per rod (0: chosen from the curvature for the default accuracy)")
+        ->check(CLI::Range(0, 100000))
+        ->capture_default_str();
+  }
+
+  PlatformLoad<double> load() const {
+    PlatformLoad<double> load;
+    if (!force.empty()) {
+      const std::string bad = "--force: expected two numbers fx,fy (N), got '" + force + "'";
+      const std::size_t comma = force.find(',');
+      if (comma == std::string::npos) throw InputError(bad);
+      char* end = nullptr;
+      const std::string fx = force.substr(0, comma), fy = force.substr(comma + 1);
+      load.force.x() = std::strtod(fx.c_str(), &end);
+      if (fx.empty() || *end != '\0') throw InputError(bad);
+      load.force.y() = std::strtod(fy.c_str(), &end);
+      if (fy.empty() || *end != '\0') throw InputError(bad);
+    }
+    load.moment = moment;
+    if (!load.force.allFinite() || !std::isfinite(load.moment)) {
+      throw InputError("--force/--moment: non-finite load");
+    }
+    return load;
+  }
+
+  SolverOptions options() const {
+    SolverOptions options;
+    options.rod_steps = steps;
+    return options;
+  }
+};
+
+}  // namespace pcr::cli

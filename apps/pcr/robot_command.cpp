@@ -1,0 +1,44 @@
+// pcr robot: validate a pcr-robot description and print it in canonical form.
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+
+namespace {
+
+struct RobotArguments {
+  std::string robot, output;
+};
+
+void run_robot(const RobotArguments& args) {
+  using namespace pcr;
+  const RobotDescription robot = load_robot_or_default(args.robot);
+  if (args.output.empty() || args.output == "-") {
+    std::cout << robot_to_json(robot);
+  } else {
+    save_robot(robot, args.output);
+  }
+  const RobotParams<double>& p = robot.params;
+  double l_min = p.limb(0).length, l_max = l_min;
+  for (int i = 1; i < p.num_limbs; ++i) {
+    l_min = std::min(l_min, p.limb(i).length);
+    l_max = std::max(l_max, p.limb(i).length);
+  }
+  std::cerr << (args.robot.empty() ? "<default robot>" : args.robot) << ": '" << robot.name
+            << "', " << p.num_limbs << " limbs, E = " << format_double(robot.young_modulus)
+            << " Pa, l = " << format_double(l_min)
+            << (l_max != l_min ? " to " + format_double(l_max) : std::string()) << " m, "
+            << (robot.uncertainty ? "with" : "without") << " uncertainty: valid\n";
+}
+
+}  // namespace
+
+void register_robot_command(CLI::App& app) {
+  auto args = std::make_shared<RobotArguments>();
+  CLI::App* cmd = app.add_subcommand(
+      "robot", "Validate a pcr-robot description and write it in canonical form "
+               "(full precision; a summary goes to stderr).");
+  pcr::cli::add_robot_option(*cmd, args->robot);
+  cmd->add_option("--output", args->output, "output JSON file (default: stdout)");
+  cmd->callback([args] { run_robot(*args); });
+}

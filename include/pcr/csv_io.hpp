@@ -1,0 +1,78 @@
+#pragma once
+// Small numeric CSV tables (joint values, poses, calibration datasets) and atomic output files.
+// Compiled in pcr::io. Format documented in docs/formats.md.
+//
+// Reading rules:
+// - blank lines and lines whose first non-blank character is '#' are skipped;
+// - the first remaining line is a header when none of its fields is a number;
+// - a column whose header name starts with '#' is a comment column: its values are not parsed;
+// - every other field must be a finite decimal number; fields are not quoted.
+// Any violation throws InputError naming the source, the line and the column (both 1-based).
+
+#include <fstream>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "pcr/robot_io.hpp"
+
+namespace pcr {
+
+struct CsvReadOptions {
+  /// The expected column names, in order. Without a header line, every row must have exactly
+  /// this many fields (comment columns can only be declared by a header). With a header line,
+  /// columns are picked by name and every other column must be a '#' comment column.
+  /// Empty: the columns are whatever the header says, or the first row's count without a header.
+  std::vector<std::string> columns;
+  /// With a header line and expected columns: skip (do not parse) columns not in `columns`
+  /// instead of rejecting them. For reading tables written by other tools (e.g. `pcr fk` output).
+  bool ignore_other_columns{false};
+};
+
+struct CsvTable {
+  std::string source;                     ///< file name, or "<stdin>"
+  bool has_header{false};
+  std::vector<std::string> columns;       ///< names of the numeric columns (expected or read)
+  std::vector<std::vector<double>> rows;  ///< numeric columns only, in `columns` order
+  std::vector<int> line_numbers;          ///< 1-based source line of each row
+};
+
+/// Parses CSV text; `source` names it in error messages.
+CsvTable parse_csv(std::istream& in, const std::string& source,
+                   const CsvReadOptions& options = CsvReadOptions());
+/// Reads a CSV file (InputError naming the file when it cannot be opened).
+CsvTable read_csv(const std::string& path, const CsvReadOptions& options = CsvReadOptions());
+
+/// Shortest decimal form that reads back to the same double (at most 17 significant digits);
+/// "nan", "inf", "-inf" for non-finite values.
+std::string format_double(double value);
+
+/// Joins fields with commas and a trailing newline.
+std::string csv_line(const std::vector<std::string>& fields);
+
+/// An output stream that is stdout when `path` is empty or "-", otherwise a temporary file in the
+/// same directory renamed over `path` by commit(). Dropped uncommitted, the temporary is removed,
+/// so a failed run never leaves a half-written file behind.
+class OutputFile {
+ public:
+  explicit OutputFile(const std::string& path);
+  ~OutputFile();
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+
+  std::ostream& stream();
+  /// Flushes and renames the temporary over the target (throws std::runtime_error on failure).
+  void commit();
+
+ private:
+  std::string path_;
+  std::string temp_path_;
+  std::ofstream file_;
+  bool to_stdout_{false};
+  bool committed_{false};
+};
+
+/// Writes `text` to `path` atomically (temporary file + rename).
+void write_file_atomically(const std::string& path, const std::string& text);
+
+}  // namespace pcr

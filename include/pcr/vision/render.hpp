@@ -1,0 +1,85 @@
+#pragma once
+// Synthetic camera images of AprilTags (and rods, outlines, chessboards) lying in the work plane,
+// seen through a pinhole camera with OpenCV distortion. For tests and the end-to-end demo.
+// Anti-aliased by supersampling (each pixel averages s x s samples, every sample is traced exactly
+// through the distortion and the plane), then an illumination gradient, a Gaussian blur and
+// Gaussian noise. The tag bitmaps are the AprilTag library's own (apriltag_to_image).
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "pcr/se2.hpp"
+#include "pcr/vision/camera.hpp"
+#include "pcr/vision/image.hpp"
+
+namespace pcr::vision {
+
+struct RenderTag {
+  std::string family{"tag36h11"};
+  int id{0};
+  double size_m{0.01};  ///< black border edge
+  Pose2<double> pose;   ///< tag frame in the plane frame
+};
+
+/// A dark straight band (a rod, an outline edge) of `width_m`, drawn under the tags.
+struct RenderSegment {
+  Eigen::Vector2d a{0, 0};
+  Eigen::Vector2d b{0, 0};
+  double width_m{125e-6};
+  float intensity{0.15f};
+};
+
+/// A chessboard with `cols` x `rows` inner corners; its corner (0, 0) at `pose`, squares along +x, +y,
+/// with a one-square white margin.
+struct RenderChessboard {
+  int cols{9};
+  int rows{6};
+  double square_m{0.005};
+  Pose2<double> pose;
+};
+
+struct Scene {
+  CameraModel camera;
+  PlanePose plane;
+  std::vector<RenderTag> tags;
+  std::vector<RenderSegment> segments;
+  std::optional<RenderChessboard> chessboard;
+};
+
+struct RenderOptions {
+  int supersampling{4};       ///< s x s samples per pixel
+  double blur_sigma_px{0.0};  ///< Gaussian blur (optics), px
+  double noise_sigma{0.0};    ///< additive Gaussian noise, in units of full scale
+  double gradient{0.0};       ///< illumination: relative change from one image side to the other
+  double gradient_angle{0.5};  ///< direction of the gradient in the image (rad)
+  float background{0.45f};
+  float white{0.92f};
+  float black{0.06f};
+  unsigned seed{1};
+};
+
+GrayImage render_scene(const Scene& scene, const RenderOptions& options);
+
+/// Ground-truth pixel coordinates of a tag's corners (same order as TagDetection::corners).
+std::vector<Eigen::Vector2d> tag_corner_pixels(const Scene& scene, const RenderTag& tag);
+
+}  // namespace pcr::vision
+
+#include "pcr/robot.hpp"
+#include "pcr/vision/mounts.hpp"
+
+namespace pcr::vision {
+
+/// The tags of `layout` placed on `robot`, with the plane frame = W: proximal tags at A_i + q_i
+/// along the actuator direction (q empty = all 0), distal tags on the platform at `platform` (^W T_P).
+/// Each tag is placed so that its clamp point and rod angle (the layout's offsets) fall on the
+/// robot's A_i, alpha_i or B_i, beta_i. Also adds the rods (straight A-B segments, for a person
+/// looking at the image) to `segments` when it is non-null.
+std::vector<RenderTag> mount_tags(const MountLayout& layout, const RobotParams<double>& robot,
+                                  const Pose2<double>& platform, const std::vector<double>& q = {},
+                                  std::vector<RenderSegment>* segments = nullptr);
+
+}  // namespace pcr::vision

@@ -1,0 +1,169 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian 12 machine (root, or a user with sudo):
+#
+#   bash scripts/run.sh demo    install what is missing, build, run the main job
+#   bash scripts/run.sh test    install what is missing, build, run every test (ctest), then the
+#                               C++ tests again under AddressSanitizer + UndefinedBehaviorSanitizer
+#   bash scripts/run.sh setup   only install what is missing (system packages + .venv)
+#   bash scripts/run.sh build   setup, then configure and build build/ (Release)
+#
+# Arguments after `demo` are passed to the main job. Environment: PCR_JOBS (parallel jobs,
+# default nproc), PCR_PYTHON (interpreter for .venv, default python3).
+set -euo pipefail
+
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+ROOT=$(pwd)
+
+# The main job. Switch to `demo` once `pcr demo` exists (and add its targets below).
+MAIN_JOB=(build/apps/pcr workspace)
+MAIN_TARGETS=(pcr_cli)
+
+APT_PACKAGES=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev libceres-dev libopencv-dev libapriltag-dev libsundials-dev
+  libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
+  python3 python3-dev python3-venv python3-pip
+)
+# Python packages of the project virtual environment (.venv); pybind11's minimum is checked below.
+PIP_PACKAGES=('pybind11>=2.12' numpy pytest scikit-build-core matplotlib)
+
+JOBS=${PCR_JOBS:-$(nproc)}
+VENV=$ROOT/.venv
+
+log() { printf '\n==> %s\n' "$*" >&2; }
+die() { printf 'error: %s\n' "$*" >&2; exit 1; }
+
+# ---- system packages -------------------------------------------------------------------------
+install_system_packages() {
+  local missing=() pkg
+  for pkg in "${APT_PACKAGES[@]}"; do
+    # `dpkg -s` also succeeds for removed packages that left their config files behind.
+    if [[ $(dpkg-query -W -f='${db:Status-Status}' "$pkg" 2>/dev/null) != installed ]]; then
+      missing+=("$pkg")
+    fi
+  done
+  if ((${#missing[@]} == 0)); then
+    return
+  fi
+  local sudo=()
+  if [[ $(id -u) -ne 0 ]]; then
+    command -v sudo >/dev/null || die "missing packages (${missing[*]}): run as root or install sudo"
+    sudo=(sudo)
+  fi
+  log "Installing ${missing[*]}"
+  "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update
+  "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive \
+    apt-get install -y --no-install-recommends "${missing[@]}"
+}
+
+# ---- Python virtual environment (pip refuses system-wide installs, PEP 668) ------------------
+venv_satisfied() {
+  "$VENV/bin/python" - "$@" <<'EOF' 2>/dev/null
+import re, sys
+from importlib.metadata import version
+for req in sys.argv[1:]:
+    name, _, minimum = req.partition(">=")
+    have = version(name)  # raises when missing
+    if minimum:
+        as_ints = lambda v: [int(x) for x in re.findall(r"\d+", v)[:3]]
+        if as_ints(have) < as_ints(minimum):
+            sys.exit(1)
+EOF
+}
+
+setup_venv() {
+  local python=${PCR_PYTHON:-python3}
+  if ! "$VENV/bin/python" -c '' 2>/dev/null; then
+    log "Creating $VENV with $(command -v "$python")"
+    rm -rf "$VENV"
+    "$python" -m venv "$VENV"
+  fi
+  if ! venv_satisfied "${PIP_PACKAGES[@]}"; then
+    log "Installing ${PIP_PACKAGES[*]} into $VENV"
+    "$VENV/bin/python" -m pip install --disable-pip-version-check --quiet "${PIP_PACKAGES[@]}"
+  fi
+}
+
+# ---- build -----------------------------------------------------------------------------------
+# configure DIR ARGS...: Ninja for a new build tree; an existing one keeps its generator.
+configure() {
+  local dir=$1
+  shift
+  local generator=()
+  [[ -f $dir/CMakeCache.txt ]] || generator=(-G Ninja)
+  cmake -S "$ROOT" -B "$dir" "${generator[@]}" "$@"
+}
+
+build_main() {
+  local python_args=()
+  # The pybind11 module (issue 5) is built, against .venv, as soon as python/ has a CMakeLists.
+  if [[ -f $ROOT/python/CMakeLists.txt && -x $VENV/bin/python ]]; then
+    python_args=(-DPCR_BUILD_PYTHON=ON "-DPython_EXECUTABLE=$VENV/bin/python"
+      "-Dpybind11_DIR=$("$VENV/bin/python" -m pybind11 --cmakedir)")
+  fi
+  log "Building build/ (Release, $JOBS jobs)"
+  configure build -DCMAKE_BUILD_TYPE=Release "${python_args[@]}"
+  cmake --build build -j "$JOBS" "$@"
+}
+
+# ---- commands --------------------------------------------------------------------------------
+run_demo() {
+  install_system_packages
+  local targets=() t
+  for t in "${MAIN_TARGETS[@]}"; do targets+=(--target "$t"); done
+  build_main "${targets[@]}"
+  log "Running ${MAIN_JOB[*]} $*"
+  "${MAIN_JOB[@]}" "$@"
+}
+
+run_tests() {
+  local start=$SECONDS failed=()
+  install_system_packages
+  setup_venv
+  build_main
+  log "ctest in build/"
+  ctest --test-dir build --output-on-failure -j "$JOBS" --timeout 900 || failed+=("ctest build/")
+  local main_done=$SECONDS
+
+  # The C++ tests again under ASan + UBSan. -O1 with assertions on (Debug keeps Eigen's
+  # bounds checks) keeps the run short.
+  log "Building build-asan/ (AddressSanitizer + UndefinedBehaviorSanitizer)"
+  configure build-asan -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g" \
+    -DPCR_SANITIZE=ON -DPCR_BUILD_BENCHMARKS=OFF -DPCR_BUILD_PYTHON=OFF
+  cmake --build build-asan -j "$JOBS"
+  # Reports go to files too, so one from a child process whose failure a test expects (a CLI
+  # run on a bad file) is not lost.
+  local reports=$ROOT/build-asan/sanitizer-reports
+  rm -rf "$reports"
+  mkdir -p "$reports"
+  log "ctest in build-asan/"
+  ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:log_path=$reports/asan" \
+    UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:log_path=$reports/ubsan" \
+    ctest --test-dir build-asan --output-on-failure -j "$JOBS" --timeout 900 ||
+    failed+=("ctest build-asan/")
+  if compgen -G "$reports/*" >/dev/null; then
+    local f
+    for f in "$reports"/*; do
+      printf '\n---- %s\n' "$f" >&2
+      cat "$f" >&2
+    done
+    failed+=("sanitizer reports in $reports")
+  fi
+
+  log "Timings: build/ + ctest $((main_done - start)) s, build-asan/ + ctest $((SECONDS - main_done)) s"
+  if ((${#failed[@]})); then
+    die "FAILED: ${failed[*]}"
+  fi
+  log "All tests passed"
+}
+
+case ${1:-} in
+  demo) shift; run_demo "$@" ;;
+  test) run_tests ;;
+  setup) install_system_packages; setup_venv ;;
+  build) install_system_packages; setup_venv; build_main ;;
+  *)
+    echo "usage: bash scripts/run.sh {demo|test|setup|build} [main job arguments]" >&2
+    exit 2
+    ;;
+esac

@@ -1,0 +1,473 @@
+#include "pcr/robot_io.hpp"
+
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "pcr/csv_io.hpp"
+
+namespace pcr {
+namespace {
+
+using Json = nlohmann::json;
+
+constexpr int kFormatVersion = 1;
+
+std::string join(const std::string& parent, const std::string& key) {
+  return parent.empty() ? key : parent + "." + key;
+}
+std::string index(const std::string& parent, std::size_t i) {
+  return parent + "[" + std::to_string(i) + "]";
+}
+
+// nlohmann refuses numbers that overflow a double (1e999) without saying where they are. The
+// parse is retried with such a literal replaced by this marker string, so that validation reports
+// it with its field path like any other non-finite number.
+const std::string kOverflowMarker = std::string(1, '\x01') + "pcr-overflow:";
+
+bool is_overflow(const Json& value) {
+  return value.is_string() && value.get_ref<const std::string&>().rfind(kOverflowMarker, 0) == 0;
+}
+
+/// A short rendering of an offending value for messages.
+std::string show(const Json& value) {
+  if (is_overflow(value)) return value.get<std::string>().substr(kOverflowMarker.size());
+  if (value.is_number_float()) return format_double(value.get<double>());
+  std::string text = value.dump();
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text;
+}
+
+/// Reads and validates one description; every error names the source and the field path.
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw InputError(source_ + ": " + (path.empty() ? "" : path + ": ") + what);
+  }
+  [[noreturn]] void fail(const std::string& path, const std::string& what,
+                         const Json& value) const {
+    fail(path, what + ", got " + show(value));
+  }
+
+  /// `object` must be a JSON object whose keys are all in `allowed`.
+  void check_object(const Json& object, const std::string& path,
+                    std::initializer_list<const char*> allowed) const {
+    if (!object.is_object()) fail(path.empty() ? "<root>" : path, "expected an object", object);
+    for (auto it = object.begin(); it != object.end(); ++it) {
+      bool known = false;
+      for (const char* name : allowed) known = known || it.key() == name;
+      if (!known) {
+        std::string names;
+        for (const char* name : allowed) names += (names.empty() ? "" : ", ") + std::string(name);
+        fail(join(path, it.key()), "unknown field (allowed here: " + names + ")");
+      }
+    }
+  }
+
+  const Json& required(const Json& object, const std::string& path, const char* key) const {
+    const auto it = object.find(key);
+    if (it == object.end()) fail(join(path, key), "missing required field");
+    return *it;
+  }
+
+  double number(const Json& value, const std::string& path) const {
+    if (is_overflow(value)) {
+      fail(path, "expected a finite number (this one overflows a double)", value);
+    }
+    if (!value.is_number()) fail(path, "expected a number", value);
+    const double x = value.get<double>();
+    if (!std::isfinite(x)) fail(path, "expected a finite number", value);
+    return x;
+  }
+  double positive(const Json& value, const std::string& path) const {
+    const double x = number(value, path);
+    if (!(x > 0)) fail(path, "must be positive", value);
+    return x;
+  }
+  double non_negative(const Json& value, const std::string& path) const {
+    const double x = number(value, path);
+    if (!(x >= 0)) fail(path, "must be non-negative (a half-width)", value);
+    return x;
+  }
+
+  template <int N>
+  Eigen::Matrix<double, N, 1> vector(const Json& value, const std::string& path,
+                                     bool half_widths = false) const {
+    if (!value.is_array() || value.size() != static_cast<std::size_t>(N)) {
+      fail(path, "expected an array of " + std::to_string(N) + " numbers", value);
+    }
+    Eigen::Matrix<double, N, 1> out;
+    for (int i = 0; i < N; ++i) {
+      const Json& v = value[static_cast<std::size_t>(i)];
+      out(i) = half_widths ? non_negative(v, index(path, i)) : number(v, index(path, i));
+    }
+    return out;
+  }
+
+  Pose2<double> pose(const Json& value, const std::string& path) const {
+    const Eigen::Vector3d v = vector<3>(value, path);
+    return Pose2<double>{v(0), v(1), v(2)};
+  }
+
+  /// Reads the limb uncertainty fields present in `object` over `out` (overrides).
+  void limb_uncertainty(const Json& object, const std::string& path, LimbUncertainty& out) const {
+    for (auto it = object.begin(); it != object.end(); ++it) {
+      const std::string key = it.key();
+      const std::string p = join(path, key);
+      if (key == "E") out.young_modulus = non_negative(*it, p);
+      if (key == "l") out.length = non_negative(*it, p);
+      if (key == "d") out.diameter = non_negative(*it, p);
+      if (key == "alpha") out.alpha = non_negative(*it, p);
+      if (key == "beta") out.beta = non_negative(*it, p);
+      if (key == "gamma") out.gamma = non_negative(*it, p);
+      if (key == "A") out.A = vector<2>(*it, p, true);
+      if (key == "B") out.B = vector<2>(*it, p, true);
+    }
+  }
+
+  RobotUncertainty uncertainty(const Json& object, int num_limbs) const {
+    const std::string path = "uncertainty";
+    check_object(object, path,
+                 {"E", "l", "d", "A", "alpha", "B", "beta", "gamma", "camera", "pattern", "limbs"});
+    RobotUncertainty u;
+    limb_uncertainty(object, path, u.global);
+    if (object.contains("camera")) {
+      u.camera = vector<3>(object["camera"], join(path, "camera"), true);
+    }
+    if (object.contains("pattern")) {
+      u.pattern = vector<3>(object["pattern"], join(path, "pattern"), true);
+    }
+    u.limbs.assign(static_cast<std::size_t>(num_limbs), u.global);
+    if (object.contains("limbs")) {
+      const Json& limbs = object["limbs"];
+      const std::string lpath = join(path, "limbs");
+      if (!limbs.is_array() || limbs.size() != static_cast<std::size_t>(num_limbs)) {
+        fail(lpath, "expected an array of " + std::to_string(num_limbs) +
+                        " objects (one per limb; {} for no override)", limbs);
+      }
+      for (std::size_t i = 0; i < limbs.size(); ++i) {
+        check_object(limbs[i], index(lpath, i),
+                     {"E", "l", "d", "A", "alpha", "B", "beta", "gamma"});
+        limb_uncertainty(limbs[i], index(lpath, i), u.limbs[i]);
+      }
+    }
+    return u;
+  }
+
+  RobotDescription robot(const Json& root) const {
+    check_object(root, "", {"pcr_robot", "name", "E", "limbs", "extrinsics", "uncertainty"});
+    const Json& version = required(root, "", "pcr_robot");
+    if (!version.is_number_integer() || version.get<long long>() != kFormatVersion) {
+      fail("pcr_robot", "unsupported format version (this build reads version " +
+                            std::to_string(kFormatVersion) + ")", version);
+    }
+    RobotDescription out;
+    const Json& name = required(root, "", "name");
+    if (!name.is_string()) fail("name", "expected a string", name);
+    out.name = name.get<std::string>();
+    out.young_modulus = positive(required(root, "", "E"), "E");
+
+    const Json& limbs = required(root, "", "limbs");
+    if (!limbs.is_array()) fail("limbs", "expected an array of limb objects", limbs);
+    if (limbs.size() < 2 || limbs.size() > static_cast<std::size_t>(kMaxLimbs)) {
+      fail("limbs", "expected between 2 and " + std::to_string(kMaxLimbs) + " limbs, got " +
+                        std::to_string(limbs.size()));
+    }
+    out.params.num_limbs = static_cast<int>(limbs.size());
+    for (std::size_t i = 0; i < limbs.size(); ++i) {
+      const std::string path = index("limbs", i);
+      const Json& l = limbs[i];
+      check_object(l, path, {"A", "alpha", "gamma", "B", "beta", "l", "d", "q_range", "E"});
+      LimbParams<double>& limb = out.params.limb(static_cast<int>(i));
+      limb.A = vector<2>(required(l, path, "A"), join(path, "A"));
+      limb.alpha = number(required(l, path, "alpha"), join(path, "alpha"));
+      limb.gamma = number(required(l, path, "gamma"), join(path, "gamma"));
+      limb.B = vector<2>(required(l, path, "B"), join(path, "B"));
+      limb.beta = number(required(l, path, "beta"), join(path, "beta"));
+      limb.length = positive(required(l, path, "l"), join(path, "l"));
+      limb.diameter = positive(required(l, path, "d"), join(path, "d"));
+      limb.young_modulus =
+          l.contains("E") ? positive(l["E"], join(path, "E")) : out.young_modulus;
+      const Json& range = required(l, path, "q_range");
+      const Eigen::Vector2d q = vector<2>(range, join(path, "q_range"));
+      if (q(0) > q(1)) fail(join(path, "q_range"), "min > max", range);
+      limb.q_min = q(0);
+      limb.q_max = q(1);
+    }
+
+    if (root.contains("extrinsics")) {
+      const Json& e = root["extrinsics"];
+      check_object(e, "extrinsics", {"camera", "pattern"});
+      if (e.contains("camera")) {
+        out.params.extrinsics.camera = pose(e["camera"], "extrinsics.camera");
+      }
+      if (e.contains("pattern")) {
+        out.params.extrinsics.pattern = pose(e["pattern"], "extrinsics.pattern");
+      }
+    }
+    if (root.contains("uncertainty")) {
+      out.uncertainty = uncertainty(root["uncertainty"], out.params.num_limbs);
+    }
+    return out;
+  }
+
+ private:
+  std::string source_;
+};
+
+/// 1-based line and column of a byte offset in `text`.
+std::pair<int, int> line_column(const std::string& text, std::size_t offset) {
+  int line = 1, column = 1;
+  for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return {line, column};
+}
+
+/// Offset of `token` in `text` standing alone as a number literal, or npos.
+std::size_t find_number_literal(const std::string& text, const std::string& token) {
+  auto part_of_number = [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'e' || c == 'E' ||
+           c == '+' || c == '-';
+  };
+  for (std::size_t at = text.find(token); at != std::string::npos;
+       at = text.find(token, at + 1)) {
+    std::size_t before = at;
+    while (before > 0 && std::isspace(static_cast<unsigned char>(text[before - 1]))) --before;
+    const bool left = before > 0 && (text[before - 1] == ':' || text[before - 1] == ',' ||
+                                     text[before - 1] == '[');
+    const std::size_t after = at + token.size();
+    const bool right = after >= text.size() || !part_of_number(text[after]);
+    if (left && right) return at;
+  }
+  return std::string::npos;
+}
+
+// ---- writing --------------------------------------------------------------------------------
+// A small pretty printer: objects one field per line, arrays of numbers on one line. Numbers go
+// through nlohmann's shortest round-trip formatting, so load(save(x)) == x bit for bit.
+using Ordered = nlohmann::ordered_json;
+
+void print(const Ordered& value, int indent, std::ostringstream& out) {
+  const std::string pad(static_cast<std::size_t>(indent), ' ');
+  if (value.is_object()) {
+    if (value.empty()) {
+      out << "{}";
+      return;
+    }
+    out << "{\n";
+    std::size_t k = 0;
+    for (auto it = value.begin(); it != value.end(); ++it, ++k) {
+      out << pad << "  " << Ordered(it.key()).dump() << ": ";
+      print(*it, indent + 2, out);
+      out << (k + 1 < value.size() ? ",\n" : "\n");
+    }
+    out << pad << "}";
+  } else if (value.is_array()) {
+    bool flat = true;
+    for (const Ordered& v : value) flat = flat && v.is_primitive();
+    if (flat) {
+      out << "[";
+      for (std::size_t i = 0; i < value.size(); ++i) out << (i ? ", " : "") << value[i].dump();
+      out << "]";
+      return;
+    }
+    out << "[\n";
+    for (std::size_t i = 0; i < value.size(); ++i) {
+      out << pad << "  ";
+      print(value[i], indent + 2, out);
+      out << (i + 1 < value.size() ? ",\n" : "\n");
+    }
+    out << pad << "]";
+  } else {
+    out << value.dump();
+  }
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
+
+bool same_bits(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return same_bits(a(0), b(0)) && same_bits(a(1), b(1));
+}
+
+Ordered pair(const Eigen::Vector2d& v) { return Ordered::array({v(0), v(1)}); }
+Ordered triple(const Eigen::Vector3d& v) { return Ordered::array({v(0), v(1), v(2)}); }
+
+/// Uncertainty fields of `u` that differ from `base` (all of them when base is null).
+Ordered limb_uncertainty_json(const LimbUncertainty& u, const LimbUncertainty* base) {
+  Ordered out = Ordered::object();
+  if (!base || !same_bits(u.young_modulus, base->young_modulus)) out["E"] = u.young_modulus;
+  if (!base || !same_bits(u.length, base->length)) out["l"] = u.length;
+  if (!base || !same_bits(u.diameter, base->diameter)) out["d"] = u.diameter;
+  if (!base || !same_bits(u.A, base->A)) out["A"] = pair(u.A);
+  if (!base || !same_bits(u.alpha, base->alpha)) out["alpha"] = u.alpha;
+  if (!base || !same_bits(u.B, base->B)) out["B"] = pair(u.B);
+  if (!base || !same_bits(u.beta, base->beta)) out["beta"] = u.beta;
+  if (!base || !same_bits(u.gamma, base->gamma)) out["gamma"] = u.gamma;
+  return out;
+}
+
+}  // namespace
+
+RobotDescription parse_robot(const std::string& json_text, const std::string& source) {
+  // Duplicate keys would otherwise silently keep the last value: reject them while parsing.
+  std::vector<std::set<std::string>> keys;
+  const Json::parser_callback_t check_duplicates = [&](int, Json::parse_event_t event,
+                                                       Json& parsed) {
+    if (event == Json::parse_event_t::object_start) keys.emplace_back();
+    if (event == Json::parse_event_t::object_end && !keys.empty()) keys.pop_back();
+    if (event == Json::parse_event_t::key && !keys.empty()) {
+      const std::string key = parsed.get<std::string>();
+      if (!keys.back().insert(key).second) {
+        throw InputError(source + ": duplicate field \"" + key + "\"");
+      }
+    }
+    return true;
+  };
+  Json root;
+  std::string text = json_text;
+  try {
+    for (int attempt = 0;; ++attempt) {
+      try {
+        keys.clear();
+        root = Json::parse(text, check_duplicates);
+        break;
+      } catch (const Json::out_of_range& e) {
+        // 406: a number literal overflows a double. Mark it and parse again (see kOverflowMarker).
+        const std::string what = e.what();
+        const std::size_t begin = what.find("parsing '");
+        const std::size_t end = what.rfind('\'');
+        if (e.id != 406 || begin == std::string::npos || end <= begin + 9 || attempt > 1000) throw;
+        const std::string token = what.substr(begin + 9, end - begin - 9);
+        const std::size_t at = find_number_literal(text, token);
+        if (at == std::string::npos) throw;
+        text.replace(at, token.size(), Json(kOverflowMarker + token).dump());
+      }
+    }
+  } catch (const Json::out_of_range& e) {
+    throw InputError(source + ": " + e.what());
+  } catch (const Json::parse_error& e) {
+    const std::size_t offset = e.byte > 0 ? e.byte - 1 : 0;
+    const auto [line, column] = line_column(text, offset);
+    std::string what = e.what();
+    const std::size_t colon = what.find(": ");  // drop nlohmann's "[json.exception...] at ...:"
+    if (colon != std::string::npos) what = what.substr(colon + 2);
+    throw InputError(source + ":" + std::to_string(line) + ":" + std::to_string(column) +
+                     ": JSON syntax error: " + what);
+  }
+  return Reader(source).robot(root);
+}
+
+RobotDescription load_robot(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open for reading: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path + ": read error");
+  return parse_robot(text.str(), path);
+}
+
+std::string robot_to_json(const RobotDescription& robot) {
+  const RobotParams<double>& params = robot.params;
+  if (params.num_limbs < 2 || params.num_limbs > kMaxLimbs) {
+    throw InputError("robot_to_json: robot '" + robot.name + "' has " +
+                     std::to_string(params.num_limbs) + " limbs (expected 2 to " +
+                     std::to_string(kMaxLimbs) + ")");
+  }
+  Ordered root = Ordered::object();
+  root["pcr_robot"] = kFormatVersion;
+  root["name"] = robot.name;
+  root["E"] = robot.young_modulus;
+  Ordered limbs = Ordered::array();
+  for (int i = 0; i < params.num_limbs; ++i) {
+    const LimbParams<double>& limb = params.limb(i);
+    Ordered l = Ordered::object();
+    l["A"] = pair(limb.A);
+    l["alpha"] = limb.alpha;
+    l["gamma"] = limb.gamma;
+    l["B"] = pair(limb.B);
+    l["beta"] = limb.beta;
+    l["l"] = limb.length;
+    l["d"] = limb.diameter;
+    l["q_range"] = Ordered::array({limb.q_min, limb.q_max});
+    if (!same_bits(limb.young_modulus, robot.young_modulus)) l["E"] = limb.young_modulus;
+    limbs.push_back(l);
+  }
+  root["limbs"] = limbs;
+  const Extrinsics<double>& e = params.extrinsics;
+  root["extrinsics"] = Ordered{{"camera", triple({e.camera.x, e.camera.y, e.camera.theta})},
+                               {"pattern", triple({e.pattern.x, e.pattern.y, e.pattern.theta})}};
+  if (robot.uncertainty) {
+    const RobotUncertainty& u = *robot.uncertainty;
+    Ordered uj = limb_uncertainty_json(u.global, nullptr);
+    uj["camera"] = triple(u.camera);
+    uj["pattern"] = triple(u.pattern);
+    if (!u.limbs.empty()) {
+      if (u.limbs.size() != static_cast<std::size_t>(params.num_limbs)) {
+        throw InputError("robot_to_json: robot '" + robot.name + "': uncertainty.limbs has " +
+                         std::to_string(u.limbs.size()) + " entries for " +
+                         std::to_string(params.num_limbs) + " limbs");
+      }
+      Ordered overrides = Ordered::array();
+      bool any = false;
+      for (const LimbUncertainty& lu : u.limbs) {
+        overrides.push_back(limb_uncertainty_json(lu, &u.global));
+        any = any || !overrides.back().empty();
+      }
+      if (any) uj["limbs"] = overrides;
+    }
+    root["uncertainty"] = uj;
+  }
+  std::ostringstream out;
+  print(root, 0, out);
+  out << "\n";
+  return out.str();
+}
+
+void save_robot(const RobotDescription& robot, const std::string& path) {
+  const std::string text = robot_to_json(robot);
+  // Never write a file that would not load: validate the text first (NaN, l <= 0, ...).
+  parse_robot(text, path + " (being written)");
+  write_file_atomically(path, text);
+}
+
+RobotDescription default_robot() {
+  RobotDescription robot;
+  robot.name = "femto-3pf";
+  robot.params = femto_3pf();
+  robot.young_modulus = robot.params.limb(0).young_modulus;
+  RobotUncertainty u;
+  // Mauze et al. 2021, Section 4: the intervals of the calibrated parameters.
+  u.global.length = 126e-6;
+  u.global.A = Eigen::Vector2d(160e-6, 160e-6);
+  u.global.B = Eigen::Vector2d(160e-6, 160e-6);
+  u.global.alpha = 5e-3;
+  u.global.beta = 5e-3;
+  u.global.gamma = 5e-3;
+  u.global.diameter = 20e-6;
+  u.global.young_modulus = 0.0;
+  u.limbs.assign(static_cast<std::size_t>(robot.params.num_limbs), u.global);
+  u.camera = Eigen::Vector3d(1e-3, 1e-3, 50e-3);
+  u.pattern = Eigen::Vector3d(1e-3, 1e-3, 50e-3);
+  robot.uncertainty = u;
+  return robot;
+}
+
+RobotDescription load_robot_or_default(const std::string& path) {
+  return path.empty() ? default_robot() : load_robot(path);
+}
+
+}  // namespace pcr

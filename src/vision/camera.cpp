@@ -1,0 +1,214 @@
+#include "pcr/vision/camera.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include <Eigen/Dense>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "pcr/robot_io.hpp"
+#include "pcr/vision/image.hpp"
+
+namespace pcr::vision {
+
+namespace {
+
+// OpenCV's distortion of normalised coordinates (rational radial + tangential).
+Eigen::Vector2d distort(const Eigen::VectorXd& d, const Eigen::Vector2d& p) {
+  const auto c = [&](int i) { return i < d.size() ? d[i] : 0.0; };
+  const double x = p.x(), y = p.y(), r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
+  const double radial = (1 + c(0) * r2 + c(1) * r4 + c(4) * r6) / (1 + c(5) * r2 + c(6) * r4 + c(7) * r6);
+  return {x * radial + 2 * c(2) * x * y + c(3) * (r2 + 2 * x * x),
+          y * radial + c(2) * (r2 + 2 * y * y) + 2 * c(3) * x * y};
+}
+
+}  // namespace
+
+Eigen::Vector2d CameraModel::project_normalized(const Eigen::Vector2d& xn) const {
+  const Eigen::Vector2d xd = distort(distortion, xn);
+  return {K(0, 0) * xd.x() + K(0, 1) * xd.y() + K(0, 2), K(1, 1) * xd.y() + K(1, 2)};
+}
+
+Eigen::Vector2d CameraModel::normalize(const Eigen::Vector2d& pixel) const {
+  const double yd = (pixel.y() - K(1, 2)) / K(1, 1);
+  const double xd = (pixel.x() - K(0, 2) - K(0, 1) * yd) / K(0, 0);
+  const Eigen::Vector2d target(xd, yd);
+  Eigen::Vector2d p = target;
+  // Newton on distort(p) = target with a finite-difference Jacobian; converges in a few steps for
+  // any lens OpenCV can calibrate.
+  for (int it = 0; it < 30; ++it) {
+    const Eigen::Vector2d r = distort(distortion, p) - target;
+    if (r.norm() < 1e-15) break;
+    constexpr double h = 1e-7;
+    Eigen::Matrix2d J;
+    J.col(0) = (distort(distortion, p + Eigen::Vector2d(h, 0)) - distort(distortion, p - Eigen::Vector2d(h, 0))) / (2 * h);
+    J.col(1) = (distort(distortion, p + Eigen::Vector2d(0, h)) - distort(distortion, p - Eigen::Vector2d(0, h))) / (2 * h);
+    p -= J.partialPivLu().solve(r);
+  }
+  return p;
+}
+
+Eigen::Vector2d CameraModel::project(const Eigen::Vector3d& pc) const {
+  return project_normalized(Eigen::Vector2d(pc.x() / pc.z(), pc.y() / pc.z()));
+}
+
+PlanePose PlanePose::looking_down(double height_m, double tilt_x, double tilt_y) {
+  PlanePose pose;
+  // Camera z down onto the plane, image x = plane x, image down = plane -y.
+  const Eigen::Matrix3d base = Eigen::Vector3d(1, -1, -1).asDiagonal();
+  pose.rotation = (Eigen::AngleAxisd(tilt_x, Eigen::Vector3d::UnitX()) *
+                   Eigen::AngleAxisd(tilt_y, Eigen::Vector3d::UnitY()))
+                      .toRotationMatrix() *
+                  base;
+  pose.translation = Eigen::Vector3d(0, 0, height_m);
+  return pose;
+}
+
+CameraModel load_camera(const std::string& path) {
+  cv::FileStorage fs;
+  try {
+    fs.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw InputError(path + ": cannot parse the camera file (" + e.what() + ")");
+  }
+  if (!fs.isOpened()) throw InputError(path + ": cannot open the camera file");
+  CameraModel camera;
+  const auto need = [&](const char* key) {
+    cv::FileNode node = fs[key];
+    if (node.empty()) throw InputError(path + ": missing field '" + key + "'");
+    return node;
+  };
+  const auto read_int = [&](const char* key) {
+    cv::FileNode node = need(key);
+    if (!node.isInt() && !node.isReal()) throw InputError(path + ": field '" + key + "' is not a number");
+    const double v = static_cast<double>(node);
+    if (!(v >= 1 && v <= 100000) || v != std::floor(v)) {
+      throw InputError(path + ": field '" + key + "' = " + std::to_string(v) + " is not a valid size in px");
+    }
+    return static_cast<int>(v);
+  };
+  camera.width = read_int("image_width");
+  camera.height = read_int("image_height");
+  cv::Mat K, D;
+  try {
+    need("camera_matrix") >> K;
+    need("distortion_coefficients") >> D;
+  } catch (const cv::Exception& e) {
+    throw InputError(path + ": camera_matrix or distortion_coefficients is not a matrix (" + e.what() + ")");
+  }
+  if (K.rows != 3 || K.cols != 3) {
+    throw InputError(path + ": field 'camera_matrix' must be 3x3, got " + std::to_string(K.rows) +
+                     "x" + std::to_string(K.cols));
+  }
+  K.convertTo(K, CV_64F);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) camera.K(r, c) = K.at<double>(r, c);
+  const int n = static_cast<int>(D.total());
+  if (!(n == 0 || n == 4 || n == 5 || n == 8)) {
+    throw InputError(path + ": field 'distortion_coefficients' must hold 0, 4, 5 or 8 values, got " +
+                     std::to_string(n));
+  }
+  D.convertTo(D, CV_64F);
+  camera.distortion = Eigen::VectorXd::Zero(std::max(n, 5));
+  for (int i = 0; i < n; ++i) camera.distortion[i] = D.ptr<double>()[i];
+  if (!camera.K.allFinite() || !camera.distortion.allFinite()) {
+    throw InputError(path + ": non-finite value in camera_matrix or distortion_coefficients");
+  }
+  if (!(camera.K(0, 0) > 0) || !(camera.K(1, 1) > 0) || camera.K(1, 0) != 0 || camera.K(2, 0) != 0 ||
+      camera.K(2, 1) != 0 || camera.K(2, 2) != 1) {
+    throw InputError(path + ": field 'camera_matrix' is not an intrinsic matrix [fx s cx; 0 fy cy; 0 0 1] with fx, fy > 0");
+  }
+  if (camera.K(0, 2) < 0 || camera.K(0, 2) > camera.width || camera.K(1, 2) < 0 || camera.K(1, 2) > camera.height) {
+    throw InputError(path + ": principal point (" + std::to_string(camera.K(0, 2)) + ", " +
+                     std::to_string(camera.K(1, 2)) + ") lies outside the image_width x image_height = " +
+                     std::to_string(camera.width) + " x " + std::to_string(camera.height) + " image");
+  }
+  return camera;
+}
+
+void save_camera(const CameraModel& camera, const std::string& path, double rms_px) {
+  const std::string tmp = path + ".tmp.yaml";
+  {
+    cv::FileStorage fs(tmp, cv::FileStorage::WRITE);
+    if (!fs.isOpened()) throw std::runtime_error(path + ": cannot write the camera file");
+    cv::Mat K(3, 3, CV_64F), D(1, static_cast<int>(camera.distortion.size()), CV_64F);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) K.at<double>(r, c) = camera.K(r, c);
+    for (int i = 0; i < camera.distortion.size(); ++i) D.at<double>(0, i) = camera.distortion[i];
+    fs << "image_width" << camera.width << "image_height" << camera.height << "camera_matrix" << K
+       << "distortion_coefficients" << D;
+    if (rms_px >= 0) fs << "avg_reprojection_error" << rms_px;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error(path + ": cannot rename " + tmp);
+  }
+}
+
+void check_image_size(const CameraModel& camera, int width, int height,
+                      const std::string& camera_source, const std::string& image_source) {
+  if (width != camera.width || height != camera.height) {
+    throw InputError(image_source + ": image is " + std::to_string(width) + " x " + std::to_string(height) +
+                     " px but the camera file " + camera_source + " describes image_width x image_height = " +
+                     std::to_string(camera.width) + " x " + std::to_string(camera.height));
+  }
+}
+
+CalibrationResult calibrate_camera(const std::vector<std::string>& image_paths,
+                                   const ChessboardSpec& board) {
+  if (board.cols < 2 || board.rows < 2 || !(board.square_m > 0)) {
+    throw InputError("chessboard: need at least 2 x 2 inner corners and a positive square size");
+  }
+  CalibrationResult result;
+  std::vector<std::vector<cv::Point3f>> object_points;
+  std::vector<std::vector<cv::Point2f>> image_points;
+  std::vector<cv::Point3f> board_points;
+  for (int r = 0; r < board.rows; ++r)
+    for (int c = 0; c < board.cols; ++c)
+      board_points.emplace_back(static_cast<float>(c * board.square_m), static_cast<float>(r * board.square_m), 0.f);
+  cv::Size size;
+  for (const std::string& path : image_paths) {
+    const GrayImage image = read_image(path);
+    if (size.width == 0) size = cv::Size(image.width, image.height);
+    if (image.width != size.width || image.height != size.height) {
+      throw InputError(path + ": image size " + std::to_string(image.width) + " x " +
+                       std::to_string(image.height) + " differs from the first image's");
+    }
+    cv::Mat f(image.height, image.width, CV_32F, const_cast<float*>(image.pixels.data())), u8;
+    f.convertTo(u8, CV_8U, 255.0);
+    std::vector<cv::Point2f> corners;
+    const bool found = cv::findChessboardCorners(
+        u8, cv::Size(board.cols, board.rows), corners,
+        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+    if (!found) {
+      result.rejected.push_back(path);
+      continue;
+    }
+    cv::cornerSubPix(u8, corners, cv::Size(5, 5), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS | cv::TermCriteria::COUNT, 100, 1e-4));
+    image_points.push_back(corners);
+    object_points.push_back(board_points);
+    result.used.push_back(path);
+  }
+  if (image_points.size() < 3) {
+    throw InputError("camera calibration: the board (" + std::to_string(board.cols) + " x " +
+                     std::to_string(board.rows) + " inner corners) was found in only " +
+                     std::to_string(image_points.size()) + " image(s), at least 3 are needed");
+  }
+  cv::Mat K, D;
+  std::vector<cv::Mat> rvecs, tvecs;
+  result.rms_px = cv::calibrateCamera(object_points, image_points, size, K, D, rvecs, tvecs);
+  result.camera.width = size.width;
+  result.camera.height = size.height;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) result.camera.K(r, c) = K.at<double>(r, c);
+  result.camera.distortion = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(D.total()));
+  for (int i = 0; i < static_cast<int>(D.total()); ++i) result.camera.distortion[i] = D.ptr<double>()[i];
+  return result;
+}
+
+}  // namespace pcr::vision

@@ -1,0 +1,141 @@
+#include "pcr/vision/mounts.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "pcr/robot_io.hpp"
+#include "pcr/vision/tags.hpp"
+
+namespace pcr::vision {
+
+using nlohmann::json;
+
+int MountLayout::num_limbs() const {
+  int n = 0;
+  for (const Mount& m : mounts) n = std::max(n, m.limb + 1);
+  return n;
+}
+
+int MountLayout::find(int limb, MountRole role) const {
+  for (std::size_t i = 0; i < mounts.size(); ++i)
+    if (mounts[i].limb == limb && mounts[i].role == role) return static_cast<int>(i);
+  return -1;
+}
+
+namespace {
+
+struct Reader {
+  const std::string& source;
+  [[noreturn]] void fail(const std::string& field, const std::string& what) const {
+    throw InputError(source + ": " + field + ": " + what);
+  }
+  double number(const json& j, const std::string& key, const std::string& path) const {
+    if (!j.contains(key)) fail(path + "." + key, "missing");
+    if (!j[key].is_number()) fail(path + "." + key, "not a number (" + j[key].dump() + ")");
+    const double v = j[key].get<double>();
+    if (!std::isfinite(v)) fail(path + "." + key, "not finite");
+    return v;
+  }
+  Eigen::Vector2d pair(const json& j, const std::string& key, const std::string& path) const {
+    if (!j.contains(key)) fail(path + "." + key, "missing");
+    const json& a = j[key];
+    if (!a.is_array() || a.size() != 2 || !a[0].is_number() || !a[1].is_number()) {
+      fail(path + "." + key, "expected [x, y] in metres, got " + a.dump());
+    }
+    return {a[0].get<double>(), a[1].get<double>()};
+  }
+};
+
+}  // namespace
+
+MountLayout parse_mounts(const std::string& text, const std::string& source) {
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::exception& e) {
+    throw InputError(source + ": not valid JSON (" + e.what() + ")");
+  }
+  const Reader r{source};
+  if (!root.is_object()) r.fail("(root)", "expected an object");
+  if (root.contains("format") && root["format"] != "pcr-mounts") {
+    r.fail("format", "expected \"pcr-mounts\", got " + root["format"].dump());
+  }
+  const std::string family = root.value("family", std::string("tag36h11"));
+  const double size = root.contains("tag_size") ? r.number(root, "tag_size", "") : 0.0;
+  if (!root.contains("mounts") || !root["mounts"].is_array() || root["mounts"].empty()) {
+    r.fail("mounts", "missing or empty array");
+  }
+  MountLayout layout;
+  std::set<std::pair<std::string, int>> ids;
+  for (std::size_t i = 0; i < root["mounts"].size(); ++i) {
+    const json& j = root["mounts"][i];
+    const std::string path = "mounts[" + std::to_string(i) + "]";
+    if (!j.is_object()) r.fail(path, "expected an object");
+    Mount m;
+    m.name = j.value("name", path);
+    const std::string where = path + " (" + m.name + ")";
+    const std::string role = j.value("role", std::string());
+    if (role == "proximal") {
+      m.role = MountRole::kProximal;
+    } else if (role == "distal") {
+      m.role = MountRole::kDistal;
+    } else {
+      r.fail(where + ".role", "expected \"proximal\" or \"distal\", got \"" + role + "\"");
+    }
+    const double limb = r.number(j, "limb", where);
+    if (limb < 0 || limb >= 6 || limb != std::floor(limb)) r.fail(where + ".limb", "expected 0..5, got " + j["limb"].dump());
+    m.limb = static_cast<int>(limb);
+    m.family = j.value("family", family);
+    if (!is_known_family(m.family)) r.fail(where + ".family", "unknown tag family \"" + m.family + "\"");
+    const double id = r.number(j, "id", where);
+    if (id < 0 || id != std::floor(id)) r.fail(where + ".id", "expected a non-negative integer, got " + j["id"].dump());
+    m.id = static_cast<int>(id);
+    int total = 0, wab = 0;
+    try {
+      tag_bitmap(m.family, m.id, &total, &wab);
+    } catch (const InputError& e) {
+      r.fail(where + ".id", e.what());
+    }
+    if (!ids.insert({m.family, m.id}).second) {
+      r.fail(where + ".id", "duplicated tag id " + std::to_string(m.id) + " (" + m.family + ")");
+    }
+    m.tag_size = j.contains("tag_size") ? r.number(j, "tag_size", where) : size;
+    if (!(m.tag_size > 0)) r.fail(where + ".tag_size", "must be positive (m), got " + std::to_string(m.tag_size));
+    m.clamp_offset = r.pair(j, "clamp_offset", where);
+    m.clamp_offset_uncertainty = r.pair(j, "clamp_offset_uncertainty", where);
+    m.rod_angle = r.number(j, "rod_angle", where);
+    m.rod_angle_uncertainty = r.number(j, "rod_angle_uncertainty", where);
+    if (m.clamp_offset_uncertainty.minCoeff() < 0 || m.rod_angle_uncertainty < 0) {
+      r.fail(where, "uncertainties must be non-negative");
+    }
+    layout.mounts.push_back(m);
+  }
+  const int n = layout.num_limbs();
+  for (int limb = 0; limb < n; ++limb) {
+    for (MountRole role : {MountRole::kProximal, MountRole::kDistal}) {
+      int count = 0;
+      for (const Mount& m : layout.mounts) count += (m.limb == limb && m.role == role);
+      const std::string name = role == MountRole::kProximal ? "proximal" : "distal";
+      if (count != 1) {
+        r.fail("mounts", "limb " + std::to_string(limb) + " has " + std::to_string(count) + " " + name +
+                             " mounts, expected exactly 1");
+      }
+    }
+  }
+  return layout;
+}
+
+MountLayout load_mounts(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the mount layout file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_mounts(ss.str(), path);
+}
+
+}  // namespace pcr::vision

@@ -1,0 +1,233 @@
+// The `pcr` command-line tool, run as a program on files in a temporary directory.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "pcr/csv_io.hpp"
+#include "pcr/robot_io.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int status = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("pcr_cli_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  /// Runs `pcr <args>` with stdout and stderr captured.
+  Result run(const std::string& args, const std::string& stdin_text = "") {
+    const fs::path in = dir_ / "stdin.txt", out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    std::ofstream(in) << stdin_text;
+    const std::string command = std::string("'") + PCR_CLI_PATH + "' " + args + " < '" +
+                                in.string() + "' > '" + out.string() + "' 2> '" + err.string() +
+                                "'";
+    const int raw = std::system(command.c_str());
+    Result r;
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+  }
+
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path path = dir_ / name;
+    std::ofstream(path) << text;
+    return path.string();
+  }
+
+  /// Reads the named numeric columns of a tool's output (the others, like status, skipped).
+  static pcr::CsvTable parse(const std::string& text, const std::vector<std::string>& columns) {
+    std::istringstream in(text);
+    pcr::CsvReadOptions options;
+    options.columns = columns;
+    options.ignore_other_columns = true;
+    return pcr::parse_csv(in, "output", options);
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(Cli, HelpWorksForEveryCommand) {
+  for (const char* command : {"", "fk", "ik", "robot", "workspace"}) {
+    const Result r = run(std::string(command) + " --help");
+    EXPECT_EQ(r.status, 0) << command;
+    EXPECT_NE(r.out.find("Usage"), std::string::npos) << command << ": " << r.out;
+  }
+  EXPECT_NE(run("fk --help").out.find("--robot"), std::string::npos);
+  EXPECT_NE(run("").status, 0);               // a subcommand is required
+  EXPECT_NE(run("fk --bogus").status, 0);     // bad usage
+  EXPECT_NE(run("fk --bogus").err.find("bogus"), std::string::npos);
+}
+
+TEST_F(Cli, ForwardThenInverseThenForwardReturnsThePose) {
+  // A short joint path (warm starts row to row), a header, a comment, and a symmetric row.
+  const std::string joints = write("q.csv",
+                                   "q1,q2,q3\n"
+                                   "0,0,0\n"
+                                   "# symmetric input: the platform only turns\n"
+                                   "0.002,0.002,0.002\n"
+                                   "0.001,-0.002,0.0005\n"
+                                   "0.0011,-0.0021,0.0006\n"
+                                   "-0.003,0.004,0.001\n");
+  const std::string fk_out = (dir_ / "fk.csv").string();
+  Result r = run("fk --input '" + joints + "' --output '" + fk_out + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const pcr::CsvTable fk =
+      parse(slurp(fk_out), {"q1", "q2", "q3", "x", "y", "theta", "converged", "iterations",
+                            "residual", "max_strain"});
+  ASSERT_EQ(fk.rows.size(), 5u);
+  for (const auto& row : fk.rows) EXPECT_EQ(row[6], 1.0);
+  // Home pose is (0, 0, 0); equal joints on the symmetric robot leave x = y = 0 (120° symmetry).
+  EXPECT_NEAR(std::abs(fk.rows[0][3]) + std::abs(fk.rows[0][4]) + std::abs(fk.rows[0][5]), 0,
+              1e-15);
+  EXPECT_NEAR(fk.rows[1][3], 0, 1e-12);
+  EXPECT_NEAR(fk.rows[1][4], 0, 1e-12);
+  EXPECT_GT(std::abs(fk.rows[1][5]), 1e-3);
+  EXPECT_EQ(fk.rows[2][1], -0.002);  // inputs echoed exactly
+
+  // IK of the poses from stdin, without header.
+  std::string poses;
+  for (const auto& row : fk.rows) {
+    poses += pcr::format_double(row[3]) + "," + pcr::format_double(row[4]) + "," +
+             pcr::format_double(row[5]) + "\n";
+  }
+  r = run("ik", poses);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const pcr::CsvTable ik = parse(r.out, {"x", "y", "theta", "q1", "q2", "q3", "converged",
+                                         "iterations", "residual", "max_strain"});
+  ASSERT_EQ(ik.rows.size(), fk.rows.size());
+  std::string joints_back = "q1,q2,q3\n";
+  for (std::size_t i = 0; i < ik.rows.size(); ++i) {
+    EXPECT_EQ(ik.rows[i][6], 1.0);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(ik.rows[i][3 + k], fk.rows[i][k], 1e-9) << i;
+    joints_back += pcr::format_double(ik.rows[i][3]) + "," + pcr::format_double(ik.rows[i][4]) +
+                   "," + pcr::format_double(ik.rows[i][5]) + "\n";
+  }
+  // FK of the IK output returns the pose.
+  r = run("fk --robot '" + std::string(PCR_SOURCE_DIR) + "/robots/femto-3pf.json'", joints_back);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const pcr::CsvTable back = parse(r.out, {"q1", "q2", "q3", "x", "y", "theta", "converged",
+                                           "iterations", "residual", "max_strain"});
+  ASSERT_EQ(back.rows.size(), fk.rows.size());
+  for (std::size_t i = 0; i < back.rows.size(); ++i) {
+    EXPECT_NEAR(back.rows[i][3], fk.rows[i][3], 1e-12) << i;
+    EXPECT_NEAR(back.rows[i][4], fk.rows[i][4], 1e-12) << i;
+    EXPECT_NEAR(back.rows[i][5], fk.rows[i][5], 1e-12 / 0.03) << i;
+  }
+}
+
+TEST_F(Cli, FailedRowsAreReportedAndTheToolGoesOn) {
+  // Pulling all three rods by 9 mm lies beyond the singularity (issue 2: 6 mm already is).
+  const Result r = run("fk", "0.001,0,0\n-0.009,-0.009,-0.009\n0.001,0.001,0\n");
+  EXPECT_EQ(r.status, 1) << r.err;
+  const pcr::CsvTable t = parse(r.out, {"q1", "q2", "q3", "converged"});  // x is nan when failed
+  ASSERT_EQ(t.rows.size(), 3u);
+  EXPECT_EQ(t.rows[0][3], 1.0);
+  EXPECT_EQ(t.rows[1][3], 0.0);
+  EXPECT_EQ(t.rows[2][3], 1.0);
+  EXPECT_NE(r.err.find("<stdin>:2"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, IkOutOfStrokeIsReported) {
+  // A pure rotation of 0.5 rad needs about 14.7 mm of stroke on every limb (> 10.5 mm).
+  const Result r = run("ik", "x,y,theta\n0,0,0\n0,0,0.5\n");
+  EXPECT_EQ(r.status, 1) << r.err;
+  const pcr::CsvTable t = parse(r.out, {"q1", "converged"});
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.rows[0][1], 1.0);
+  EXPECT_EQ(t.rows[1][1], 0.0);
+  EXPECT_GT(t.rows[1][0], 0.0105);  // the (valid) joint value beyond the stroke is reported
+  EXPECT_NE(r.out.find(",out_of_range,"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, BadRobotFileNamesTheField) {
+  std::string text = pcr::robot_to_json(pcr::default_robot());
+  const std::size_t first = text.find("\"l\": 0.03");
+  const std::size_t third = text.find("\"l\": 0.03", text.find("\"l\": 0.03", first + 1) + 1);
+  ASSERT_NE(third, std::string::npos);
+  text.replace(third, 9, "\"l\": -0.25");
+  const std::string path = write("bad.json", text);
+  for (const char* command : {"fk", "ik", "robot", "workspace --samples 1"}) {
+    const Result r = run(std::string(command) + " --robot '" + path + "'", "0,0,0\n");
+    EXPECT_EQ(r.status, 2) << command;
+    EXPECT_NE(r.err.find("pcr: error: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("bad.json"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("limbs[2].l"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("-0.25"), std::string::npos) << r.err;
+  }
+}
+
+TEST_F(Cli, BadCsvNamesFileLineAndColumn) {
+  const std::string path = write("q.csv", "q1,q2,q3\n0,0,0\n0,x,0\n");
+  Result r = run("fk --input '" + path + "'");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("q.csv:3:2"), std::string::npos) << r.err;
+  r = run("ik", "0,0\n");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("<stdin>:1"), std::string::npos) << r.err;
+  r = run("fk --force 1,y", "0,0,0\n");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, RobotCommandWritesTheCanonicalFile) {
+  const std::string path = (dir_ / "robot.json").string();
+  const Result r = run("robot --output '" + path + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("femto-3pf"), std::string::npos);
+  const pcr::RobotDescription a = pcr::load_robot(path), b = pcr::default_robot();
+  // Equal bit for bit (spot checks; test_robot_io checks every field of the shipped file).
+  EXPECT_EQ(a.params.limb(2).B, b.params.limb(2).B);
+  EXPECT_EQ(a.params.limb(1).alpha, b.params.limb(1).alpha);
+  EXPECT_EQ(slurp(path), slurp(std::string(PCR_SOURCE_DIR) + "/robots/femto-3pf.json"));
+}
+
+TEST_F(Cli, IkRefusesMoreThanThreeLimbs) {
+  pcr::RobotDescription robot = pcr::default_robot();
+  robot.uncertainty.reset();
+  robot.params.num_limbs = 4;
+  robot.params.limb(3) = robot.params.limb(0);
+  robot.params.limb(3).A *= -1.0;
+  const std::string path = (dir_ / "four.json").string();
+  pcr::save_robot(robot, path);
+  const Result r = run("ik --robot '" + path + "'", "0,0,0\n");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("4 limbs"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, WorkspaceSummarises) {
+  const Result r = run("workspace --samples 6 --seed 3");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("# FK (cold from home): "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("# max round-trip error"), std::string::npos) << r.out;
+  // The table part parses (the summary lines are '#' comments).
+  const pcr::CsvTable t = parse(r.out, {"q1", "q2", "q3"});
+  EXPECT_EQ(t.rows.size(), 6u);
+}
+
+}  // namespace

@@ -1,0 +1,212 @@
+// Bad input: each gives an InputError naming the mount, the file or the id. And the camera files.
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "pcr/robot_io.hpp"
+#include "pcr/vision/measure.hpp"
+#include "pcr/vision/render.hpp"
+
+namespace pcr::vision {
+namespace {
+
+std::string tmp(const std::string& name) { return std::string(PCR_BINARY_DIR) + "/test_vision_inputs_" + name; }
+
+MountLayout layout() { return load_mounts(std::string(PCR_SOURCE_DIR) + "/data/mounts-femto-3pf.json"); }
+
+Scene small_scene() {
+  Scene scene;
+  scene.camera.width = scene.camera.height = 1100;
+  scene.camera.K << 2800, 0, 550, 0, 2800, 550, 0, 0, 1;  // 179 um/px at 0.5 m
+  scene.plane = PlanePose::looking_down(0.5);
+  scene.tags = mount_tags(layout(), femto_3pf(), Pose2<double>{});
+  return scene;
+}
+
+GrayImage render(const Scene& s) {
+  RenderOptions opt;
+  opt.supersampling = 2;
+  opt.blur_sigma_px = 0.6;
+  return render_scene(s, opt);
+}
+
+// Runs the measurement and returns the InputError message ("" when none was thrown).
+std::string measure_error(const Scene& s, const MountLayout& l) {
+  try {
+    measure_robot(render(s), "home.png", l, s.camera, femto_3pf());
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(VisionInputs, GoodSceneMeasures) {
+  const Scene s = small_scene();
+  const RobotMeasurement m = measure_robot(render(s), "home.png", layout(), s.camera, femto_3pf());
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR((m.limbs[i].A - femto_3pf().limb(i).A).norm(), 0.0, 20e-6);
+}
+
+TEST(VisionInputs, MissingMarkerNamesTheMount) {
+  Scene s = small_scene();
+  s.tags.erase(s.tags.begin() + 4);  // B2, id 4
+  const std::string e = measure_error(s, layout());
+  EXPECT_NE(e.find("home.png"), std::string::npos) << e;
+  EXPECT_NE(e.find("mount B2"), std::string::npos) << e;
+  EXPECT_NE(e.find("id 4"), std::string::npos) << e;
+}
+
+TEST(VisionInputs, DuplicatedIdNamesTheId) {
+  Scene s = small_scene();
+  RenderTag extra = s.tags[2];
+  extra.pose = Pose2<double>{0.0, 0.0, 0.3};
+  s.tags.push_back(extra);
+  const std::string e = measure_error(s, layout());
+  EXPECT_NE(e.find("tag id 2"), std::string::npos) << e;
+  EXPECT_NE(e.find("2 times"), std::string::npos) << e;
+}
+
+TEST(VisionInputs, WrongFamilyNamesTheMount) {
+  Scene s = small_scene();
+  for (RenderTag& t : s.tags) t.family = "tag25h9";
+  const std::string e = measure_error(s, layout());
+  EXPECT_NE(e.find("mount A1 (tag36h11 id 0) not found"), std::string::npos) << e;
+}
+
+TEST(VisionInputs, MarkerCutByTheBorder) {
+  Scene s = small_scene();
+  // Shift the view so that A1's quiet zone crosses the bottom border (black border still inside).
+  const Eigen::Vector2d c = s.tags[0].pose.translation();
+  const double metres_per_px = 0.5 / 2800;
+  const double half_visible = 0.5 * 0.010 + 0.4 * 0.00125;  // to the middle of the white ring
+  s.plane.translation.x() = -c.x();
+  s.plane.translation.y() = (550 - 0.5 - half_visible / metres_per_px) * metres_per_px + c.y();
+  const std::string e = measure_error(s, layout());
+  EXPECT_NE(e.find("mount A1"), std::string::npos) << e;
+  EXPECT_NE(e.find("is cut by the image border"), std::string::npos) << e;
+}
+
+TEST(VisionInputs, UnreadableAndBlankImagesNameTheFile) {
+  const std::string garbage = tmp("garbage.png");
+  std::ofstream(garbage) << "not an image";
+  try {
+    read_image(garbage);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(garbage), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(read_image(tmp("does-not-exist.png")), InputError);
+  const std::string blank = tmp("blank.png");
+  write_png(GrayImage(200, 100, 0.5f), blank);
+  try {
+    read_image(blank);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("blank"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(blank), std::string::npos) << e.what();
+  }
+}
+
+TEST(VisionInputs, CameraFileRoundTripAndErrors) {
+  const Scene s = small_scene();
+  CameraModel cam = s.camera;
+  cam.distortion << -0.1, 0.05, 1e-4, -2e-4, 0.01;
+  const std::string path = tmp("camera.yaml");
+  save_camera(cam, path);
+  const CameraModel back = load_camera(path);
+  EXPECT_EQ(back.width, 1100);
+  EXPECT_DOUBLE_EQ(back.K(0, 0), 2800);
+  EXPECT_DOUBLE_EQ(back.distortion[3], -2e-4);
+  // normalize() inverts project_normalized().
+  const Eigen::Vector2d xn(0.12, -0.09);
+  EXPECT_LT((back.normalize(back.project_normalized(xn)) - xn).norm(), 1e-12);
+
+  // Wrong dimensions for the image.
+  CameraModel wrong = cam;
+  wrong.width = 1000;
+  wrong.K(0, 2) = 500;
+  try {
+    measure_robot(render(s), "home.png", layout(), wrong, femto_3pf());
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("1100 x 1100"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("home.png"), std::string::npos) << e.what();
+  }
+  // A missing field and a malformed matrix, named with the file.
+  const std::string missing = tmp("missing.yaml");
+  std::ofstream(missing) << "%YAML:1.0\n---\nimage_width: 100\nimage_height: 100\n";
+  try {
+    load_camera(missing);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("camera_matrix"), std::string::npos) << e.what();
+  }
+  const std::string bad = tmp("bad.yaml");
+  std::ofstream(bad) << "%YAML:1.0\n---\nimage_width: 100\nimage_height: 100\ncamera_matrix: !!opencv-matrix\n"
+                        "   rows: 2\n   cols: 2\n   dt: d\n   data: [ 1., 0., 0., 1. ]\n"
+                        "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
+                        "   data: [ 0., 0., 0., 0., 0. ]\n";
+  try {
+    load_camera(bad);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("must be 3x3"), std::string::npos) << e.what();
+  }
+}
+
+TEST(VisionInputs, MountLayoutErrors) {
+  const std::string base = R"({"mounts": [
+    {"name": "A1", "role": "proximal", "limb": 0, "id": 0, "tag_size": 0.01, "clamp_offset": [0.014, 0],
+     "clamp_offset_uncertainty": [0, 0], "rod_angle": 0, "rod_angle_uncertainty": 0},
+    {"name": "B1", "role": "distal", "limb": 0, "id": ID, "tag_size": 0.01, "clamp_offset": [0.014, 0],
+     "clamp_offset_uncertainty": [0, 0], "rod_angle": 3.14, "rod_angle_uncertainty": 0}]})";
+  auto with = [&](const std::string& id) {
+    std::string t = base;
+    t.replace(t.find("ID"), 2, id);
+    return t;
+  };
+  EXPECT_NO_THROW(parse_mounts(with("1"), "m.json"));
+  try {
+    parse_mounts(with("0"), "m.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("duplicated tag id 0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("B1"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parse_mounts(with("100000"), "m.json"), InputError);  // not in tag36h11
+}
+
+// cv::calibrateCamera on rendered chessboards recovers the camera that rendered them.
+TEST(VisionInputs, ChessboardCalibrationRecoversTheCamera) {
+  CameraModel cam;
+  cam.width = 800;
+  cam.height = 600;
+  cam.K << 900, 0, 402, 0, 905, 297, 0, 0, 1;
+  cam.distortion << -0.2, 0.1, 0, 0, 0;
+  std::vector<std::string> paths;
+  const double tilts[][2] = {{0.0, 0.0}, {0.3, 0.0}, {-0.3, 0.1}, {0.1, 0.35}, {0.0, -0.35}, {0.25, 0.25}};
+  for (int k = 0; k < 6; ++k) {
+    Scene s;
+    s.camera = cam;
+    s.plane = PlanePose::looking_down(0.12, tilts[k][0], tilts[k][1]);
+    s.chessboard = RenderChessboard{9, 6, 0.008, Pose2<double>{-0.032, -0.02, 0.05 * k}};
+    RenderOptions opt;
+    opt.supersampling = 3;
+    opt.blur_sigma_px = 0.7;
+    paths.push_back(tmp("board" + std::to_string(k) + ".png"));
+    write_png(render_scene(s, opt), paths.back());
+  }
+  const CalibrationResult r = calibrate_camera(paths, ChessboardSpec{9, 6, 0.008});
+  EXPECT_EQ(r.used.size(), 6u);
+  EXPECT_LT(r.rms_px, 0.2);
+  EXPECT_NEAR(r.camera.K(0, 0), 900, 9);
+  EXPECT_NEAR(r.camera.K(1, 1), 905, 9);
+  EXPECT_NEAR(r.camera.K(0, 2), 402, 8);
+  EXPECT_NEAR(r.camera.K(1, 2), 297, 8);
+  EXPECT_NEAR(r.camera.distortion[0], -0.2, 0.05);
+}
+
+}  // namespace
+}  // namespace pcr::vision
