@@ -131,23 +131,20 @@ run_tests() {
   configure build-asan -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g" \
     -DPCR_SANITIZE=ON -DPCR_BUILD_BENCHMARKS=OFF -DPCR_BUILD_PYTHON=OFF
   cmake --build build-asan -j "$JOBS"
-  # Reports go to files too, so one from a child process whose failure a test expects (a CLI
-  # run on a bad file) is not lost.
-  local reports=$ROOT/build-asan/sanitizer-reports
-  rm -rf "$reports"
-  mkdir -p "$reports"
+  # Every test's output is kept (JUnit XML) and searched for reports, so one from a child process
+  # whose failure a test expects (a CLI run on a bad file) is not lost.
+  local junit=$ROOT/build-asan/ctest-output.xml
+  local report_pattern='SUMMARY: [A-Za-z]+Sanitizer|[0-9]+: runtime error: '
+  rm -f "$junit"
   log "ctest in build-asan/"
-  ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:log_path=$reports/asan" \
-    UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:log_path=$reports/ubsan" \
-    ctest --test-dir build-asan --output-on-failure -j "$JOBS" --timeout 900 ||
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+    UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+    ctest --test-dir build-asan --output-on-failure -j "$JOBS" --timeout 900 \
+    --output-junit "$junit" --test-output-size-passed 1048576 --test-output-size-failed 1048576 ||
     failed+=("ctest build-asan/")
-  if compgen -G "$reports/*" >/dev/null; then
-    local f
-    for f in "$reports"/*; do
-      printf '\n---- %s\n' "$f" >&2
-      cat "$f" >&2
-    done
-    failed+=("sanitizer reports in $reports")
+  if grep -E -q "$report_pattern" "$junit"; then
+    grep -E -B2 -A12 "$report_pattern" "$junit" >&2
+    failed+=("sanitizer reports in $junit")
   fi
 
   log "Timings: build/ + ctest $((main_done - start)) s, build-asan/ + ctest $((SECONDS - main_done)) s"

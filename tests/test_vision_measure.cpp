@@ -132,7 +132,7 @@ int scene_count(int fallback) {
 
 int sweep_count_from_env() {
   const char* env = std::getenv("PCR_VISION_SWEEPS");
-  return env ? std::max(0, std::atoi(env)) : 3;
+  return env ? std::max(0, std::atoi(env)) : 2;
 }
 
 void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Coverage& ca, Coverage& cb,
@@ -220,7 +220,7 @@ void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Co
 TEST(VisionMeasure, RobotIntervalsContainTheTruth) {
   for (bool exact : {true, false}) {
     Coverage cA, cB, ca, cb, cg;
-    const int scenes = scene_count(exact ? 6 : 3);
+    const int scenes = scene_count(exact ? 5 : 2);
     run_coverage(exact, scenes, cA, cB, ca, cb, &cg);
     std::printf("%s offsets, %d scenes: coverage A %.3f (mean half-width %.2f um), B %.3f (%.2f um), alpha %.3f "
                 "(%.3f mrad), beta %.3f (%.3f mrad), gamma %.3f (%.3f mrad, %d sweeps)\n",
@@ -230,7 +230,7 @@ TEST(VisionMeasure, RobotIntervalsContainTheTruth) {
     EXPECT_GE(cB.rate(), 0.95);
     EXPECT_GE(ca.rate(), 0.95);
     EXPECT_GE(cb.rate(), 0.95);
-    EXPECT_GE(cg.rate(), 0.6);  // few sweeps: one miss in three is still allowed
+    EXPECT_GE(cg.rate(), 0.5);  // few sweeps here; PCR_VISION_SWEEPS=30 for a real rate
     if (exact) {
       // Without machining uncertainty the intervals come from the image alone: tight.
       EXPECT_LT(cA.mean(), 40e-6);

@@ -1,0 +1,90 @@
+// pcr sample: joint configurations by Poisson-disc sampling of the reachable joint box.
+// With --validation-output, count + validation-count points are drawn together and split, so the
+// calibration and validation sets are disjoint and spaced by the same radius.
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "pcr/calib/dataset.hpp"
+#include "pcr/calib/sampling.hpp"
+
+namespace {
+
+struct SampleArguments {
+  std::string robot, output, validation_output;
+  int count = pcr::kDefaultCalibrationCount;
+  int validation_count = pcr::kDefaultValidationCount;
+  std::uint64_t seed = 1;
+  double min_distance = 0;
+  double strain_limit = 0.01;
+  std::vector<double> box;
+};
+
+void run_sample(const SampleArguments& args) {
+  using namespace pcr;
+  const RobotDescription robot = load_robot_or_default(args.robot);
+  const int n = robot.params.num_limbs;
+  SamplingOptions options;
+  options.count = args.count + (args.validation_output.empty() ? 0 : args.validation_count);
+  options.seed = args.seed;
+  options.min_distance = args.min_distance;
+  options.strain_limit = args.strain_limit;
+  if (!args.box.empty()) {
+    options.box_min.resize(n);
+    options.box_max.resize(n);
+    if (args.box.size() == 2) {
+      options.box_min.setConstant(args.box[0]);
+      options.box_max.setConstant(args.box[1]);
+    } else if (args.box.size() == static_cast<std::size_t>(2 * n)) {
+      for (int i = 0; i < n; ++i) {
+        options.box_min(i) = args.box[static_cast<std::size_t>(2 * i)];
+        options.box_max(i) = args.box[static_cast<std::size_t>(2 * i + 1)];
+      }
+    } else {
+      throw InputError("--box: expected 2 numbers (min,max for every joint) or " +
+                       std::to_string(2 * n) + " (min1,max1,...), got " +
+                       std::to_string(args.box.size()));
+    }
+  }
+  const SamplingResult result = poisson_disc_sample(robot.params, options);
+  if (!result.complete) {
+    throw std::runtime_error("only " + std::to_string(result.configurations.size()) +
+                             " admissible configurations are " + std::to_string(result.min_distance) +
+                             " m apart; asked for " + std::to_string(options.count) +
+                             " (lower --min-distance)");
+  }
+  std::vector<JointVector> calibration, validation;
+  split_configurations(result.configurations, args.count, &calibration, &validation);
+  write_configurations(calibration, args.output);
+  if (!args.validation_output.empty()) write_configurations(validation, args.validation_output);
+  std::cerr << "pcr sample: " << calibration.size() << " configurations";
+  if (!args.validation_output.empty()) std::cerr << " + " << validation.size() << " validation";
+  std::cerr << ", pairwise >= " << result.min_distance * 1e3 << " mm; " << result.candidates
+            << " FK solves in the last run (" << result.rejected_fk << " without solution, "
+            << result.rejected_strain << " over the strain limit)\n";
+}
+
+}  // namespace
+
+void register_sample_command(CLI::App& app) {
+  auto args = std::make_shared<SampleArguments>();
+  CLI::App* cmd = app.add_subcommand(
+      "sample", "joint configurations by Poisson-disc sampling (FK converged, strain-limited)");
+  pcr::cli::add_robot_option(*cmd, args->robot);
+  cmd->add_option("--count", args->count, "calibration configurations")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--seed", args->seed, "sampling seed")->capture_default_str();
+  cmd->add_option("--output", args->output, "configurations CSV to write (q1,...,qn)")->required();
+  cmd->add_option("--validation-output", args->validation_output,
+                  "also write a disjoint validation set (drawn together, then split)");
+  cmd->add_option("--validation-count", args->validation_count, "validation configurations")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--min-distance", args->min_distance,
+                  "Poisson-disc radius in joint space (m; default: chosen from the count)");
+  cmd->add_option("--box", args->box,
+                  "joint sub-box: min,max for all joints, or min1,max1,...,minn,maxn (m)")
+      ->delimiter(',');
+  cmd->add_option("--strain-limit", args->strain_limit, "max bending strain")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->callback([args] { run_sample(*args); });
+}

@@ -1,0 +1,43 @@
+// pcr sensitivity: the paper's Table 2 for a robot, and the ranking of the parameters by the pose
+// error their uncertainty can cause. See pcr/calib/sensitivity.hpp.
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "pcr/calib/sensitivity.hpp"
+
+namespace {
+
+struct SensitivityArguments {
+  std::string robot, csv, json;
+  double step = 1e-3;
+  pcr::cli::SolveArguments solve;
+};
+
+void run_sensitivity(const SensitivityArguments& args) {
+  using namespace pcr;
+  const RobotDescription robot = load_robot_or_default(args.robot);
+  SensitivityOptions options;
+  options.step = args.step;
+  options.load = args.solve.load();
+  options.solver = args.solve.options();
+  const SensitivityReport report = sensitivity_analysis(robot, options);
+  std::cout << sensitivity_table_text(report);
+  if (!args.csv.empty()) write_file_atomically(args.csv, sensitivity_csv(report));
+  if (!args.json.empty()) write_file_atomically(args.json, sensitivity_json(report));
+}
+
+}  // namespace
+
+void register_sensitivity_command(CLI::App& app) {
+  auto args = std::make_shared<SensitivityArguments>();
+  CLI::App* cmd = app.add_subcommand(
+      "sensitivity", "Table 2: platform pose sensitivity to each kind of parameter, and ranking");
+  pcr::cli::add_robot_option(*cmd, args->robot);
+  cmd->add_option("--csv", args->csv, "also write the table as CSV");
+  cmd->add_option("--json", args->json, "also write the table as JSON");
+  cmd->add_option("--step", args->step, "grid step around the centre of the strokes (m)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  args->solve.add_to(*cmd);
+  cmd->callback([args] { run_sensitivity(*args); });
+}

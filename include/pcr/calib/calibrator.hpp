@@ -1,0 +1,146 @@
+#pragma once
+// Staged, bounded identification of a robot description from measured poses (Mauze et al. 2021,
+// Section 5), with Ceres.
+//
+// - Residuals: PoseMeasurementError (pcr/calib/cost.hpp), one per configuration.
+// - Bounds (Eq. 7): nominal +- bounds_scale * half-width, from the nominal description's
+//   uncertainty section. Parameters with a zero half-width are never free.
+// - Stages (default: the paper's three): (1) extrinsics; (2) l, A, B, alpha + extrinsics; (3) every
+//   parameter with a nonzero half-width. Free parameters through ceres::SubsetManifold.
+// - Gauge. With no load on the platform, these motions change no prediction:
+//     proximal: a rigid motion G of every A_i, alpha_i together with the camera frame ^W T_Se;
+//     distal:   a rigid motion H of every B_i, beta_i together with the pattern frame ^M T_P;
+//     stiffness: a common scale of every rod's bending stiffness E_i d_i^4.
+//   During the stages a weak prior towards the nominal values (gauge_prior_weight, in half-width
+//   units) picks, along the gauge directions only, the representative closest to the nominal:
+//   holding limb 0 at its nominal values instead would push the truth's equivalent outside the
+//   bounds box, and leaving the directions free lets Levenberg-Marquardt drift into the bounds,
+//   where projected steps stall. Its bias on identifiable directions is ~(weight / sigma)^2 of a
+//   half-width, negligible here. After the last stage the gauge is fixed exactly, without
+//   changing any prediction: limb 0 defines the frames, so A_0, alpha_0 (and, distally, B_0,
+//   beta_0) and d_0 get back their nominal (measured) values, the others and the extrinsics follow.
+//   The standard deviations are computed in that gauge (those parameters held), so every reported
+//   value and deviation is relative to limb 0's measured clamps. Gauge directions are detected
+//   (rank of the scaled Jacobian at the solution) and named in the report.
+// - Uncertainty: ceres::Covariance (dense SVD) on the free parameters with the gauge references
+//   held, scaled by the residual variance (sum of squares / (m - p)).
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "pcr/calib/cost.hpp"
+#include "pcr/robot_io.hpp"
+
+namespace pcr {
+
+/// One measured configuration: joints (m) and measured pattern pose ^Se T_M (m, m, rad).
+struct CalibrationSample {
+  JointVector q;
+  Pose2<double> measured;
+};
+
+struct CalibrationStage {
+  std::string name;
+  /// Kinds: "E", "d", "l", "A", "A_x", "A_y", "alpha", "B", "B_x", "B_y", "beta", "gamma",
+  /// "camera", "pattern", "extrinsics", "all".
+  std::vector<std::string> free;
+  double bounds_scale = 1.0;
+};
+
+/// The paper's three stages.
+std::vector<CalibrationStage> default_stages();
+
+/// Throws InputError naming `source` on an unknown kind or a non-positive bounds scale.
+void validate_stages(const std::vector<CalibrationStage>& stages, const std::string& source);
+
+struct CalibrationOptions {
+  std::vector<CalibrationStage> stages = default_stages();
+  double orientation_weight = kDefaultOrientationWeight;  ///< w of Eq. 6 (m/rad)
+  double residual_scale = kDefaultResidualScale;          ///< whitening of the residuals (m)
+  DerivativeMode derivatives = DerivativeMode::kImplicit;
+  SolverOptions fk;
+  int max_iterations = 100;     ///< per stage
+  bool fix_gauge = true;        ///< move the result to the limb-0 gauge (see above)
+  /// Weight of the weak prior towards the nominal values during the stages (whitened residual
+  /// per half-width of deviation). It fixes the gauge directions smoothly; 0 disables it.
+  double gauge_prior_weight = 1e-3;
+  bool compute_covariance = true;
+  /// Progress lines (stage, iteration, cost); empty: silent.
+  std::function<void(const std::string&)> progress;
+};
+
+/// Table 3 of the paper for one model and one set: e_p (Eq. 8, m) and e_theta (Eq. 9, rad),
+/// comparing FK with the platform pose computed from the measurement by Eq. 5.
+struct PoseErrorStats {
+  double max_p = 0, mean_p = 0, min_p = 0;
+  double max_theta = 0, mean_theta = 0, min_theta = 0;
+  int count = 0;   ///< configurations evaluated
+  int failed = 0;  ///< configurations whose FK did not converge (not in the statistics)
+};
+
+struct StageReport {
+  std::string name;
+  std::vector<std::string> free_parameters;
+  double initial_cost = 0;  ///< 1/2 sum F^T F (Eq. 7 / 2), in m^2
+  double final_cost = 0;    ///< m^2
+  int iterations = 0;
+  double time_s = 0;
+  std::string termination;  ///< Ceres' brief report
+  bool usable = false;      ///< Ceres' IsSolutionUsable()
+};
+
+struct ParameterEstimate {
+  std::string name;   ///< "l[1]", "camera_x" ...
+  double nominal = 0;
+  double value = 0;   ///< identified, in the final gauge
+  double std_dev = 0; ///< 0 when not free or gauge reference; NaN when the covariance failed
+  double half_width = 0;
+  bool free = false;        ///< free in the last stage
+  bool gauge_reference = false;  ///< held by the gauge fix
+  bool at_bound = false;    ///< ended (before the gauge fix) within 1e-6 of its bound range
+};
+
+struct GaugeDirection {
+  std::string name;   ///< e.g. "proximal clamps + camera: rotation"
+  std::string combination;  ///< the parameters it moves, e.g. "A_x[*] + camera_x"
+  double relative_gain = 0;  ///< |J g| / (sigma_max |g|), scaled units: ~0 means a gauge
+  bool present = false;      ///< every parameter it moves is free in the last stage
+};
+
+struct CalibrationResult {
+  RobotParams<double> identified;     ///< final parameters (gauge fixed)
+  RobotParams<double> extrinsics_only;  ///< nominal robot with identified extrinsics
+  std::vector<StageReport> stages;
+  std::vector<ParameterEstimate> parameters;  ///< every flat parameter, in flat order
+  std::vector<GaugeDirection> gauge;
+  int free_count = 0;        ///< free parameters of the last stage
+  int jacobian_rank = 0;     ///< numerical rank of the scaled Jacobian on them
+  std::vector<double> singular_values;  ///< of the scaled Jacobian, relative to the largest
+  double residual_variance = 0;  ///< of the whitened residuals: ~1 at the noise floor
+  bool covariance_ok = false;
+};
+
+/// Identifies `nominal` from `data`. Throws InputError when the description has no uncertainty
+/// section, the data does not match the limb count, or a stage is invalid.
+CalibrationResult calibrate(const RobotDescription& nominal,
+                            const std::vector<CalibrationSample>& data,
+                            const CalibrationOptions& options = CalibrationOptions());
+
+/// Table 3 statistics of `robot` (with its extrinsics) on `data`.
+PoseErrorStats pose_errors(const RobotParams<double>& robot,
+                           const std::vector<CalibrationSample>& data,
+                           const SolverOptions& fk = SolverOptions());
+
+/// The flat half-widths of `uncertainty` for a robot with `num_limbs` limbs.
+std::vector<double> parameter_half_widths(const RobotUncertainty& uncertainty, int num_limbs);
+
+/// Moves `params` along the gauge orbit so that limb 0's clamps (A_0, alpha_0 when
+/// `proximal` = 0b111 bits x/y/rotation present, B_0, beta_0 for `distal`) and d_0 (`stiffness`)
+/// take `reference`'s values; predictions (with no load) are unchanged.
+RobotParams<double> fix_gauge(const RobotParams<double>& params,
+                              const RobotParams<double>& reference, bool proximal_translation,
+                              bool proximal_rotation, bool distal_translation,
+                              bool distal_rotation, bool stiffness);
+
+}  // namespace pcr

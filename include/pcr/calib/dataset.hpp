@@ -1,0 +1,48 @@
+#pragma once
+// Calibration datasets and joint-configuration lists as CSV (issue 3, section 1).
+//
+// Dataset: header `q1,...,qn,x,y,theta`, one row per configuration: joint values (m) and the
+// measured pattern pose in the camera frame ^Se T_M (m, m, rad). Configurations: header
+// `q1,...,qn`. Columns whose header starts with '#' are comments (ignored); lines starting with
+// '#' are skipped. A wrong column count, a non-numeric field or a NaN throws InputError naming
+// the file, the line and the column (pcr/csv_io.hpp rules). Files are written atomically.
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "pcr/robot_io.hpp"
+#include "pcr/se2.hpp"
+#include "pcr/shooting.hpp"
+
+namespace pcr {
+
+struct Dataset {
+  int num_joints = 0;
+  std::vector<JointVector> q;         ///< joint values (m)
+  std::vector<Pose2<double>> poses;   ///< measured ^Se T_M (m, m, rad)
+  std::vector<int> line_numbers;      ///< 1-based source line of each row (empty if built in code)
+
+  std::size_t size() const { return q.size(); }
+  void add(const JointVector& joints, const Pose2<double>& pose);
+};
+
+/// "q1", ..., "qn", "x", "y", "theta".
+std::vector<std::string> dataset_columns(int num_joints);
+
+/// num_joints < 0: taken from the header (the number of q columns), or columns - 3 without one.
+/// A header is required when num_joints < 0 and the file has comment columns.
+Dataset parse_dataset(std::istream& in, const std::string& source, int num_joints = -1);
+Dataset read_dataset(const std::string& path, int num_joints = -1);
+std::string dataset_to_csv(const Dataset& data);
+/// Temporary file + rename.
+void write_dataset(const Dataset& data, const std::string& path);
+
+/// Joint configurations, header `q1,...,qn` (num_joints < 0: from the file).
+std::vector<JointVector> parse_configurations(std::istream& in, const std::string& source,
+                                              int num_joints = -1);
+std::vector<JointVector> read_configurations(const std::string& path, int num_joints = -1);
+std::string configurations_to_csv(const std::vector<JointVector>& configurations);
+void write_configurations(const std::vector<JointVector>& configurations, const std::string& path);
+
+}  // namespace pcr

@@ -1,0 +1,68 @@
+#pragma once
+// Sensitivity analysis: the paper's Table 2 for any robot (Section 2.3, issue 3 section 3).
+//
+// Configurations: a 3^n grid of joint values around the centre of the strokes with a step of
+// `step` (default 1 mm), minus its centre: 26 configurations for 3 limbs.
+// Derivatives: exact, by the implicit function theorem (forward_pose_implicit with ceres::Jet),
+// of the platform pose ^W T_P w.r.t. each limb parameter. Rows, as in Table 2 (SI units):
+//   E  all Young moduli together (d pose / dE, per Pa),  D  all diameters together,
+//   d_i, alpha_i, beta_i, gamma_i, l_i, A_xi, A_yi, B_xi, B_yi  one limb at a time;
+// each value is max over configurations (and limbs) of |dx/dp|, |dy/dp|, |dtheta/dp|.
+// Ranking: position error = max over configurations and limbs of hypot(dx/dp, dy/dp) * h_p and
+// orientation error = max |dtheta/dp| * h_p, h_p the parameter's uncertainty half-width; sorted by
+// position error (ties: orientation error). For E and D, h is the global (all-limbs) half-width.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "pcr/kinematics.hpp"
+#include "pcr/parameters.hpp"
+#include "pcr/robot_io.hpp"
+
+namespace pcr {
+
+struct SensitivityOptions {
+  double step = 1e-3;  ///< m, grid step around the centre
+  JointVector centre;  ///< m; empty: the middle of each stroke
+  PlatformLoad<double> load;
+  SolverOptions solver;
+};
+
+struct SensitivityRow {
+  std::string kind;           ///< "E", "D", "d", "alpha", "beta", "gamma", "l", "A_x", ...
+  double dx = 0, dy = 0, dtheta = 0;  ///< max |d pose / d p| (SI: m/unit, rad/unit)
+  double half_width = 0;      ///< the largest uncertainty half-width of this kind (SI)
+  double position_error = 0;  ///< m, max hypot(dx, dy) * h over configurations and limbs
+  double orientation_error = 0;  ///< rad, max |dtheta| * h
+};
+
+struct SensitivityReport {
+  double step = 0;
+  std::vector<JointVector> configurations;
+  std::vector<SensitivityRow> rows;  ///< Table 2 order: E, D, d, alpha, beta, gamma, l, A_x, A_y, B_x, B_y
+  std::vector<int> ranking;          ///< indices into rows, most influential first
+};
+
+/// The 3^n grid minus its centre (throws InputError on a non-positive step).
+std::vector<JointVector> sensitivity_configurations(const RobotParams<double>& robot, double step,
+                                                    const JointVector& centre = JointVector());
+
+/// d(^W T_P)/d(limb parameters) at q: 3 rows (x, y, theta), kLimbParameters * n columns in
+/// parameters.hpp order (the extrinsics do not move the platform). Exact (implicit function
+/// theorem). Returns false when FK from home does not converge at q.
+bool platform_parameter_jacobian(const RobotParams<double>& robot, const JointVector& q,
+                                 Eigen::MatrixXd* jacobian,
+                                 const PlatformLoad<double>& load = PlatformLoad<double>(),
+                                 const SolverOptions& solver = SolverOptions());
+
+/// Throws std::runtime_error naming the configuration when FK fails.
+SensitivityReport sensitivity_analysis(const RobotDescription& robot,
+                                       const SensitivityOptions& options = SensitivityOptions());
+
+std::string sensitivity_table_text(const SensitivityReport& report);
+std::string sensitivity_csv(const SensitivityReport& report);
+std::string sensitivity_json(const SensitivityReport& report);
+
+}  // namespace pcr

@@ -1,0 +1,90 @@
+#pragma once
+// A simulated stand-in for the real robot (issue 3, section 1): a "true" robot drawn from a nominal
+// description inside its uncertainty intervals, true extrinsics, and a camera that measures the
+// pattern pose ^Se T_M = (^W T_Se)^-1 . ^W T_P(q) . (^M T_P)^-1 (Eq. 5) with Gaussian noise.
+//
+// How the truth is drawn (seeded, std::mt19937_64, reproducible across runs of the same build):
+// - every limb parameter and every extrinsic parameter = nominal + U(-h, h), h its half-width in
+//   the nominal description's RobotUncertainty (a missing uncertainty means h = 0);
+// - E and d are drawn once for all limbs (one material, one wire): per-limb differences are an
+//   unmodelled effect, switched on by UnmodelledEffects::unequal_diameters.
+// Unmodelled effects, each independent of the others:
+// - misalignments: beta_i and gamma_i get an extra U(-h_m, h_m) on top of their nominal draw, for
+//   a nominal model that treats them as known (the paper neglects beta and gamma);
+// - unequal_diameters: each d_i gets an extra, independent U(-h_d, h_d);
+// - external_load: a constant force and moment applied on the platform (in W, at P's origin).
+
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "pcr/kinematics.hpp"
+#include "pcr/robot_io.hpp"
+
+namespace pcr {
+
+/// The paper's repeatability (standard deviations): 9.13 nm in position, 1.2 urad in orientation.
+inline constexpr double kDefaultNoisePosition = 9.13e-9;  ///< m
+inline constexpr double kDefaultNoiseAngle = 1.2e-6;      ///< rad
+
+struct UnmodelledEffects {
+  bool misalignments = false;
+  double misalignment_half_width = 5e-3;  ///< rad, on beta_i and gamma_i (paper Section 4.3: 5 mrad)
+  bool unequal_diameters = false;
+  double diameter_half_width = 2e-6;      ///< m, independent on each d_i
+  bool external_load = false;
+  /// N, N m (in W, at P). The default robot is stiff: 5 mN along x moves the platform ~1 um.
+  PlatformLoad<double> load{Vector2<double>(5e-3, 0.0), 0.0};
+
+  bool any() const { return misalignments || unequal_diameters || external_load; }
+};
+
+struct VirtualRobotOptions {
+  std::uint64_t seed = 1;
+  double noise_position = kDefaultNoisePosition;  ///< m, std of x and of y (independent)
+  double noise_angle = kDefaultNoiseAngle;        ///< rad, std of theta
+  UnmodelledEffects effects;
+  SolverOptions solver;
+};
+
+/// One simulated measurement.
+struct VirtualMeasurement {
+  bool ok = false;          ///< false: FK of the true robot has no solution at q (see summary)
+  Pose2<double> measured;   ///< ^Se T_M with noise: what the camera reports
+  Pose2<double> exact;      ///< ^Se T_M without noise
+  Pose2<double> platform;   ///< ^W T_P of the true robot
+  SolverSummary summary;    ///< of the true robot's FK
+};
+
+class VirtualRobot {
+ public:
+  /// Draws the truth from `nominal` (throws InputError on an invalid robot or negative option).
+  VirtualRobot(const RobotDescription& nominal, const VirtualRobotOptions& options = {});
+
+  const RobotDescription& nominal() const { return nominal_; }
+  /// The true description (same uncertainty block as the nominal one). Never needed by
+  /// calibration, only by tests and `pcr simulate --truth`.
+  const RobotDescription& truth() const { return truth_; }
+  /// The load actually applied (zero unless effects.external_load).
+  const PlatformLoad<double>& load() const { return load_; }
+  const VirtualRobotOptions& options() const { return options_; }
+
+  /// Moves to q and measures. FK is warm-started from the previous successful call and falls back
+  /// to a cold start from home; the noise stream advances only on success.
+  VirtualMeasurement measure(const JointVector& q);
+
+  /// measure(q), throwing std::runtime_error (naming q and the solver status) on failure.
+  Pose2<double> measure_or_throw(const JointVector& q);
+
+ private:
+  RobotDescription nominal_;
+  RobotDescription truth_;
+  PlatformLoad<double> load_;
+  VirtualRobotOptions options_;
+  std::mt19937_64 noise_rng_;
+  ForwardSolution last_;
+  bool has_last_ = false;
+};
+
+}  // namespace pcr

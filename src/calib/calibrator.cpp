@@ -1,0 +1,655 @@
+// Staged, bounded identification with Ceres (see pcr/calib/calibrator.hpp for the design).
+
+#include "pcr/calib/calibrator.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include <Eigen/SVD>
+#include <ceres/ceres.h>
+#include <ceres/covariance.h>
+#include <ceres/manifold.h>
+#include <ceres/normal_prior.h>
+
+namespace pcr {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// Flat indices of a parameter kind name ("A" covers A_x and A_y, "camera" three values...).
+std::vector<int> indices_of_kind(const std::string& kind, int n) {
+  std::vector<ParameterKind> limb_kinds;
+  std::vector<int> out;
+  const int extrinsics = kLimbParameters * n;
+  if (kind == "all") {
+    for (int k = 0; k < num_parameters(n); ++k) out.push_back(k);
+    return out;
+  }
+  if (kind == "camera" || kind == "extrinsics") {
+    for (int k = 0; k < 3; ++k) out.push_back(extrinsics + k);
+  }
+  if (kind == "pattern" || kind == "extrinsics") {
+    for (int k = 3; k < 6; ++k) out.push_back(extrinsics + k);
+  }
+  if (!out.empty()) return out;
+  if (kind == "E") limb_kinds = {ParameterKind::kYoungModulus};
+  else if (kind == "d") limb_kinds = {ParameterKind::kDiameter};
+  else if (kind == "l") limb_kinds = {ParameterKind::kLength};
+  else if (kind == "A") limb_kinds = {ParameterKind::kAx, ParameterKind::kAy};
+  else if (kind == "A_x") limb_kinds = {ParameterKind::kAx};
+  else if (kind == "A_y") limb_kinds = {ParameterKind::kAy};
+  else if (kind == "alpha") limb_kinds = {ParameterKind::kAlpha};
+  else if (kind == "B") limb_kinds = {ParameterKind::kBx, ParameterKind::kBy};
+  else if (kind == "B_x") limb_kinds = {ParameterKind::kBx};
+  else if (kind == "B_y") limb_kinds = {ParameterKind::kBy};
+  else if (kind == "beta") limb_kinds = {ParameterKind::kBeta};
+  else if (kind == "gamma") limb_kinds = {ParameterKind::kGamma};
+  for (int i = 0; i < n; ++i) {
+    for (ParameterKind pk : limb_kinds) out.push_back(parameter_index(ParameterId{pk, i}, n));
+  }
+  return out;
+}
+
+bool known_kind(const std::string& kind) {
+  static const char* const kKinds[] = {"E",     "d",     "l",     "A",      "A_x",    "A_y",
+                                       "alpha", "B",     "B_x",   "B_y",    "beta",   "gamma",
+                                       "camera", "pattern", "extrinsics", "all"};
+  for (const char* k : kKinds) {
+    if (kind == k) return true;
+  }
+  return false;
+}
+
+std::string format_number(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+
+/// Everything the stages share: current values, warm-start caches, data.
+class Identification {
+ public:
+  Identification(const RobotDescription& nominal, const std::vector<CalibrationSample>& data,
+                 const CalibrationOptions& options)
+      : nominal_(nominal.params), data_(data), options_(options), n_(nominal.params.num_limbs),
+        count_(num_parameters(n_)), values_(static_cast<std::size_t>(count_)),
+        nominal_values_(static_cast<std::size_t>(count_)), caches_(data.size()) {
+    half_widths_ = parameter_half_widths(*nominal.uncertainty, n_);
+    get_parameters(nominal_, nominal_values_.data());
+    values_ = nominal_values_;
+  }
+
+  int count() const { return count_; }
+  const std::vector<double>& values() const { return values_; }
+  void set_values(const std::vector<double>& v) { values_ = v; }
+  const std::vector<double>& half_widths() const { return half_widths_; }
+  const std::vector<double>& nominal_values() const { return nominal_values_; }
+  RobotParams<double> robot() const { return with_parameters(nominal_, values_.data()); }
+
+  /// Free flat indices of a stage: its kinds, restricted to nonzero half-widths.
+  std::vector<int> free_indices(const CalibrationStage& stage) const {
+    std::set<int> free;
+    for (const std::string& kind : stage.free) {
+      for (int k : indices_of_kind(kind, n_)) {
+        if (half_widths_[static_cast<std::size_t>(k)] > 0) free.insert(k);
+      }
+    }
+    return std::vector<int>(free.begin(), free.end());
+  }
+
+  /// Adds every residual block on values_.data(); returns the number of blocks.
+  void add_residuals(ceres::Problem& problem) {
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      problem.AddResidualBlock(
+          PoseMeasurementError::Create(nominal_, data_[j].q, data_[j].measured,
+                                       options_.orientation_weight, options_.residual_scale,
+                                       &caches_[j], options_.fk, options_.derivatives),
+          nullptr, values_.data());
+    }
+  }
+
+  StageReport run_stage(const CalibrationStage& stage) {
+    StageReport report;
+    report.name = stage.name;
+    const std::vector<int> free = free_indices(stage);
+    for (int k : free) report.free_parameters.push_back(parameter_name(parameter_id(k, n_)));
+    const double to_m2 = options_.residual_scale * options_.residual_scale;
+    if (free.empty()) {
+      report.initial_cost = report.final_cost = cost() * to_m2;
+      report.termination = "no free parameter";
+      report.usable = true;
+      return report;
+    }
+    for (int k : free) {  // a previous stage with wider bounds may have left a value outside
+      const double h = stage.bounds_scale * half_widths_[static_cast<std::size_t>(k)];
+      const double c = nominal_values_[static_cast<std::size_t>(k)];
+      double& v = values_[static_cast<std::size_t>(k)];
+      v = std::min(std::max(v, c - h), c + h);
+    }
+    ceres::Problem problem;
+    add_residuals(problem);
+    std::vector<int> constant;
+    std::vector<bool> is_free(static_cast<std::size_t>(count_), false);
+    for (int k : free) is_free[static_cast<std::size_t>(k)] = true;
+    for (int k = 0; k < count_; ++k) {
+      if (!is_free[static_cast<std::size_t>(k)]) constant.push_back(k);
+    }
+    if (!constant.empty()) {
+      problem.SetManifold(values_.data(), new ceres::SubsetManifold(count_, constant));
+    }
+    if (options_.gauge_prior_weight > 0) {
+      // Weak pull towards the nominal values, in half-width units: it only matters along the
+      // gauge directions (where the data says nothing), which it fixes to the representative
+      // closest to the nominal, away from the bounds.
+      Eigen::MatrixXd a = Eigen::MatrixXd::Zero(count_, count_);
+      for (int k : free) {
+        a(k, k) = options_.gauge_prior_weight / half_widths_[static_cast<std::size_t>(k)];
+      }
+      const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(nominal_values_.data(), count_);
+      problem.AddResidualBlock(new ceres::NormalPrior(a, b), nullptr, values_.data());
+    }
+    for (int k : free) {
+      const double h = stage.bounds_scale * half_widths_[static_cast<std::size_t>(k)];
+      const double c = nominal_values_[static_cast<std::size_t>(k)];
+      problem.SetParameterLowerBound(values_.data(), k, c - h);
+      problem.SetParameterUpperBound(values_.data(), k, c + h);
+    }
+
+    ceres::Solver::Options solver;
+    solver.linear_solver_type = ceres::DENSE_QR;
+    solver.max_num_iterations = options_.max_iterations;
+    solver.num_threads = 1;
+    solver.function_tolerance = 1e-10;
+    solver.gradient_tolerance = 1e-12;
+    // Off: Ceres compares the step with |x|, which E (~7e10 Pa) dominates, so any step would
+    // look negligible. The function and gradient tolerances (whitened residuals) decide.
+    solver.parameter_tolerance = 0.0;
+    solver.logging_type = ceres::SILENT;
+    ProgressCallback callback(stage.name, to_m2, options_.progress);
+    if (options_.progress) solver.callbacks.push_back(&callback);
+    ceres::Solver::Summary summary;
+    const auto start = std::chrono::steady_clock::now();
+    ceres::Solve(solver, &problem, &summary);
+    report.initial_cost = summary.initial_cost * to_m2;
+    report.iterations = static_cast<int>(summary.iterations.size()) - 1;
+    // Ceres projects the unconstrained step onto the box, which stalls once a parameter sits on a
+    // bound the step pushes against. Active set: hold the parameters at a bound, solve again.
+    for (int pass = 0; pass < 3; ++pass) {
+      bool changed = false;
+      for (int k : free) {
+        const std::size_t uk = static_cast<std::size_t>(k);
+        const double h = stage.bounds_scale * half_widths_[uk];
+        if (is_free[uk] && std::abs(values_[uk] - nominal_values_[uk]) >= h * (1 - 1e-9)) {
+          is_free[uk] = false;
+          constant.push_back(k);
+          changed = true;
+        }
+      }
+      if (!changed || static_cast<int>(constant.size()) >= count_) break;
+      problem.SetManifold(values_.data(), new ceres::SubsetManifold(count_, constant));
+      ceres::Solve(solver, &problem, &summary);
+      report.iterations += static_cast<int>(summary.iterations.size()) - 1;
+    }
+    report.time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.final_cost = summary.final_cost * to_m2;
+    report.termination = summary.BriefReport();
+    report.usable = summary.IsSolutionUsable();
+    last_free_ = free;
+    last_bounds_scale_ = stage.bounds_scale;
+    return report;
+  }
+
+  /// Ceres cost (whitened) at the current values.
+  double cost() {
+    ceres::Problem problem;
+    add_residuals(problem);
+    double c = 0;
+    problem.Evaluate(ceres::Problem::EvaluateOptions(), &c, nullptr, nullptr, nullptr);
+    return c;
+  }
+
+  /// Whitened residuals and the dense Jacobian over every flat parameter at the current values.
+  bool jacobian(Eigen::MatrixXd* J, Eigen::VectorXd* r) {
+    ceres::Problem problem;
+    add_residuals(problem);
+    double c = 0;
+    std::vector<double> residuals;
+    ceres::CRSMatrix crs;
+    if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), &c, &residuals, nullptr, &crs)) {
+      return false;
+    }
+    J->setZero(crs.num_rows, crs.num_cols);
+    for (int row = 0; row < crs.num_rows; ++row) {
+      for (int p = crs.rows[static_cast<std::size_t>(row)];
+           p < crs.rows[static_cast<std::size_t>(row) + 1]; ++p) {
+        (*J)(row, crs.cols[static_cast<std::size_t>(p)]) = crs.values[static_cast<std::size_t>(p)];
+      }
+    }
+    *r = Eigen::Map<Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(residuals.size()));
+    return true;
+  }
+
+  /// Covariance of the flat vector (whitened units) with `held` indices constant; false on failure.
+  bool covariance(const std::vector<int>& free, const std::vector<int>& held,
+                  Eigen::MatrixXd* cov) {
+    ceres::Problem problem;
+    add_residuals(problem);
+    std::set<int> constant;
+    for (int k = 0; k < count_; ++k) constant.insert(k);
+    for (int k : free) constant.erase(k);
+    for (int k : held) constant.insert(k);
+    if (static_cast<int>(constant.size()) == count_) return false;
+    if (!constant.empty()) {
+      problem.SetManifold(values_.data(),
+                          new ceres::SubsetManifold(
+                              count_, std::vector<int>(constant.begin(), constant.end())));
+    }
+    ceres::Covariance::Options co;
+    co.algorithm_type = ceres::DENSE_SVD;
+    co.null_space_rank = -1;  // drop what is still unidentifiable (pseudo-inverse)
+    co.min_reciprocal_condition_number = 1e-20;
+    co.num_threads = 1;
+    ceres::Covariance covariance(co);
+    std::vector<std::pair<const double*, const double*>> blocks = {
+        {values_.data(), values_.data()}};
+    if (!covariance.Compute(blocks, &problem)) return false;
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> c(count_, count_);
+    if (!covariance.GetCovarianceBlock(values_.data(), values_.data(), c.data())) return false;
+    *cov = c;
+    return true;
+  }
+
+  const std::vector<int>& last_free() const { return last_free_; }
+  double last_bounds_scale() const { return last_bounds_scale_; }
+
+ private:
+  class ProgressCallback : public ceres::IterationCallback {
+   public:
+    ProgressCallback(std::string stage, double to_m2,
+                     const std::function<void(const std::string&)>& sink)
+        : stage_(std::move(stage)), to_m2_(to_m2), sink_(sink) {}
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+      if (sink_) {
+        sink_("stage " + stage_ + ": iteration " + std::to_string(s.iteration) + ", cost " +
+              format_number(s.cost * to_m2_) + " m^2");
+      }
+      return ceres::SOLVER_CONTINUE;
+    }
+
+   private:
+    std::string stage_;
+    double to_m2_;
+    const std::function<void(const std::string&)>& sink_;
+  };
+
+  RobotParams<double> nominal_;
+  const std::vector<CalibrationSample>& data_;
+  const CalibrationOptions& options_;
+  int n_;
+  int count_;
+  std::vector<double> values_;
+  std::vector<double> nominal_values_;
+  std::vector<double> half_widths_;
+  std::vector<FkCache> caches_;
+  std::vector<int> last_free_;
+  double last_bounds_scale_ = 1.0;
+};
+
+struct Generator {
+  std::string name;
+  std::string combination;
+  std::vector<double> direction;  // flat, unscaled
+};
+
+/// Tangent vectors of the gauge orbit at `robot` (see the header).
+std::vector<Generator> gauge_generators(const RobotParams<double>& robot) {
+  const int n = robot.num_limbs;
+  const int count = num_parameters(n);
+  auto idx = [n](ParameterKind kind, int limb) { return parameter_index(ParameterId{kind, limb}, n); };
+  auto blank = [count]() { return std::vector<double>(static_cast<std::size_t>(count), 0.0); };
+  std::vector<Generator> out;
+  const Pose2<double>& camera = robot.extrinsics.camera;
+  const Pose2<double>& pattern = robot.extrinsics.pattern;
+  for (int axis = 0; axis < 2; ++axis) {
+    Generator g{std::string("proximal clamps + camera: translation ") + (axis ? "y" : "x"),
+                std::string(axis ? "A_y[*] + camera_y" : "A_x[*] + camera_x"), blank()};
+    for (int i = 0; i < n; ++i) g.direction[idx(axis ? ParameterKind::kAy : ParameterKind::kAx, i)] = 1;
+    g.direction[idx(axis ? ParameterKind::kCameraY : ParameterKind::kCameraX, -1)] = 1;
+    out.push_back(g);
+  }
+  {
+    Generator g{"proximal clamps + camera: rotation",
+                "(A_x, A_y)[*] rotated about W + alpha[*] + camera", blank()};
+    for (int i = 0; i < n; ++i) {
+      g.direction[idx(ParameterKind::kAx, i)] = -robot.limb(i).A.y();
+      g.direction[idx(ParameterKind::kAy, i)] = robot.limb(i).A.x();
+      g.direction[idx(ParameterKind::kAlpha, i)] = 1;
+    }
+    g.direction[idx(ParameterKind::kCameraX, -1)] = -camera.y;
+    g.direction[idx(ParameterKind::kCameraY, -1)] = camera.x;
+    g.direction[idx(ParameterKind::kCameraTheta, -1)] = 1;
+    out.push_back(g);
+  }
+  for (int axis = 0; axis < 2; ++axis) {
+    Generator g{std::string("distal clamps + pattern: translation ") + (axis ? "y" : "x"),
+                std::string(axis ? "B_y[*] - R(pattern_theta) e_y" : "B_x[*] - R(pattern_theta) e_x"),
+                blank()};
+    for (int i = 0; i < n; ++i) g.direction[idx(axis ? ParameterKind::kBy : ParameterKind::kBx, i)] = 1;
+    const Vector2<double> e = axis ? Vector2<double>(0, 1) : Vector2<double>(1, 0);
+    const Vector2<double> d = -pattern.rotate(e);
+    g.direction[idx(ParameterKind::kPatternX, -1)] = d.x();
+    g.direction[idx(ParameterKind::kPatternY, -1)] = d.y();
+    out.push_back(g);
+  }
+  {
+    Generator g{"distal clamps + pattern: rotation",
+                "(B_x, B_y)[*] rotated about P + beta[*] - pattern_theta", blank()};
+    for (int i = 0; i < n; ++i) {
+      g.direction[idx(ParameterKind::kBx, i)] = -robot.limb(i).B.y();
+      g.direction[idx(ParameterKind::kBy, i)] = robot.limb(i).B.x();
+      g.direction[idx(ParameterKind::kBeta, i)] = 1;
+    }
+    g.direction[idx(ParameterKind::kPatternTheta, -1)] = -1;
+    out.push_back(g);
+  }
+  {
+    Generator g{"bending stiffness: common scale", "d[*] scaled together", blank()};
+    for (int i = 0; i < n; ++i) g.direction[idx(ParameterKind::kDiameter, i)] = robot.limb(i).diameter;
+    out.push_back(g);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<CalibrationStage> default_stages() {
+  return {
+      {"extrinsics", {"camera", "pattern"}, 1.0},
+      {"influential", {"l", "A", "B", "alpha", "camera", "pattern"}, 1.0},
+      {"all", {"all"}, 1.0},
+  };
+}
+
+void validate_stages(const std::vector<CalibrationStage>& stages, const std::string& source) {
+  if (stages.empty()) throw InputError(source + ": no stage");
+  for (std::size_t s = 0; s < stages.size(); ++s) {
+    const std::string where = source + ": stages[" + std::to_string(s) + "]";
+    for (const std::string& kind : stages[s].free) {
+      if (!known_kind(kind)) throw InputError(where + ".free: unknown kind \"" + kind + "\"");
+    }
+    if (!(stages[s].bounds_scale > 0) || !std::isfinite(stages[s].bounds_scale)) {
+      throw InputError(where + ".bounds_scale: must be positive, got " +
+                       format_number(stages[s].bounds_scale));
+    }
+  }
+}
+
+std::vector<double> parameter_half_widths(const RobotUncertainty& u, int num_limbs) {
+  std::vector<double> h(static_cast<std::size_t>(num_parameters(num_limbs)), 0.0);
+  for (int k = 0; k < num_parameters(num_limbs); ++k) {
+    const ParameterId id = parameter_id(k, num_limbs);
+    double& v = h[static_cast<std::size_t>(k)];
+    if (id.limb >= 0) {
+      const LimbUncertainty& l = static_cast<std::size_t>(id.limb) < u.limbs.size()
+                                     ? u.limbs[static_cast<std::size_t>(id.limb)]
+                                     : u.global;
+      switch (id.kind) {
+        case ParameterKind::kYoungModulus: v = l.young_modulus; break;
+        case ParameterKind::kDiameter: v = l.diameter; break;
+        case ParameterKind::kLength: v = l.length; break;
+        case ParameterKind::kAx: v = l.A.x(); break;
+        case ParameterKind::kAy: v = l.A.y(); break;
+        case ParameterKind::kAlpha: v = l.alpha; break;
+        case ParameterKind::kBx: v = l.B.x(); break;
+        case ParameterKind::kBy: v = l.B.y(); break;
+        case ParameterKind::kBeta: v = l.beta; break;
+        default: v = l.gamma; break;
+      }
+    } else {
+      const int e = static_cast<int>(id.kind) - static_cast<int>(ParameterKind::kCameraX);
+      v = e < 3 ? u.camera(e) : u.pattern(e - 3);
+    }
+  }
+  return h;
+}
+
+RobotParams<double> fix_gauge(const RobotParams<double>& params,
+                              const RobotParams<double>& reference, bool proximal_translation,
+                              bool proximal_rotation, bool distal_translation,
+                              bool distal_rotation, bool stiffness) {
+  RobotParams<double> out = params;
+  const int n = params.num_limbs;
+  if (proximal_translation) {
+    // G maps limb 0's estimated proximal clamp frame onto its reference one.
+    const double rot =
+        proximal_rotation ? reference.limb(0).alpha - params.limb(0).alpha : 0.0;
+    const Pose2<double> r{0, 0, rot};
+    const Vector2<double> t = reference.limb(0).A - r.rotate(params.limb(0).A);
+    const Pose2<double> G{t.x(), t.y(), rot};
+    for (int i = 0; i < n; ++i) {
+      out.limb(i).A = G.transform(params.limb(i).A);
+      out.limb(i).alpha = params.limb(i).alpha + rot;
+    }
+    out.extrinsics.camera = G * params.extrinsics.camera;
+  }
+  if (distal_translation) {
+    const double rot = distal_rotation ? reference.limb(0).beta - params.limb(0).beta : 0.0;
+    const Pose2<double> r{0, 0, rot};
+    const Vector2<double> t = reference.limb(0).B - r.rotate(params.limb(0).B);
+    const Pose2<double> H{t.x(), t.y(), rot};
+    for (int i = 0; i < n; ++i) {
+      out.limb(i).B = H.transform(params.limb(i).B);
+      out.limb(i).beta = params.limb(i).beta + rot;
+    }
+    out.extrinsics.pattern = params.extrinsics.pattern * H.inverse();
+  }
+  if (stiffness) {
+    const double s = reference.limb(0).diameter / params.limb(0).diameter;
+    for (int i = 0; i < n; ++i) out.limb(i).diameter = params.limb(i).diameter * s;
+  }
+  return out;
+}
+
+PoseErrorStats pose_errors(const RobotParams<double>& robot,
+                           const std::vector<CalibrationSample>& data, const SolverOptions& fk) {
+  PoseErrorStats stats;
+  stats.min_p = stats.min_theta = std::numeric_limits<double>::infinity();
+  ForwardSolution last;
+  bool has_last = false;
+  for (const CalibrationSample& sample : data) {
+    ForwardSolution s;
+    if (has_last) s = forward_kinematics(robot, sample.q, last, fk);
+    if (!has_last || !s.summary.converged()) s = forward_kinematics(robot, sample.q, fk);
+    if (!s.summary.converged()) {
+      ++stats.failed;
+      continue;
+    }
+    last = s;
+    has_last = true;
+    const Pose2<double> measured = robot.extrinsics.platform_from_measurement(sample.measured);
+    const double e_p = std::hypot(s.pose.x - measured.x, s.pose.y - measured.y);
+    const double e_t = std::abs(wrap_angle(s.pose.theta - measured.theta));
+    stats.max_p = std::max(stats.max_p, e_p);
+    stats.min_p = std::min(stats.min_p, e_p);
+    stats.mean_p += e_p;
+    stats.max_theta = std::max(stats.max_theta, e_t);
+    stats.min_theta = std::min(stats.min_theta, e_t);
+    stats.mean_theta += e_t;
+    ++stats.count;
+  }
+  if (stats.count > 0) {
+    stats.mean_p /= stats.count;
+    stats.mean_theta /= stats.count;
+  } else {
+    stats.min_p = stats.min_theta = kNaN;
+    stats.max_p = stats.max_theta = stats.mean_p = stats.mean_theta = kNaN;
+  }
+  return stats;
+}
+
+CalibrationResult calibrate(const RobotDescription& nominal,
+                            const std::vector<CalibrationSample>& data,
+                            const CalibrationOptions& options) {
+  const std::string source = "calibration of \"" + nominal.name + "\"";
+  if (!nominal.uncertainty) {
+    throw InputError(source + ": the nominal description has no \"uncertainty\" section; the "
+                              "bounds of the identification (Eq. 7) come from it");
+  }
+  const int n = nominal.params.num_limbs;
+  if (n < 2 || n > kMaxLimbs) throw InputError(source + ": invalid limb count " + std::to_string(n));
+  if (data.empty()) throw InputError(source + ": no calibration configuration");
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    if (data[j].q.size() != n) {
+      throw InputError(source + ": configuration " + std::to_string(j + 1) + " has " +
+                       std::to_string(data[j].q.size()) + " joint values, the robot " +
+                       std::to_string(n) + " limbs");
+    }
+  }
+  if (!(options.orientation_weight >= 0) || !(options.residual_scale > 0)) {
+    throw InputError(source + ": orientation weight must be >= 0 and residual scale > 0, got " +
+                     format_number(options.orientation_weight) + " and " +
+                     format_number(options.residual_scale));
+  }
+  validate_stages(options.stages, source);
+
+  CalibrationResult result;
+  Identification id(nominal, data, options);
+  const int count = id.count();
+
+  // Table 3's "nominal model": the nominal robot with the extrinsics alone identified.
+  bool first_is_extrinsics = true;
+  for (int k : id.free_indices(options.stages.front())) {
+    first_is_extrinsics = first_is_extrinsics && parameter_id(k, n).limb < 0;
+  }
+  if (!first_is_extrinsics) {
+    id.run_stage(CalibrationStage{"extrinsics (nominal model)", {"extrinsics"}, 1.0});
+    result.extrinsics_only = id.robot();
+    id.set_values(id.nominal_values());
+  }
+  for (std::size_t s = 0; s < options.stages.size(); ++s) {
+    result.stages.push_back(id.run_stage(options.stages[s]));
+    if (s == 0 && first_is_extrinsics) result.extrinsics_only = id.robot();
+  }
+
+  // Parameters at a bound (before the gauge fix, in the last stage's box).
+  const std::vector<int>& free = id.last_free();
+  std::vector<bool> is_free(static_cast<std::size_t>(count), false);
+  for (int k : free) is_free[static_cast<std::size_t>(k)] = true;
+  result.parameters.resize(static_cast<std::size_t>(count));
+  for (int k = 0; k < count; ++k) {
+    ParameterEstimate& p = result.parameters[static_cast<std::size_t>(k)];
+    const std::size_t uk = static_cast<std::size_t>(k);
+    p.name = parameter_name(parameter_id(k, n));
+    p.nominal = id.nominal_values()[uk];
+    p.half_width = id.half_widths()[uk];
+    p.free = is_free[uk];
+    if (p.free) {
+      const double h = id.last_bounds_scale() * p.half_width;
+      p.at_bound = std::abs(std::abs(id.values()[uk] - p.nominal) - h) <= 1e-6 * h;
+    }
+  }
+
+  // Gauge: which generators only move free parameters.
+  const std::vector<Generator> generators = gauge_generators(id.robot());
+  std::vector<bool> present(generators.size(), false);
+  for (std::size_t g = 0; g < generators.size(); ++g) {
+    bool ok = true, any = false;
+    for (int k = 0; k < count; ++k) {
+      if (generators[g].direction[static_cast<std::size_t>(k)] != 0.0) {
+        ok = ok && is_free[static_cast<std::size_t>(k)];
+        any = true;
+      }
+    }
+    present[g] = ok && any;
+  }
+  const auto flat = [n](ParameterKind kind, int limb) {
+    return parameter_index(ParameterId{kind, limb}, n);
+  };
+  const bool prox_t = present[0] && present[1];
+  const bool prox_r = prox_t && present[2];
+  const bool dist_t = present[3] && present[4];
+  const bool dist_r = dist_t && present[5];
+  const bool stiff = present[6];
+  if (options.fix_gauge) {
+    const RobotParams<double> fixed =
+        fix_gauge(id.robot(), nominal.params, prox_t, prox_r, dist_t, dist_r, stiff);
+    std::vector<double> v(static_cast<std::size_t>(count));
+    get_parameters(fixed, v.data());
+    id.set_values(v);
+  }
+  std::vector<int> held;
+  if (prox_t) held.insert(held.end(), {flat(ParameterKind::kAx, 0), flat(ParameterKind::kAy, 0)});
+  if (prox_r) held.push_back(flat(ParameterKind::kAlpha, 0));
+  if (dist_t) held.insert(held.end(), {flat(ParameterKind::kBx, 0), flat(ParameterKind::kBy, 0)});
+  if (dist_r) held.push_back(flat(ParameterKind::kBeta, 0));
+  if (stiff) held.push_back(flat(ParameterKind::kDiameter, 0));
+  result.identified = id.robot();
+  result.free_count = static_cast<int>(free.size());
+
+  // Rank of the Jacobian (columns scaled by the half-widths) on the free parameters.
+  Eigen::MatrixXd J;
+  Eigen::VectorXd r;
+  if (!free.empty() && id.jacobian(&J, &r)) {
+    Eigen::MatrixXd Js(J.rows(), static_cast<Eigen::Index>(free.size()));
+    for (std::size_t c = 0; c < free.size(); ++c) {
+      Js.col(static_cast<Eigen::Index>(c)) =
+          J.col(free[c]) * id.half_widths()[static_cast<std::size_t>(free[c])];
+    }
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js);
+    const Eigen::VectorXd sv = svd.singularValues();
+    const double smax = sv.size() > 0 ? sv(0) : 0.0;
+    for (Eigen::Index k = 0; k < sv.size(); ++k) {
+      result.singular_values.push_back(smax > 0 ? sv(k) / smax : 0.0);
+      if (smax > 0 && sv(k) > 1e-7 * smax) ++result.jacobian_rank;
+    }
+    const std::vector<Generator> final_generators = gauge_generators(id.robot());
+    for (std::size_t g = 0; g < final_generators.size(); ++g) {
+      GaugeDirection d;
+      d.name = final_generators[g].name;
+      d.combination = final_generators[g].combination;
+      d.present = present[g];
+      Eigen::VectorXd scaled(static_cast<Eigen::Index>(free.size()));
+      for (std::size_t c = 0; c < free.size(); ++c) {
+        const std::size_t k = static_cast<std::size_t>(free[c]);
+        scaled(static_cast<Eigen::Index>(c)) = final_generators[g].direction[k] / id.half_widths()[k];
+      }
+      d.relative_gain = (d.present && smax > 0 && scaled.norm() > 0)
+                            ? (Js * scaled).norm() / (smax * scaled.norm())
+                            : kNaN;
+      result.gauge.push_back(d);
+    }
+    const double m = static_cast<double>(r.size());
+    const double dof = m - static_cast<double>(result.jacobian_rank);
+    result.residual_variance = dof > 0 ? r.squaredNorm() / dof : kNaN;
+  }
+
+  // Standard deviations in the limb-0 gauge.
+  for (int k : held) result.parameters[static_cast<std::size_t>(k)].gauge_reference = true;
+  Eigen::MatrixXd cov;
+  if (options.compute_covariance && !free.empty() && std::isfinite(result.residual_variance) &&
+      id.covariance(free, held, &cov)) {
+    result.covariance_ok = true;
+    for (int k : free) {
+      ParameterEstimate& p = result.parameters[static_cast<std::size_t>(k)];
+      p.std_dev = p.gauge_reference ? 0.0 : std::sqrt(std::max(0.0, cov(k, k) * result.residual_variance));
+    }
+  } else {
+    for (int k : free) {
+      ParameterEstimate& p = result.parameters[static_cast<std::size_t>(k)];
+      p.std_dev = p.gauge_reference ? 0.0 : kNaN;
+    }
+  }
+  for (int k = 0; k < count; ++k) {
+    result.parameters[static_cast<std::size_t>(k)].value = id.values()[static_cast<std::size_t>(k)];
+  }
+  return result;
+}
+
+}  // namespace pcr

@@ -1,0 +1,174 @@
+#include "pcr/calib/dataset.hpp"
+
+#include <fstream>
+#include <istream>
+#include <sstream>
+
+#include "pcr/csv_io.hpp"
+
+namespace pcr {
+namespace {
+
+std::vector<std::string> joint_columns(int num_joints) {
+  std::vector<std::string> columns;
+  for (int i = 1; i <= num_joints; ++i) columns.push_back("q" + std::to_string(i));
+  return columns;
+}
+
+/// Number of leading q1..qk columns of a header (the numeric columns only).
+int count_joint_columns(const std::vector<std::string>& columns) {
+  int k = 0;
+  while (k < static_cast<int>(columns.size()) && columns[k] == "q" + std::to_string(k + 1)) ++k;
+  return k;
+}
+
+/// Reads the whole stream into a string stream, so it can be parsed twice (peek, then read).
+std::string slurp(std::istream& in) {
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// The joint count of a table read without expected columns: the header's q columns, or the
+/// field count minus `extra` without a header.
+int infer_joints(const CsvTable& table, int extra, const std::string& source) {
+  if (table.has_header) {
+    const int k = count_joint_columns(table.columns);
+    if (k < 1) throw InputError(source + ": header has no q1 column (expected q1,...,qn" +
+                                (extra ? std::string(",x,y,theta)") : std::string(")")));
+    return k;
+  }
+  if (table.rows.empty()) throw InputError(source + ": no data rows and no header");
+  const int k = static_cast<int>(table.columns.size()) - extra;
+  if (k < 1 || k > kMaxLimbs) {
+    throw InputError(source + ": " + std::to_string(table.columns.size()) +
+                     " columns cannot hold q1..qn" + (extra ? ",x,y,theta" : "") +
+                     " with 1 <= n <= " + std::to_string(kMaxLimbs));
+  }
+  return k;
+}
+
+CsvTable read_table(std::istream& in, const std::string& source, int num_joints, int extra,
+                    int* joints) {
+  std::vector<std::string> expected;
+  if (num_joints < 0) {
+    const std::string text = slurp(in);
+    std::istringstream first(text);
+    const CsvTable peek = parse_csv(first, source);
+    num_joints = infer_joints(peek, extra, source);
+    expected = extra ? dataset_columns(num_joints) : joint_columns(num_joints);
+    std::istringstream second(text);
+    CsvReadOptions options;
+    options.columns = expected;
+    *joints = num_joints;
+    return parse_csv(second, source, options);
+  }
+  if (num_joints < 1 || num_joints > kMaxLimbs) {
+    throw InputError(source + ": invalid number of joints " + std::to_string(num_joints));
+  }
+  CsvReadOptions options;
+  options.columns = extra ? dataset_columns(num_joints) : joint_columns(num_joints);
+  *joints = num_joints;
+  return parse_csv(in, source, options);
+}
+
+std::ifstream open(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open for reading");
+  return in;
+}
+
+}  // namespace
+
+void Dataset::add(const JointVector& joints, const Pose2<double>& pose) {
+  if (num_joints == 0) num_joints = static_cast<int>(joints.size());
+  if (joints.size() != num_joints) {
+    throw InputError("Dataset::add: configuration with " + std::to_string(joints.size()) +
+                     " joints in a dataset of " + std::to_string(num_joints));
+  }
+  q.push_back(joints);
+  poses.push_back(pose);
+}
+
+std::vector<std::string> dataset_columns(int num_joints) {
+  std::vector<std::string> columns = joint_columns(num_joints);
+  columns.insert(columns.end(), {"x", "y", "theta"});
+  return columns;
+}
+
+Dataset parse_dataset(std::istream& in, const std::string& source, int num_joints) {
+  Dataset data;
+  const CsvTable table = read_table(in, source, num_joints, 3, &data.num_joints);
+  const int n = data.num_joints;
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    const std::vector<double>& row = table.rows[r];
+    JointVector q(n);
+    for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
+    data.q.push_back(q);
+    data.poses.push_back(Pose2<double>{row[n], row[n + 1], row[n + 2]});
+    data.line_numbers.push_back(table.line_numbers[r]);
+  }
+  return data;
+}
+
+Dataset read_dataset(const std::string& path, int num_joints) {
+  std::ifstream in = open(path);
+  return parse_dataset(in, path, num_joints);
+}
+
+std::string dataset_to_csv(const Dataset& data) {
+  std::string out = csv_line(dataset_columns(data.num_joints));
+  for (std::size_t r = 0; r < data.size(); ++r) {
+    std::vector<std::string> fields;
+    for (int i = 0; i < data.q[r].size(); ++i) fields.push_back(format_double(data.q[r](i)));
+    fields.push_back(format_double(data.poses[r].x));
+    fields.push_back(format_double(data.poses[r].y));
+    fields.push_back(format_double(data.poses[r].theta));
+    out += csv_line(fields);
+  }
+  return out;
+}
+
+void write_dataset(const Dataset& data, const std::string& path) {
+  if (data.q.size() != data.poses.size()) {
+    throw InputError(path + ": dataset has " + std::to_string(data.q.size()) +
+                     " configurations and " + std::to_string(data.poses.size()) + " poses");
+  }
+  write_file_atomically(path, dataset_to_csv(data));
+}
+
+std::vector<JointVector> parse_configurations(std::istream& in, const std::string& source,
+                                              int num_joints) {
+  int n = 0;
+  const CsvTable table = read_table(in, source, num_joints, 0, &n);
+  std::vector<JointVector> out;
+  for (const std::vector<double>& row : table.rows) {
+    JointVector q(n);
+    for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
+    out.push_back(q);
+  }
+  return out;
+}
+
+std::vector<JointVector> read_configurations(const std::string& path, int num_joints) {
+  std::ifstream in = open(path);
+  return parse_configurations(in, path, num_joints);
+}
+
+std::string configurations_to_csv(const std::vector<JointVector>& configurations) {
+  const int n = configurations.empty() ? 0 : static_cast<int>(configurations[0].size());
+  std::string out = csv_line(joint_columns(n));
+  for (const JointVector& q : configurations) {
+    if (q.size() != n) throw InputError("configurations_to_csv: configurations of unequal sizes");
+    std::vector<std::string> fields;
+    for (int i = 0; i < n; ++i) fields.push_back(format_double(q(i)));
+    out += csv_line(fields);
+  }
+  return out;
+}
+
+void write_configurations(const std::vector<JointVector>& configurations, const std::string& path) {
+  write_file_atomically(path, configurations_to_csv(configurations));
+}
+
+}  // namespace pcr

@@ -1,0 +1,146 @@
+#include "pcr/calib/virtual_robot.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace pcr {
+namespace {
+
+/// nominal + U(-h, h); h = 0 leaves the value unchanged (and still consumes one draw, so the
+/// stream does not depend on which half-widths are zero).
+double draw(std::mt19937_64& rng, double nominal, double half_width) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  return nominal + half_width * u(rng);
+}
+
+void check_non_negative(double value, const char* name) {
+  if (!(value >= 0.0) || !std::isfinite(value)) {
+    std::ostringstream msg;
+    msg << "VirtualRobotOptions: " << name << " must be finite and >= 0, got " << value;
+    throw InputError(msg.str());
+  }
+}
+
+std::string format_q(const JointVector& q) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "(";
+  for (int i = 0; i < q.size(); ++i) out << (i ? ", " : "") << q(i);
+  out << ")";
+  return out.str();
+}
+
+}  // namespace
+
+VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOptions& options)
+    : nominal_(nominal), truth_(nominal), options_(options), noise_rng_() {
+  const int n = nominal.params.num_limbs;
+  if (n < 2 || n > kMaxLimbs) {
+    throw InputError("VirtualRobot: robot '" + nominal.name + "' has " + std::to_string(n) +
+                     " limbs (expected 2 to " + std::to_string(kMaxLimbs) + ")");
+  }
+  check_non_negative(options.noise_position, "noise_position");
+  check_non_negative(options.noise_angle, "noise_angle");
+  check_non_negative(options.effects.misalignment_half_width, "effects.misalignment_half_width");
+  check_non_negative(options.effects.diameter_half_width, "effects.diameter_half_width");
+
+  // Two independent streams from one seed: the truth, and the measurement noise.
+  std::seed_seq truth_seq{options.seed, std::uint64_t{0x7472757468}};  // "truth"
+  std::seed_seq noise_seq{options.seed, std::uint64_t{0x6e6f697365}};  // "noise"
+  std::mt19937_64 rng(truth_seq);
+  noise_rng_.seed(noise_seq);
+
+  RobotUncertainty u;
+  if (nominal.uncertainty) u = *nominal.uncertainty;
+  if (u.limbs.size() != static_cast<std::size_t>(n)) u.limbs.assign(static_cast<std::size_t>(n), u.global);
+
+  RobotParams<double>& p = truth_.params;
+  // One material and one wire: E and d are drawn once for all limbs (relative to limb 0's
+  // nominal offset, so per-limb nominal differences are kept).
+  const double e_offset = draw(rng, 0.0, u.global.young_modulus);
+  const double d_offset = draw(rng, 0.0, u.global.diameter);
+  truth_.young_modulus = nominal.young_modulus + e_offset;
+  for (int i = 0; i < n; ++i) {
+    const LimbUncertainty& h = u.limbs[static_cast<std::size_t>(i)];
+    LimbParams<double>& limb = p.limb(i);
+    limb.young_modulus += e_offset;
+    limb.diameter += d_offset;
+    limb.length = draw(rng, limb.length, h.length);
+    limb.A.x() = draw(rng, limb.A.x(), h.A.x());
+    limb.A.y() = draw(rng, limb.A.y(), h.A.y());
+    limb.alpha = draw(rng, limb.alpha, h.alpha);
+    limb.B.x() = draw(rng, limb.B.x(), h.B.x());
+    limb.B.y() = draw(rng, limb.B.y(), h.B.y());
+    limb.beta = draw(rng, limb.beta, h.beta);
+    limb.gamma = draw(rng, limb.gamma, h.gamma);
+  }
+  Pose2<double>& camera = p.extrinsics.camera;
+  Pose2<double>& pattern = p.extrinsics.pattern;
+  camera.x = draw(rng, camera.x, u.camera.x());
+  camera.y = draw(rng, camera.y, u.camera.y());
+  camera.theta = draw(rng, camera.theta, u.camera.z());
+  pattern.x = draw(rng, pattern.x, u.pattern.x());
+  pattern.y = draw(rng, pattern.y, u.pattern.y());
+  pattern.theta = draw(rng, pattern.theta, u.pattern.z());
+
+  // Unmodelled effects: each from its own stream, so switching one on does not change the others
+  // nor the base truth above.
+  const UnmodelledEffects& fx = options.effects;
+  if (fx.misalignments) {
+    std::seed_seq seq{options.seed, std::uint64_t{0x6d6973616c}};
+    std::mt19937_64 r(seq);
+    for (int i = 0; i < n; ++i) {
+      p.limb(i).beta = draw(r, p.limb(i).beta, fx.misalignment_half_width);
+      p.limb(i).gamma = draw(r, p.limb(i).gamma, fx.misalignment_half_width);
+    }
+  }
+  if (fx.unequal_diameters) {
+    std::seed_seq seq{options.seed, std::uint64_t{0x6469616d}};
+    std::mt19937_64 r(seq);
+    for (int i = 0; i < n; ++i) {
+      p.limb(i).diameter = draw(r, p.limb(i).diameter, fx.diameter_half_width);
+      if (!(p.limb(i).diameter > 0)) {
+        throw InputError("VirtualRobot: effects.diameter_half_width " +
+                         std::to_string(fx.diameter_half_width) + " makes a diameter <= 0");
+      }
+    }
+  }
+  if (fx.external_load) load_ = fx.load;
+}
+
+VirtualMeasurement VirtualRobot::measure(const JointVector& q) {
+  VirtualMeasurement m;
+  const RobotParams<double>& robot = truth_.params;
+  ForwardSolution fk;
+  if (has_last_) fk = forward_kinematics(robot, q, last_, options_.solver, load_);
+  if (!has_last_ || !fk.summary.converged()) {
+    // Cold start from home: the reference branch.
+    fk = forward_kinematics(robot, q, options_.solver, load_);
+  }
+  m.summary = fk.summary;
+  if (!fk.summary.converged()) return m;
+  last_ = fk;
+  has_last_ = true;
+  m.ok = true;
+  m.platform = fk.pose;
+  m.exact = robot.extrinsics.measurement_from_platform(fk.pose);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  m.measured = m.exact;
+  m.measured.x += options_.noise_position * gauss(noise_rng_);
+  m.measured.y += options_.noise_position * gauss(noise_rng_);
+  m.measured.theta += options_.noise_angle * gauss(noise_rng_);
+  return m;
+}
+
+Pose2<double> VirtualRobot::measure_or_throw(const JointVector& q) {
+  const VirtualMeasurement m = measure(q);
+  if (!m.ok) {
+    throw std::runtime_error("virtual robot: no forward-kinematics solution at q = " + format_q(q) +
+                             " (solver status " + to_string(m.summary.status) + ", residual " +
+                             std::to_string(m.summary.final_residual_norm) + ")");
+  }
+  return m.measured;
+}
+
+}  // namespace pcr
