@@ -1,5 +1,7 @@
 // Speed of the header-only core on the default robot at the default accuracy.
 //   build/benchmarks/bench_kinematics [--benchmark_repetitions=5 --benchmark_report_aggregates_only]
+#include <algorithm>
+#include <chrono>
 #include <random>
 #include <vector>
 
@@ -79,17 +81,20 @@ void BM_ForwardWarm(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
   const std::vector<ForwardSolution> solutions = reachable_solutions(64);
   std::size_t k = 0;
-  long iterations = 0;
+  long iterations = 0, evaluations = 0;
   for (auto _ : state) {
     const ForwardSolution& warm = solutions[k++ % solutions.size()];
     JointVector q = warm.q;
     q.array() += 10e-6;
     const ForwardSolution fk = forward_kinematics(robot, q, warm);
     iterations += fk.summary.iterations;
+    evaluations += fk.summary.residual_evaluations;
     benchmark::DoNotOptimize(fk.pose.x);
   }
   state.counters["newton_iterations"] =
       benchmark::Counter(static_cast<double>(iterations), benchmark::Counter::kAvgIterations);
+  state.counters["residual_evaluations"] =
+      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kAvgIterations);
 }
 BENCHMARK(BM_ForwardWarm);
 
@@ -100,17 +105,20 @@ void BM_InverseWarm(benchmark::State& state) {
   std::vector<InverseSolution> warm;
   for (const ForwardSolution& fk : solutions) warm.push_back(as_inverse_warm_start(fk));
   std::size_t k = 0;
-  long iterations = 0;
+  long iterations = 0, evaluations = 0;
   for (auto _ : state) {
     const InverseSolution& start = warm[k++ % warm.size()];
     const Pose2<double> target{start.pose.x + 7.07e-6, start.pose.y + 7.07e-6,
                                start.pose.theta + 1e-3};
     const InverseSolution ik = inverse_kinematics(robot, target, start);
     iterations += ik.summary.iterations;
+    evaluations += ik.summary.residual_evaluations;
     benchmark::DoNotOptimize(ik.q(0));
   }
   state.counters["newton_iterations"] =
       benchmark::Counter(static_cast<double>(iterations), benchmark::Counter::kAvgIterations);
+  state.counters["residual_evaluations"] =
+      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kAvgIterations);
 }
 BENCHMARK(BM_InverseWarm);
 
@@ -139,11 +147,17 @@ BENCHMARK(BM_InverseCold);
 void BM_ColdSurvey(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
   double direct = 0, continued = 0, singular = 0, over_strain = 0, failed = 0;
+  std::vector<double> solve_us;  // wall time of each solve (the median is what the target is on)
   for (auto _ : state) {
     std::mt19937 rng(2021);
     direct = continued = singular = over_strain = failed = 0;
+    solve_us.clear();
     for (int k = 0; k < 1000; ++k) {
-      const ForwardSolution fk = forward_kinematics(robot, random_joints(rng, robot));
+      const JointVector q = random_joints(rng, robot);
+      const auto t0 = std::chrono::steady_clock::now();
+      const ForwardSolution fk = forward_kinematics(robot, q);
+      solve_us.push_back(
+          std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
       if (fk.summary.converged()) {
         (fk.summary.continuation_steps == 0 ? direct : continued) += 1;
         if (fk.summary.max_strain > 0.01) over_strain += 1;
@@ -159,6 +173,8 @@ void BM_ColdSurvey(benchmark::State& state) {
   state.counters["converged_over_1pct_strain"] = over_strain;
   state.counters["singular"] = singular;
   state.counters["other_failures"] = failed;
+  std::nth_element(solve_us.begin(), solve_us.begin() + 500, solve_us.end());
+  state.counters["median_solve_us"] = solve_us[500];
 }
 BENCHMARK(BM_ColdSurvey)->Iterations(1)->Unit(benchmark::kMillisecond);
 

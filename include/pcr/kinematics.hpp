@@ -237,8 +237,18 @@ struct NewtonResult {
 
 /// Damped Newton from z (updated in place). A stall at a non-zero minimum of |r| means the
 /// Jacobian is singular there (J^T r = 0 with r != 0): reported as kSingular.
+///
+/// A Jacobian costs about two plain residuals, so it is evaluated only where it pays: near a
+/// solution (a warm start) a step that shrinks the residual by kChordContraction or more is
+/// followed by chord steps with the same factorisation, which keep contracting by about as much
+/// (the Jacobian barely changes over the step). A chord step that does not contract that well,
+/// and every step far from the solution, falls back to a fresh Jacobian and a line search.
 inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector& z,
                                  const SolverOptions& options, SolverSummary& summary) {
+  // Residual norms below this ask for no Jacobian at the trial point: Newton from there is
+  // expected to contract by kChordContraction, so the old factorisation will do.
+  constexpr double kWarmNorm = 1e-2;
+  constexpr double kChordContraction = 0.1;
   NewtonResult result;
   ShootingVector r, r_trial, z_trial, step;
   JacobianMatrix J, J_trial;
@@ -252,6 +262,8 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
     return result;
   }
   Eigen::PartialPivLU<JacobianMatrix> lu;
+  bool jacobian_at_z = true;  // J is the Jacobian at z (else: at an earlier iterate, chord)
+  bool factorised = false;    // lu holds the factorisation of J
   for (int iter = 0; iter <= options.max_iterations; ++iter) {
     if (norm <= options.tolerance) {
       result.status = SolveStatus::kConverged;
@@ -259,20 +271,50 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
     }
     if (iter == options.max_iterations) break;
     ++summary.iterations;
-    lu.compute(J);
-    if (!(lu.rcond() > 1e-14)) {
-      result.status = SolveStatus::kSingular;
-      return result;
+    if (!jacobian_at_z) {
+      // Chord step: accepted only if it contracts as a Newton step near the solution would.
+      step = -lu.solve(r);
+      z_trial = z + step;
+      const double strain = problem.evaluate(z_trial, r_trial, nullptr);
+      ++summary.residual_evaluations;
+      const double trial_norm = max_norm(r_trial);
+      if (std::isfinite(trial_norm) &&
+          (trial_norm <= kChordContraction * norm || trial_norm <= options.tolerance)) {
+        z = z_trial;
+        r = r_trial;
+        norm = trial_norm;
+        result.final_norm = norm;
+        result.max_strain = strain;
+        continue;
+      }
+      // Refresh the Jacobian at z and take a Newton step from there instead.
+      result.max_strain = problem.evaluate(z, r, &J);
+      ++summary.residual_evaluations;
+      norm = max_norm(r);
+      jacobian_at_z = true;
+      factorised = false;
+    }
+    if (!factorised) {
+      lu.compute(J);
+      factorised = true;
+      if (!(lu.rcond() > 1e-14)) {
+        result.status = SolveStatus::kSingular;
+        return result;
+      }
     }
     step = -lu.solve(r);
-    // Backtracking on the Euclidean norm, whose decrease the Newton direction guarantees.
+    // Backtracking on the Euclidean norm, whose decrease the Newton direction guarantees. Near
+    // the solution the full step is evaluated without its Jacobian (the chord may reuse J).
+    const bool warm = norm <= kWarmNorm;
     const double norm2 = r.squaredNorm();
     double t = 1.0;
     bool accepted = false;
+    bool trial_has_jacobian = false;
     double strain = result.max_strain;
     for (int ls = 0; ls <= options.max_line_search; ++ls, t *= 0.5) {
       z_trial = z + t * step;
-      strain = problem.evaluate(z_trial, r_trial, &J_trial);
+      trial_has_jacobian = !warm;
+      strain = problem.evaluate(z_trial, r_trial, trial_has_jacobian ? &J_trial : nullptr);
       ++summary.residual_evaluations;
       const double trial2 = r_trial.squaredNorm();
       if (std::isfinite(trial2) && trial2 <= (1.0 - 1e-4 * t) * norm2) {
@@ -294,12 +336,24 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
                           : SolveStatus::kMaxIterations;
       return result;
     }
+    const double trial_norm = max_norm(r_trial);
+    const bool contracted = t == 1.0 && trial_norm <= kChordContraction * norm;
     z = z_trial;
     r = r_trial;
-    J = J_trial;
-    norm = max_norm(r);
+    norm = trial_norm;
     result.final_norm = norm;
     result.max_strain = strain;
+    if (trial_has_jacobian) {
+      J = J_trial;
+      factorised = false;
+    } else if (contracted || norm <= options.tolerance) {
+      jacobian_at_z = false;  // chord from here with the current factorisation
+    } else {
+      result.max_strain = problem.evaluate(z, r, &J);
+      ++summary.residual_evaluations;
+      norm = max_norm(r);
+      factorised = false;
+    }
   }
   result.status = SolveStatus::kMaxIterations;
   return result;

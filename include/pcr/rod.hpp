@@ -43,82 +43,131 @@ struct RodTip {
 
 namespace internal {
 
-// Column 0: (x, y, c, s, theta, m); columns 1..3: their derivatives w.r.t. n_x0, n_y0, m0.
-template <class T, int Cols>
-using RodBlock = Eigen::Matrix<T, 6, Cols>;
-
-template <class T, int Cols>
-inline void rod_rhs(const RodBlock<T, Cols>& Y, const T& nx, const T& ny, const T& inv_ei,
-                    RodBlock<T, Cols>& D) {
-  const T c = Y(2, 0), s = Y(3, 0), k = Y(5, 0) * inv_ei;
-  D(0, 0) = c;
-  D(1, 0) = s;
-  D(2, 0) = -s * k;
-  D(3, 0) = c * k;
-  D(4, 0) = k;
-  D(5, 0) = nx * s - ny * c;
-  for (int j = 1; j < Cols; ++j) {
-    const T dc = Y(2, j), ds = Y(3, j), dk = Y(5, j) * inv_ei;
-    D(0, j) = dc;
-    D(1, j) = ds;
-    D(2, j) = -ds * k - s * dk;
-    D(3, j) = dc * k + c * dk;
-    D(4, j) = dk;
-    D(5, j) = nx * ds - ny * dc;
-  }
-  if constexpr (Cols > 1) {
-    D(5, 1) += s;  // d/dn_x of n_x s
-    D(5, 2) -= c;  // d/dn_y of -n_y c
-  }
-}
-
 struct NoVisitor {
   template <class S, class State>
   void operator()(const S&, const State&) const {}
 };
 
-/// RK4 over [0, length] in `steps` steps. The tangent columns are RK4 applied to the variational
-/// equations, which is exactly the derivative of the discrete map: Newton sees the true Jacobian.
-template <class T, int Cols, class Visitor>
-RodBlock<T, Cols> integrate_rod_block(const RodState<T>& start, const T& ei, const T& length,
-                                      int steps, T& max_abs_moment, Visitor&& visit) {
-  using std::abs;
-  using std::cos;
-  using std::sin;
-  RodBlock<T, Cols> Y = RodBlock<T, Cols>::Zero();
-  Y(0, 0) = start.x;
-  Y(1, 0) = start.y;
-  Y(2, 0) = cos(start.theta);
-  Y(3, 0) = sin(start.theta);
-  Y(4, 0) = start.theta;
-  Y(5, 0) = start.m;
-  if constexpr (Cols > 1) Y(5, 3) = T(1);
+/// RK4 on (x, y, c, s, theta, m), c = cos(theta) and s = sin(theta), one step at a time. Only
+/// (c, s, m) are coupled; x, y and theta are quadratures of the stage values, written with the
+/// same arithmetic as one RK4 update of the whole vector. With Sens, the tangents w.r.t. the
+/// proximal (n_x, n_y, m) are RK4 applied to the variational equations, which is exactly the
+/// derivative of the discrete map: Newton sees the true Jacobian. Scalar locals rather than Eigen
+/// blocks: the recurrence is latency-bound, and this keeps the three tangent columns (and, in
+/// integrate_rods_lockstep, the rods) independent chains the CPU can overlap.
+template <class T, bool Sens>
+struct RodStepper {
+  T nx, ny, x, y, c, s, th, m;
+  T inv_ei, h, half_h, sixth_h, max_abs_moment;
+  T tx[3], ty[3], tc[3], ts[3], tth[3], tm[3];  // tangents, column j: d / d wrench_j
 
-  const T inv_ei = T(1) / ei;
-  const T h = length / T(steps);
-  const T half_h = h / T(2);
-  const T sixth_h = h / T(6);
-  RodBlock<T, Cols> k1, k2, k3, k4, tmp;
-  max_abs_moment = abs(Y(5, 0));
-  const auto report = [&](int step) {
-    RodState<T> state{Y(0, 0), Y(1, 0), Y(4, 0), start.nx, start.ny, Y(5, 0)};
-    visit(T(step) * h, state);
-  };
-  report(0);
-  for (int i = 0; i < steps; ++i) {
-    rod_rhs<T, Cols>(Y, start.nx, start.ny, inv_ei, k1);
-    tmp = Y + half_h * k1;
-    rod_rhs<T, Cols>(tmp, start.nx, start.ny, inv_ei, k2);
-    tmp = Y + half_h * k2;
-    rod_rhs<T, Cols>(tmp, start.nx, start.ny, inv_ei, k3);
-    tmp = Y + h * k3;
-    rod_rhs<T, Cols>(tmp, start.nx, start.ny, inv_ei, k4);
-    Y += sixth_h * (k1 + T(2) * (k2 + k3) + k4);
-    const T abs_m = abs(Y(5, 0));
-    if (abs_m > max_abs_moment) max_abs_moment = abs_m;
-    report(i + 1);
+  void init(const RodState<T>& start, const T& ei, const T& length, int steps) {
+    using std::abs;
+    using std::cos;
+    using std::sin;
+    nx = start.nx;
+    ny = start.ny;
+    x = start.x;
+    y = start.y;
+    c = cos(start.theta);
+    s = sin(start.theta);
+    th = start.theta;
+    m = start.m;
+    if constexpr (Sens) {
+      for (int j = 0; j < 3; ++j) tx[j] = ty[j] = tc[j] = ts[j] = tth[j] = tm[j] = T(0);
+      tm[2] = T(1);  // only dm/dm0 starts non-zero
+    }
+    inv_ei = T(1) / ei;
+    h = length / T(steps);
+    half_h = h / T(2);
+    sixth_h = h / T(6);
+    max_abs_moment = abs(m);
   }
-  return Y;
+
+  void step() {
+    using std::abs;
+    // Stage values (the rhs of x, y, theta are c, s, k) and slopes of (c, s, m).
+    T sc[4], ss[4], sk[4], dc[4], ds[4], dm[4];
+    T gc[4][3], gs[4][3], gk[4][3], gdc[4][3], gds[4][3], gdm[4][3];
+    for (int st = 0; st < 4; ++st) {
+      const T a = st == 3 ? h : half_h;
+      const int p = st == 0 ? 0 : st - 1;
+      const T cc = st == 0 ? c : c + a * dc[p];
+      const T sv = st == 0 ? s : s + a * ds[p];
+      const T mm = st == 0 ? m : m + a * dm[p];
+      const T k = mm * inv_ei;
+      sc[st] = cc;
+      ss[st] = sv;
+      sk[st] = k;
+      dc[st] = -sv * k;
+      ds[st] = cc * k;
+      dm[st] = nx * sv - ny * cc;
+      if constexpr (Sens) {
+        for (int j = 0; j < 3; ++j) {
+          const T vc = st == 0 ? tc[j] : tc[j] + a * gdc[p][j];
+          const T vs = st == 0 ? ts[j] : ts[j] + a * gds[p][j];
+          const T vm = st == 0 ? tm[j] : tm[j] + a * gdm[p][j];
+          const T dk = vm * inv_ei;
+          gc[st][j] = vc;
+          gs[st][j] = vs;
+          gk[st][j] = dk;
+          gdc[st][j] = -vs * k - sv * dk;
+          gds[st][j] = vc * k + cc * dk;
+          gdm[st][j] = nx * vs - ny * vc;
+        }
+        gdm[st][0] += sv;  // d/dn_x of n_x s
+        gdm[st][1] -= cc;  // d/dn_y of -n_y c
+      }
+    }
+    const auto rk4 = [this](T& v, const T(&k)[4]) {
+      v += sixth_h * (k[0] + T(2) * (k[1] + k[2]) + k[3]);
+    };
+    rk4(x, sc);
+    rk4(y, ss);
+    rk4(c, dc);
+    rk4(s, ds);
+    rk4(th, sk);
+    rk4(m, dm);
+    if constexpr (Sens) {
+      for (int j = 0; j < 3; ++j) {
+        const auto rk4j = [this, j](T& v, const T(&k)[4][3]) {
+          v += sixth_h * (k[0][j] + T(2) * (k[1][j] + k[2][j]) + k[3][j]);
+        };
+        rk4j(tx[j], gc);
+        rk4j(ty[j], gs);
+        rk4j(tc[j], gdc);
+        rk4j(ts[j], gds);
+        rk4j(tth[j], gk);
+        rk4j(tm[j], gdm);
+      }
+    }
+    const T abs_m = abs(m);
+    if (abs_m > max_abs_moment) max_abs_moment = abs_m;
+  }
+
+  RodState<T> state() const { return RodState<T>{x, y, th, nx, ny, m}; }
+};
+
+/// Integrates up to MaxRods rods over their lengths in `steps` steps each, in lockstep (bit for
+/// bit the same as one at a time: each rod is a serial chain, interleaving them overlaps them).
+template <int MaxRods, bool Sens, class T>
+void integrate_rods_lockstep(RodStepper<T, Sens>* rods, int n, int steps) {
+  for (int i = 0; i < steps; ++i) {
+    for (int r = 0; r < n && r < MaxRods; ++r) rods[r].step();
+  }
+}
+
+template <class T, bool Sens, class Visitor>
+RodStepper<T, Sens> integrate_rod_pass(const RodState<T>& start, const T& ei, const T& length,
+                                       int steps, Visitor&& visit) {
+  RodStepper<T, Sens> rod;
+  rod.init(start, ei, length, steps);
+  visit(T(0), rod.state());
+  for (int i = 0; i < steps; ++i) {
+    rod.step();
+    visit(T(i + 1) * rod.h, rod.state());
+  }
+  return rod;
 }
 
 }  // namespace internal
@@ -127,11 +176,10 @@ RodBlock<T, Cols> integrate_rod_block(const RodState<T>& start, const T& ei, con
 template <class T>
 RodState<T> integrate_rod(const RodState<T>& start, const T& ei, const T& length, int steps,
                           T* max_abs_moment = nullptr) {
-  T max_m;
-  const auto Y = internal::integrate_rod_block<T, 1>(start, ei, length, steps, max_m,
-                                                     internal::NoVisitor{});
-  if (max_abs_moment) *max_abs_moment = max_m;
-  return RodState<T>{Y(0, 0), Y(1, 0), Y(4, 0), start.nx, start.ny, Y(5, 0)};
+  const auto pass = internal::integrate_rod_pass<T, false>(start, ei, length, steps,
+                                                           internal::NoVisitor{});
+  if (max_abs_moment) *max_abs_moment = pass.max_abs_moment;
+  return pass.state();
 }
 
 /// Integrates the rod and its sensitivity to the proximal wrench (n_x, n_y, m)(0).
@@ -139,14 +187,15 @@ template <class T>
 RodTip<T> integrate_rod_with_sensitivity(const RodState<T>& start, const T& ei, const T& length,
                                          int steps) {
   RodTip<T> tip;
-  const auto Y = internal::integrate_rod_block<T, 4>(start, ei, length, steps, tip.max_abs_moment,
-                                                     internal::NoVisitor{});
-  tip.state = RodState<T>{Y(0, 0), Y(1, 0), Y(4, 0), start.nx, start.ny, Y(5, 0)};
+  const auto pass = internal::integrate_rod_pass<T, true>(start, ei, length, steps,
+                                                          internal::NoVisitor{});
+  tip.state = pass.state();
+  tip.max_abs_moment = pass.max_abs_moment;
   for (int j = 0; j < 3; ++j) {
-    tip.sensitivity(0, j) = Y(0, j + 1);
-    tip.sensitivity(1, j) = Y(1, j + 1);
-    tip.sensitivity(2, j) = Y(4, j + 1);
-    tip.sensitivity(3, j) = Y(5, j + 1);
+    tip.sensitivity(0, j) = pass.tx[j];
+    tip.sensitivity(1, j) = pass.ty[j];
+    tip.sensitivity(2, j) = pass.tth[j];
+    tip.sensitivity(3, j) = pass.tm[j];
   }
   return tip;
 }
@@ -155,9 +204,7 @@ RodTip<T> integrate_rod_with_sensitivity(const RodState<T>& start, const T& ei, 
 template <class T, class Visitor>
 RodState<T> sample_rod(const RodState<T>& start, const T& ei, const T& length, int steps,
                        Visitor&& visit) {
-  T max_m;
-  const auto Y = internal::integrate_rod_block<T, 1>(start, ei, length, steps, max_m, visit);
-  return RodState<T>{Y(0, 0), Y(1, 0), Y(4, 0), start.nx, start.ny, Y(5, 0)};
+  return internal::integrate_rod_pass<T, false>(start, ei, length, steps, visit).state();
 }
 
 }  // namespace pcr

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cmath>
+#include <type_traits>
 
 #include <Eigen/Core>
 
@@ -119,22 +120,66 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
   Vector2<T> force_sum = -load.force;
   T moment_sum = -load.moment;
   T max_strain(0);
+  // Rod tips (and sensitivities with partials). In double the rods are integrated in lockstep:
+  // each is a serial chain of dependent multiplies, interleaved they overlap.
+  RodTip<T> tips[kMaxLimbs];
+  const auto proximal_state = [&](int i) {
+    const LimbParams<T>& limb = robot.limb(i);
+    const Wrench<T>& w = point.wrenches[i];
+    const Vector2<T> start = limb.proximal_position(point.q[i]);
+    return RodState<T>{start.x(), start.y(), limb.alpha, w.nx, w.ny, w.m};
+  };
+  const auto integrate_all = [&](auto sens) {
+    constexpr bool kSens = decltype(sens)::value;
+    internal::RodStepper<T, kSens> rods[kMaxLimbs];
+    for (int i = 0; i < n; ++i) {
+      rods[i].init(proximal_state(i), robot.limb(i).bending_stiffness(), robot.limb(i).length,
+                   rod_steps);
+    }
+    internal::integrate_rods_lockstep<kMaxLimbs>(rods, n, rod_steps);
+    for (int i = 0; i < n; ++i) {
+      tips[i].state = rods[i].state();
+      tips[i].max_abs_moment = rods[i].max_abs_moment;
+      if constexpr (kSens) {
+        for (int j = 0; j < 3; ++j) {
+          tips[i].sensitivity(0, j) = rods[i].tx[j];
+          tips[i].sensitivity(1, j) = rods[i].ty[j];
+          tips[i].sensitivity(2, j) = rods[i].tth[j];
+          tips[i].sensitivity(3, j) = rods[i].tm[j];
+        }
+      }
+    }
+  };
+  if constexpr (std::is_same_v<T, double>) {
+    if (partials) {
+      integrate_all(std::true_type{});
+    } else {
+      integrate_all(std::false_type{});
+    }
+  } else {
+    for (int i = 0; i < n; ++i) {
+      const LimbParams<T>& limb = robot.limb(i);
+      if (partials) {
+        tips[i] = integrate_rod_with_sensitivity(proximal_state(i), limb.bending_stiffness(),
+                                                 limb.length, rod_steps);
+      } else {
+        tips[i].state = integrate_rod(proximal_state(i), limb.bending_stiffness(), limb.length,
+                                      rod_steps, &tips[i].max_abs_moment);
+      }
+    }
+  }
   for (int i = 0; i < n; ++i) {
     const LimbParams<T>& limb = robot.limb(i);
     const Wrench<T>& w = point.wrenches[i];
     const T ei = limb.bending_stiffness();
-    const Vector2<T> start = limb.proximal_position(point.q[i]);
-    const RodState<T> proximal{start.x(), start.y(), limb.alpha, w.nx, w.ny, w.m};
     // Distal clamp in W, relative to the platform origin.
     const Vector2<T> arm(c * limb.B.x() - s * limb.B.y(), s * limb.B.x() + c * limb.B.y());
     const Vector2<T> clamp = point.pose.translation() + arm;
 
-    RodState<T> tip;
-    T max_m;
+    const RodTip<T>& rod = tips[i];
+    const RodState<T>& tip = rod.state;
+    const T& max_m = rod.max_abs_moment;
     if (partials) {
-      const RodTip<T> rod = integrate_rod_with_sensitivity(proximal, ei, limb.length, rod_steps);
-      tip = rod.state;
-      max_m = rod.max_abs_moment;
       // d r / d (scaled wrench): physical derivative times the unknown's scale.
       const double to_scaled[3] = {scale.force, scale.force, scale.moment()};
       const double arm_x = scalar_value(arm.x()), arm_y = scalar_value(arm.y());
@@ -165,8 +210,6 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
       const Vector2<T> dir = limb.actuator_direction();
       (*partials)(3 * i + 0, 3 * n + 3 + i) = scalar_value(dir.x());
       (*partials)(3 * i + 1, 3 * n + 3 + i) = scalar_value(dir.y());
-    } else {
-      tip = integrate_rod(proximal, ei, limb.length, rod_steps, &max_m);
     }
 
     residual(3 * i + 0) = (tip.x - clamp.x()) * inv_length;
