@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "pcr/calib/dataset.hpp"
+#include "pcr/csv_io.hpp"
 #include "pcr/calib/sampling.hpp"
 #include "pcr/calib/virtual_robot.hpp"
 #include "pcr/kinematics.hpp"
@@ -23,6 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::string kTool = std::string(PCR_BINARY_DIR) + "/apps/pcr_calibrate";
+const std::string kCli = std::string(PCR_BINARY_DIR) + "/apps/pcr";
 
 int run(const std::string& args) {
   const std::string command = kTool + " " + args + " > /dev/null 2>&1";
@@ -99,13 +101,25 @@ TEST_F(PcrCalibrate, IdentifiedFileReproducesTheTruthsMeasurements) {
   ASSERT_TRUE(identified.uncertainty.has_value());
   EXPECT_NE(slurp(path("report.json")).find("identified_model_validation_set"), std::string::npos);
 
-  // The nominal model is far off; the identified one predicts what the truth's camera sees.
+  // The identified file, used as is by `pcr fk`, predicts what the truth's camera sees (noise
+  // free); the nominal model is far off.
+  write_configurations(validation_q_, path("validation-q.csv"));
+  const std::string fk = kCli + " fk --robot " + path("identified.json") + " --input " +
+                         path("validation-q.csv") + " --output " + path("fk.csv") + " 2> /dev/null";
+  ASSERT_EQ(std::system(fk.c_str()), 0);
+  CsvReadOptions columns;
+  columns.columns = {"x", "y", "theta", "converged"};
+  columns.ignore_other_columns = true;
+  const CsvTable predicted = read_csv(path("fk.csv"), columns);
+  ASSERT_EQ(predicted.rows.size(), validation_q_.size());
   double nominal_mean = 0, identified_mean = 0;
   for (std::size_t j = 0; j < validation_q_.size(); ++j) {
-    const ForwardSolution a = forward_kinematics(identified.params, validation_q_[j]);
+    const std::vector<double>& row = predicted.rows[j];
+    ASSERT_EQ(row[3], 1.0) << "pcr fk did not converge on row " << j;
     const ForwardSolution b = forward_kinematics(nominal_.params, validation_q_[j]);
-    ASSERT_TRUE(a.summary.converged() && b.summary.converged());
-    const Pose2<double> pa = identified.params.extrinsics.measurement_from_platform(a.pose);
+    ASSERT_TRUE(b.summary.converged());
+    const Pose2<double> pa = identified.params.extrinsics.measurement_from_platform(
+        Pose2<double>{row[0], row[1], row[2]});
     const Pose2<double> pb = nominal_.params.extrinsics.measurement_from_platform(b.pose);
     identified_mean += std::hypot(pa.x - exact_[j].x, pa.y - exact_[j].y) / exact_.size();
     nominal_mean += std::hypot(pb.x - exact_[j].x, pb.y - exact_[j].y) / exact_.size();

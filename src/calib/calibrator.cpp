@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <ceres/ceres.h>
 #include <ceres/covariance.h>
@@ -71,6 +72,66 @@ std::string format_number(double v) {
   s << v;
   return s.str();
 }
+
+struct Generator {
+  std::string name;
+  std::string combination;
+  std::vector<double> direction;  // flat, unscaled
+};
+
+std::vector<Generator> gauge_generators(const RobotParams<double>& robot);
+
+/// Generators whose every moved parameter is in `is_free` (and that move at least one).
+std::vector<bool> present_generators(const std::vector<Generator>& generators,
+                                     const std::vector<bool>& is_free) {
+  std::vector<bool> present(generators.size(), false);
+  for (std::size_t g = 0; g < generators.size(); ++g) {
+    bool ok = true, any = false;
+    for (std::size_t k = 0; k < is_free.size(); ++k) {
+      if (generators[g].direction[k] != 0.0) {
+        ok = ok && is_free[k];
+        any = true;
+      }
+    }
+    present[g] = ok && any;
+  }
+  return present;
+}
+
+/// x + B delta on the flat vector: B spans the free parameters (in half-width units) minus the
+/// gauge directions, so the step neither moves a held parameter nor drifts along a gauge orbit.
+class SubspaceManifold final : public ceres::Manifold {
+ public:
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  SubspaceManifold(RowMajor basis, RowMajor inverse)
+      : basis_(std::move(basis)), inverse_(std::move(inverse)) {}
+  int AmbientSize() const override { return static_cast<int>(basis_.rows()); }
+  int TangentSize() const override { return static_cast<int>(basis_.cols()); }
+  bool Plus(const double* x, const double* delta, double* x_plus_delta) const override {
+    Eigen::Map<Eigen::VectorXd>(x_plus_delta, basis_.rows()) =
+        Eigen::Map<const Eigen::VectorXd>(x, basis_.rows()) +
+        basis_ * Eigen::Map<const Eigen::VectorXd>(delta, basis_.cols());
+    return true;
+  }
+  bool PlusJacobian(const double*, double* jacobian) const override {
+    Eigen::Map<RowMajor>(jacobian, basis_.rows(), basis_.cols()) = basis_;
+    return true;
+  }
+  bool Minus(const double* y, const double* x, double* y_minus_x) const override {
+    Eigen::Map<Eigen::VectorXd>(y_minus_x, inverse_.rows()) =
+        inverse_ * (Eigen::Map<const Eigen::VectorXd>(y, basis_.rows()) -
+                    Eigen::Map<const Eigen::VectorXd>(x, basis_.rows()));
+    return true;
+  }
+  bool MinusJacobian(const double*, double* jacobian) const override {
+    Eigen::Map<RowMajor>(jacobian, inverse_.rows(), inverse_.cols()) = inverse_;
+    return true;
+  }
+
+ private:
+  RowMajor basis_;    // ambient x tangent
+  RowMajor inverse_;  // tangent x ambient, inverse_ * basis_ = I
+};
 
 /// Everything the stages share: current values, warm-start caches, data.
 class Identification {
@@ -140,10 +201,9 @@ class Identification {
     for (int k = 0; k < count_; ++k) {
       if (!is_free[static_cast<std::size_t>(k)]) constant.push_back(k);
     }
-    if (!constant.empty()) {
-      problem.SetManifold(values_.data(), new ceres::SubsetManifold(count_, constant));
-    }
-    if (options_.gauge_prior_weight > 0) {
+    const bool subspace = options_.stage_gauge == StageGauge::kSubspace;
+    problem.SetManifold(values_.data(), make_manifold(is_free, subspace));
+    if (!subspace && options_.gauge_prior_weight > 0) {
       // Weak pull towards the nominal values, in half-width units: it only matters along the
       // gauge directions (where the data says nothing), which it fixes to the representative
       // closest to the nominal, away from the bounds.
@@ -165,19 +225,22 @@ class Identification {
     solver.linear_solver_type = ceres::DENSE_QR;
     solver.max_num_iterations = options_.max_iterations;
     solver.num_threads = 1;
-    solver.function_tolerance = 1e-10;
+    solver.function_tolerance = options_.function_tolerance;
     solver.gradient_tolerance = 1e-12;
     // Off: Ceres compares the step with |x|, which E (~7e10 Pa) dominates, so any step would
     // look negligible. The function and gradient tolerances (whitened residuals) decide.
     solver.parameter_tolerance = 0.0;
     solver.logging_type = ceres::SILENT;
+
     ProgressCallback callback(stage.name, to_m2, options_.progress);
     if (options_.progress) solver.callbacks.push_back(&callback);
     ceres::Solver::Summary summary;
     const auto start = std::chrono::steady_clock::now();
+    for (FkCache& c : caches_) c.evaluations = c.warm_start_failures = c.newton_iterations = 0;
     ceres::Solve(solver, &problem, &summary);
     report.initial_cost = summary.initial_cost * to_m2;
     report.iterations = static_cast<int>(summary.iterations.size()) - 1;
+    add_counters(summary, &report);
     // Ceres projects the unconstrained step onto the box, which stalls once a parameter sits on a
     // bound the step pushes against. Active set: hold the parameters at a bound, solve again.
     for (int pass = 0; pass < 3; ++pass) {
@@ -192,18 +255,68 @@ class Identification {
         }
       }
       if (!changed || static_cast<int>(constant.size()) >= count_) break;
-      problem.SetManifold(values_.data(), new ceres::SubsetManifold(count_, constant));
+      problem.SetManifold(values_.data(), make_manifold(is_free, subspace));
       ceres::Solve(solver, &problem, &summary);
       report.iterations += static_cast<int>(summary.iterations.size()) - 1;
+      add_counters(summary, &report);
     }
     report.time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    for (const FkCache& c : caches_) {
+      report.fk_solves += c.evaluations;
+      report.fk_warm_start_failures += c.warm_start_failures;
+      report.fk_newton_iterations += c.newton_iterations;
+    }
     report.final_cost = summary.final_cost * to_m2;
     report.termination = summary.BriefReport();
     report.usable = summary.IsSolutionUsable();
     last_free_ = free;
     last_bounds_scale_ = stage.bounds_scale;
     return report;
+  }
+
+  static void add_counters(const ceres::Solver::Summary& summary, StageReport* report) {
+    report->residual_evaluations += summary.num_residual_evaluations;
+    report->jacobian_evaluations += summary.num_jacobian_evaluations;
+    report->residual_time_s += summary.residual_evaluation_time_in_seconds;
+    report->jacobian_time_s += summary.jacobian_evaluation_time_in_seconds;
+    report->linear_solver_time_s += summary.linear_solver_time_in_seconds;
+  }
+
+  /// The stage's manifold: the free parameters in half-width units, minus (with `remove_gauge`)
+  /// the gauge directions whose parameters are all free, taken at the current values.
+  ceres::Manifold* make_manifold(const std::vector<bool>& is_free, bool remove_gauge) const {
+    std::vector<int> free;
+    for (int k = 0; k < count_; ++k) {
+      if (is_free[static_cast<std::size_t>(k)]) free.push_back(k);
+    }
+    const Eigen::Index f = static_cast<Eigen::Index>(free.size());
+    Eigen::MatrixXd g(f, 0);
+    if (remove_gauge) {
+      const std::vector<Generator> generators = gauge_generators(robot());
+      const std::vector<bool> present = present_generators(generators, is_free);
+      for (std::size_t j = 0; j < generators.size(); ++j) {
+        if (!present[j]) continue;
+        g.conservativeResize(f, g.cols() + 1);
+        for (Eigen::Index c = 0; c < f; ++c) {
+          const std::size_t k = static_cast<std::size_t>(free[static_cast<std::size_t>(c)]);
+          g(c, g.cols() - 1) = generators[j].direction[k] / half_widths_[k];
+        }
+      }
+    }
+    // Orthonormal complement of the (scaled) gauge generators among the free parameters.
+    Eigen::MatrixXd q = Eigen::MatrixXd::Identity(f, f);
+    if (g.cols() > 0) q = Eigen::HouseholderQR<Eigen::MatrixXd>(g).householderQ();
+    const Eigen::Index t = f - g.cols();
+    SubspaceManifold::RowMajor basis = SubspaceManifold::RowMajor::Zero(count_, t);
+    SubspaceManifold::RowMajor inverse = SubspaceManifold::RowMajor::Zero(t, count_);
+    for (Eigen::Index c = 0; c < f; ++c) {
+      const int k = free[static_cast<std::size_t>(c)];
+      const double h = half_widths_[static_cast<std::size_t>(k)];
+      basis.row(k) = h * q.block(c, g.cols(), 1, t);
+      inverse.col(k) = q.block(c, g.cols(), 1, t).transpose() / h;
+    }
+    return new SubspaceManifold(std::move(basis), std::move(inverse));
   }
 
   /// Ceres cost (whitened) at the current values.
@@ -300,12 +413,6 @@ class Identification {
   std::vector<FkCache> caches_;
   std::vector<int> last_free_;
   double last_bounds_scale_ = 1.0;
-};
-
-struct Generator {
-  std::string name;
-  std::string combination;
-  std::vector<double> direction;  // flat, unscaled
 };
 
 /// Tangent vectors of the gauge orbit at `robot` (see the header).
@@ -457,10 +564,10 @@ RobotParams<double> fix_gauge(const RobotParams<double>& params,
   return out;
 }
 
-PoseErrorStats pose_errors(const RobotParams<double>& robot,
-                           const std::vector<CalibrationSample>& data, const SolverOptions& fk) {
-  PoseErrorStats stats;
-  stats.min_p = stats.min_theta = std::numeric_limits<double>::infinity();
+ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
+                                         const std::vector<CalibrationSample>& data,
+                                         const SolverOptions& fk) {
+  ConfigurationErrors errors;
   ForwardSolution last;
   bool has_last = false;
   for (const CalibrationSample& sample : data) {
@@ -468,14 +575,30 @@ PoseErrorStats pose_errors(const RobotParams<double>& robot,
     if (has_last) s = forward_kinematics(robot, sample.q, last, fk);
     if (!has_last || !s.summary.converged()) s = forward_kinematics(robot, sample.q, fk);
     if (!s.summary.converged()) {
-      ++stats.failed;
+      errors.e_p.push_back(kNaN);
+      errors.e_theta.push_back(kNaN);
       continue;
     }
     last = s;
     has_last = true;
     const Pose2<double> measured = robot.extrinsics.platform_from_measurement(sample.measured);
-    const double e_p = std::hypot(s.pose.x - measured.x, s.pose.y - measured.y);
-    const double e_t = std::abs(wrap_angle(s.pose.theta - measured.theta));
+    errors.e_p.push_back(std::hypot(s.pose.x - measured.x, s.pose.y - measured.y));
+    errors.e_theta.push_back(std::abs(wrap_angle(s.pose.theta - measured.theta)));
+  }
+  return errors;
+}
+
+PoseErrorStats pose_errors(const RobotParams<double>& robot,
+                           const std::vector<CalibrationSample>& data, const SolverOptions& fk) {
+  const ConfigurationErrors errors = configuration_errors(robot, data, fk);
+  PoseErrorStats stats;
+  stats.min_p = stats.min_theta = std::numeric_limits<double>::infinity();
+  for (std::size_t j = 0; j < errors.e_p.size(); ++j) {
+    const double e_p = errors.e_p[j], e_t = errors.e_theta[j];
+    if (std::isnan(e_p)) {
+      ++stats.failed;
+      continue;
+    }
     stats.max_p = std::max(stats.max_p, e_p);
     stats.min_p = std::min(stats.min_p, e_p);
     stats.mean_p += e_p;

@@ -1,0 +1,42 @@
+#pragma once
+// The calibration report (issue 3, section 5): the paper's Table 3 for the nominal and the
+// identified model on the calibration and validation sets, the stages, the identified values with
+// their standard deviations, the parameters at a bound and the gauge directions. One writer for
+// pcr_calibrate, pcr demo and the Python bindings.
+
+#include <string>
+#include <vector>
+
+#include "pcr/calib/calibrator.hpp"
+#include "pcr/calib/dataset.hpp"
+
+namespace pcr {
+
+/// The dataset's rows as calibration samples.
+std::vector<CalibrationSample> calibration_samples(const Dataset& data);
+
+/// Table 3: e_p (Eq. 8) and e_theta (Eq. 9) of the nominal model (nominal geometry with the
+/// identified extrinsics, as the paper reports it) and of the identified model.
+struct CalibrationTable {
+  PoseErrorStats nominal_calibration, identified_calibration;
+  PoseErrorStats nominal_validation, identified_validation;
+  bool has_validation = false;
+};
+
+/// Evaluates both models on both sets (`validation` may be empty).
+CalibrationTable calibration_table(const CalibrationResult& result,
+                                   const std::vector<CalibrationSample>& calibration,
+                                   const std::vector<CalibrationSample>& validation,
+                                   const SolverOptions& fk = SolverOptions());
+
+/// Table 3 as text (um and mrad), one line per model and set.
+std::string calibration_table_text(const CalibrationTable& table);
+
+/// The whole report as text: Table 3, stages, free parameters (value, nominal, std), parameters at
+/// a bound, gauge directions, residual variance.
+std::string calibration_report_text(const CalibrationResult& result, const CalibrationTable& table);
+
+/// The whole report as JSON text (SI units, field names carry them: e_p_m, e_theta_rad, ...).
+std::string calibration_report_json(const CalibrationResult& result, const CalibrationTable& table);
+
+}  // namespace pcr

@@ -1,0 +1,169 @@
+// The calibration report: Table 3, stages, identified values, gauge (see calibration_report.hpp).
+
+#include "pcr/calib/calibration_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace pcr {
+namespace {
+
+using nlohmann::ordered_json;
+
+ordered_json stats_json(const PoseErrorStats& s) {
+  return ordered_json{
+      {"e_p_m", {{"max", s.max_p}, {"mean", s.mean_p}, {"min", s.min_p}}},
+      {"e_theta_rad", {{"max", s.max_theta}, {"mean", s.mean_theta}, {"min", s.min_theta}}},
+      {"configurations", s.count},
+      {"failed", s.failed}};
+}
+
+std::string stats_line(const char* label, const PoseErrorStats& s) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%-34s %9.4f %9.4f %9.4f | %9.5f %9.5f %9.5f  (%d configurations%s)\n",
+                label, s.max_p * 1e6, s.mean_p * 1e6, s.min_p * 1e6, s.max_theta * 1e3,
+                s.mean_theta * 1e3, s.min_theta * 1e3, s.count,
+                s.failed ? (", " + std::to_string(s.failed) + " FK failures").c_str() : "");
+  return buf;
+}
+
+}  // namespace
+
+std::vector<CalibrationSample> calibration_samples(const Dataset& data) {
+  std::vector<CalibrationSample> out;
+  out.reserve(data.size());
+  for (std::size_t j = 0; j < data.size(); ++j) out.push_back({data.q[j], data.poses[j]});
+  return out;
+}
+
+CalibrationTable calibration_table(const CalibrationResult& result,
+                                   const std::vector<CalibrationSample>& calibration,
+                                   const std::vector<CalibrationSample>& validation,
+                                   const SolverOptions& fk) {
+  CalibrationTable table;
+  table.nominal_calibration = pose_errors(result.extrinsics_only, calibration, fk);
+  table.identified_calibration = pose_errors(result.identified, calibration, fk);
+  table.has_validation = !validation.empty();
+  if (table.has_validation) {
+    table.nominal_validation = pose_errors(result.extrinsics_only, validation, fk);
+    table.identified_validation = pose_errors(result.identified, validation, fk);
+  }
+  return table;
+}
+
+std::string calibration_table_text(const CalibrationTable& table) {
+  std::string out =
+      "Table 3                            e_p (um): max      mean       min | e_theta (mrad): max"
+      "      mean       min\n";
+  out += stats_line("nominal model, calibration set", table.nominal_calibration);
+  if (table.has_validation) out += stats_line("nominal model, validation set", table.nominal_validation);
+  out += stats_line("identified model, calibration set", table.identified_calibration);
+  if (table.has_validation) {
+    out += stats_line("identified model, validation set", table.identified_validation);
+  }
+  out += "(nominal model: the nominal geometry with identified extrinsics, as in the paper)\n";
+  return out;
+}
+
+std::string calibration_report_text(const CalibrationResult& result, const CalibrationTable& table) {
+  std::ostringstream out;
+  out << calibration_table_text(table) << "\nstages:\n";
+  for (const StageReport& s : result.stages) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "  %-12s %2zu free  cost %.4e -> %.4e m^2  %3d iterations  %.2f s\n",
+                  s.name.c_str(), s.free_parameters.size(), s.initial_cost, s.final_cost,
+                  s.iterations, s.time_s);
+    out << buf;
+  }
+  out << "\nparameters (value, nominal, std; limb-0 gauge):\n";
+  std::vector<std::string> at_bound;
+  for (const ParameterEstimate& p : result.parameters) {
+    if (p.free) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  std %.3e%s%s\n",
+                    p.name.c_str(), p.value, p.nominal, p.std_dev,
+                    p.gauge_reference ? "  (gauge reference)" : "",
+                    p.at_bound ? "  AT BOUND" : "");
+      out << buf;
+    }
+    if (p.at_bound) at_bound.push_back(p.name);
+  }
+  out << "parameters at a bound:";
+  for (const std::string& name : at_bound) out << " " << name;
+  out << (at_bound.empty() ? " none\n" : "\n");
+  out << "\ngauge directions (rank " << result.jacobian_rank << " of " << result.free_count
+      << " free parameters):\n";
+  for (const GaugeDirection& g : result.gauge) {
+    out << "  " << g.name << " [" << g.combination << "]: ";
+    if (g.present) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "present, |J g| / (s_max |g|) = %.2e", g.relative_gain);
+      out << buf << "\n";
+    } else {
+      out << "not free\n";
+    }
+  }
+  out << "residual variance (whitened): " << result.residual_variance << "\n";
+  return out.str();
+}
+
+std::string calibration_report_json(const CalibrationResult& result, const CalibrationTable& table) {
+  ordered_json table3{{"nominal_model_calibration_set", stats_json(table.nominal_calibration)},
+                      {"identified_model_calibration_set", stats_json(table.identified_calibration)}};
+  if (table.has_validation) {
+    table3["nominal_model_validation_set"] = stats_json(table.nominal_validation);
+    table3["identified_model_validation_set"] = stats_json(table.identified_validation);
+  }
+  ordered_json stages = ordered_json::array();
+  for (const StageReport& s : result.stages) {
+    stages.push_back({{"name", s.name},
+                      {"free_parameters", s.free_parameters},
+                      {"initial_cost_m2", s.initial_cost},
+                      {"final_cost_m2", s.final_cost},
+                      {"iterations", s.iterations},
+                      {"time_s", s.time_s},
+                      {"termination", s.termination},
+                      {"usable", s.usable}});
+  }
+  ordered_json parameters = ordered_json::array();
+  std::vector<std::string> at_bound;
+  for (const ParameterEstimate& p : result.parameters) {
+    if (p.at_bound) at_bound.push_back(p.name);
+    parameters.push_back({{"name", p.name},
+                          {"nominal", p.nominal},
+                          {"value", p.value},
+                          {"std", p.std_dev},
+                          {"half_width", p.half_width},
+                          {"free", p.free},
+                          {"gauge_reference", p.gauge_reference},
+                          {"at_bound", p.at_bound}});
+  }
+  ordered_json gauge = ordered_json::array();
+  for (const GaugeDirection& g : result.gauge) {
+    gauge.push_back({{"name", g.name},
+                     {"combination", g.combination},
+                     {"present", g.present},
+                     {"relative_gain", g.relative_gain}});
+  }
+  const ordered_json report{
+      {"table3", table3},
+      {"stages", stages},
+      {"parameters", parameters},
+      {"parameters_at_bound", at_bound},
+      {"gauge_directions", gauge},
+      {"gauge_fix",
+       "limb 0 defines the frames: A_0, alpha_0, B_0, beta_0 and d_0 keep their nominal values; "
+       "std are relative to them"},
+      {"jacobian_rank", result.jacobian_rank},
+      {"free_parameters", result.free_count},
+      {"residual_variance", result.residual_variance},
+      {"covariance_ok", result.covariance_ok}};
+  // NaN (a failed covariance, an empty set) is not JSON: nlohmann writes null.
+  return report.dump(2) + "\n";
+}
+
+}  // namespace pcr

@@ -1,0 +1,58 @@
+// The calibration stages file (documented in the README): {"stages": [...]} or the bare list.
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "pcr/calib/calibrator.hpp"
+
+namespace pcr {
+
+using nlohmann::json;
+
+std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the stages file");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::exception& e) {
+    throw InputError(path + ": invalid JSON: " + e.what());
+  }
+  if (j.is_object() && j.contains("stages")) j = j["stages"];
+  if (!j.is_array()) throw InputError(path + ": expected a list of stages");
+  std::vector<CalibrationStage> stages;
+  for (std::size_t s = 0; s < j.size(); ++s) {
+    const std::string where = path + ": stages[" + std::to_string(s) + "]";
+    const json& e = j[s];
+    if (!e.is_object()) throw InputError(where + ": expected an object");
+    for (auto it = e.begin(); it != e.end(); ++it) {
+      if (it.key() != "name" && it.key() != "free" && it.key() != "bounds_scale") {
+        throw InputError(where + ": unknown field \"" + it.key() + "\"");
+      }
+    }
+    CalibrationStage stage;
+    stage.name = e.value("name", "stage " + std::to_string(s + 1));
+    if (!e.contains("free") || !e["free"].is_array()) {
+      throw InputError(where + ".free: expected a list of parameter kinds");
+    }
+    for (const json& k : e["free"]) {
+      if (!k.is_string()) throw InputError(where + ".free: expected strings, got " + k.dump());
+      stage.free.push_back(k.get<std::string>());
+    }
+    if (e.contains("bounds_scale")) {
+      if (!e["bounds_scale"].is_number()) {
+        throw InputError(where + ".bounds_scale: expected a number, got " +
+                              e["bounds_scale"].dump());
+      }
+      stage.bounds_scale = e["bounds_scale"].get<double>();
+    }
+    stages.push_back(stage);
+  }
+  validate_stages(stages, path);
+  return stages;
+}
+
+}  // namespace pcr
