@@ -1,0 +1,141 @@
+"""pcr: planar parallel continuum robots (Mauze et al. 2021), Python bindings.
+
+All quantities are SI: metres, radians, newtons, pascals. The C++ library does the work
+(``pcr._pcr``); this package re-exports it and adds small pure-Python conveniences
+(``Robot.replace``, ``Robot.with_limb``, ``workspace``, ``pose_errors_per_configuration``).
+Plots live in ``pcr.plot`` (matplotlib, imported on demand).
+"""
+from __future__ import annotations
+
+import copy as _copy
+
+import numpy as _np
+
+from ._pcr import (  # noqa: F401
+    BatchResult,
+    Extrinsics,
+    Limb,
+    LimbUncertainty,
+    Pose,
+    Robot,
+    Solution,
+    SolverOptions,
+    SolveStatus,
+    Uncertainty,
+    __version__,
+    has_calibration,
+)
+
+if has_calibration:
+    from ._pcr import (  # noqa: F401
+        VirtualRobot,
+        admissible_configuration,
+        calibrate,
+        default_stages,
+        load_calibration_stages,
+        parameter_names,
+        platform_parameter_jacobian,
+        poisson_disc_sample,
+        pose_errors,
+        read_configurations,
+        read_dataset,
+        sensitivity,
+        sensitivity_configurations,
+        write_configurations,
+        write_dataset,
+    )
+
+
+def _replace(self, **changes):
+    """A copy with some attributes changed, e.g. ``robot.replace(name="b", E=70e9)``."""
+    out = _copy.copy(self)
+    for name, value in changes.items():
+        if not hasattr(out, name):
+            raise AttributeError(f"{type(self).__name__} has no attribute {name!r}")
+        setattr(out, name, value)
+    return out
+
+
+for _cls in (Robot, Limb, Pose, Extrinsics, Uncertainty, LimbUncertainty, SolverOptions):
+    _cls.replace = _replace
+
+
+def _with_limb(self, index, **changes):
+    """A copy of the robot with limb ``index`` changed, e.g. ``robot.with_limb(1, l=0.0301)``."""
+    out = self.copy()
+    limbs = out.limbs
+    if not -len(limbs) <= index < len(limbs):
+        raise IndexError(f"limb index {index} out of range for {len(limbs)} limbs")
+    for name, value in changes.items():
+        if not hasattr(limbs[index], name):
+            raise AttributeError(f"Limb has no attribute {name!r}")
+        setattr(limbs[index], name, value)
+    return out
+
+
+Robot.with_limb = _with_limb
+
+
+def compose_poses(a, b):
+    """Row-wise SE(2) product ^A T_B * ^B T_C of (N, 3) or (3,) arrays (x m, y m, theta rad)."""
+    a = _np.asarray(a, dtype=float)
+    b = _np.asarray(b, dtype=float)
+    c, s = _np.cos(a[..., 2]), _np.sin(a[..., 2])
+    x = a[..., 0] + c * b[..., 0] - s * b[..., 1]
+    y = a[..., 1] + s * b[..., 0] + c * b[..., 1]
+    return _np.stack([x, y, a[..., 2] + b[..., 2]], axis=-1)
+
+
+def _wrap(angle):
+    return _np.arctan2(_np.sin(angle), _np.cos(angle))
+
+
+def pose_errors_per_configuration(robot, q, measured, **solve_args):
+    """Per-configuration errors of ``robot`` (with its extrinsics) on a dataset.
+
+    q: (N, n) joints (m); measured: (N, 3) pattern poses ^Se T_M. The platform pose follows
+    from the measurement by Eq. 5 and is compared with FK (batched, warm-started).
+    Returns (e_p (N,) m, Eq. 8; e_theta (N,) rad, Eq. 9); NaN where FK failed.
+    """
+    measured = _np.atleast_2d(_np.asarray(measured, dtype=float))
+    ext = robot.extrinsics
+    camera = ext.camera.to_array()
+    pattern = ext.pattern.to_array()
+    platform = compose_poses(compose_poses(camera, measured), pattern)
+    fk = robot.forward(_np.atleast_2d(_np.asarray(q, dtype=float)), **solve_args)
+    e_p = _np.hypot(fk.pose[:, 0] - platform[:, 0], fk.pose[:, 1] - platform[:, 1])
+    e_t = _np.abs(_wrap(fk.pose[:, 2] - platform[:, 2]))
+    return e_p, e_t
+
+
+def workspace(robot, theta=0.0, half_width=None, resolution=41, centre=(0.0, 0.0), **solve_args):
+    """The reachable set at a fixed orientation: IK on a (resolution x resolution) grid of
+    positions around ``centre`` (m), swept row by row in alternating directions so that each
+    IK is warm-started from its neighbour.
+
+    half_width (m) defaults to 1.3 times the largest actuator stroke. Returns a dict: ``x``, ``y``
+    (resolution,) grid axes (m), ``reachable`` (resolution, resolution) bool [iy, ix] (IK
+    converged within the strokes), ``q`` (resolution, resolution, n) joints (m, NaN where
+    unreachable), ``max_strain`` and ``theta``.
+    """
+    if half_width is None:  # the platform can travel a little further than one stroke
+        half_width = 1.3 * max(max(abs(l.q_range[0]), abs(l.q_range[1])) for l in robot.limbs)
+    if resolution < 2:
+        raise ValueError(f"resolution: expected at least 2, got {resolution}")
+    xs = centre[0] + _np.linspace(-half_width, half_width, resolution)
+    ys = centre[1] + _np.linspace(-half_width, half_width, resolution)
+    order = []
+    for iy in range(resolution):
+        row = range(resolution) if iy % 2 == 0 else range(resolution - 1, -1, -1)
+        order.extend((iy, ix) for ix in row)
+    order = _np.array(order)
+    poses = _np.column_stack([xs[order[:, 1]], ys[order[:, 0]], _np.full(len(order), theta)])
+    ik = robot.inverse(poses, **solve_args)
+    n = robot.num_limbs
+    reachable = _np.zeros((resolution, resolution), dtype=bool)
+    q = _np.full((resolution, resolution, n), _np.nan)
+    strain = _np.full((resolution, resolution), _np.nan)
+    reachable[order[:, 0], order[:, 1]] = ik.converged
+    q[order[:, 0], order[:, 1]] = _np.where(ik.converged[:, None], ik.q, _np.nan)
+    strain[order[:, 0], order[:, 1]] = _np.where(ik.converged, ik.max_strain, _np.nan)
+    return {"x": xs, "y": ys, "theta": theta, "reachable": reachable, "q": q, "max_strain": strain}

@@ -1,0 +1,216 @@
+"""Type stubs of the pcr._pcr extension module (SI units: m, rad, N, Pa)."""
+from __future__ import annotations
+
+from typing import Any, Callable, Optional, Sequence, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+has_calibration: bool
+
+ArrayLike = npt.ArrayLike
+FloatArray = npt.NDArray[np.float64]
+
+class Pose:
+    x: float  # m
+    y: float  # m
+    theta: float  # rad
+    def __init__(self, x: float = 0.0, y: float = 0.0, theta: float = 0.0) -> None: ...
+    def to_array(self) -> FloatArray: ...
+    def inverse(self) -> Pose: ...
+    def __mul__(self, other: Pose) -> Pose: ...
+    def replace(self, **changes: Any) -> Pose: ...
+
+class Limb:
+    A: FloatArray  # (2,) m, in W at q = 0
+    alpha: float  # rad
+    gamma: float  # rad
+    B: FloatArray  # (2,) m, in P
+    beta: float  # rad
+    l: float  # m
+    d: float  # m
+    E: float  # Pa
+    q_range: tuple[float, float]  # m
+    @property
+    def EI(self) -> float: ...  # N m^2
+    def __init__(self) -> None: ...
+    def replace(self, **changes: Any) -> Limb: ...
+
+class Extrinsics:
+    camera: Pose  # ^W T_Se
+    pattern: Pose  # ^M T_P
+    def __init__(self) -> None: ...
+    def platform_from_measurement(self, camera_T_pattern: Pose) -> Pose: ...
+    def measurement_from_platform(self, world_T_platform: Pose) -> Pose: ...
+    def replace(self, **changes: Any) -> Extrinsics: ...
+
+class LimbUncertainty:
+    A: FloatArray
+    alpha: float
+    gamma: float
+    B: FloatArray
+    beta: float
+    l: float
+    d: float
+    E: float
+    def __init__(self) -> None: ...
+    def replace(self, **changes: Any) -> LimbUncertainty: ...
+
+class Uncertainty:
+    global_: LimbUncertainty
+    limbs: list[LimbUncertainty]
+    camera: FloatArray  # (3,) m, m, rad
+    pattern: FloatArray  # (3,) m, m, rad
+    def __init__(self) -> None: ...
+    def replace(self, **changes: Any) -> Uncertainty: ...
+
+class SolveStatus:
+    converged: SolveStatus
+    max_iterations: SolveStatus
+    singular: SolveStatus
+    non_finite: SolveStatus
+    out_of_range: SolveStatus
+    unsupported: SolveStatus
+    invalid_input: SolveStatus
+    @property
+    def name(self) -> str: ...
+    @property
+    def value(self) -> int: ...
+
+class SolverOptions:
+    rod_steps: int
+    rod_error_tolerance: float
+    min_rod_steps: int
+    max_rod_steps: int
+    max_iterations: int
+    tolerance: float
+    max_line_search: int
+    continuation: bool
+    max_continuation_steps: int
+    min_continuation_step: float
+    def __init__(self) -> None: ...
+    def replace(self, **changes: Any) -> SolverOptions: ...
+
+class Solution:
+    @property
+    def q(self) -> FloatArray: ...  # (n,) m
+    @property
+    def pose(self) -> Pose: ...
+    @property
+    def wrenches(self) -> FloatArray: ...  # (n, 3) N, N, N m
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_code(self) -> SolveStatus: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def residual(self) -> float: ...
+    @property
+    def max_strain(self) -> float: ...
+    @property
+    def rod_steps(self) -> int: ...
+    @property
+    def continuation_steps(self) -> int: ...
+    @property
+    def shapes(self) -> Optional[list[FloatArray]]: ...  # per rod (steps + 1, 4): s, x, y, theta
+
+class BatchResult:
+    q: FloatArray  # (N, n) m
+    pose: FloatArray  # (N, 3)
+    wrenches: FloatArray  # (N, n, 3)
+    converged: npt.NDArray[np.bool_]
+    status: npt.NDArray[np.str_]
+    status_code: npt.NDArray[np.int32]
+    iterations: npt.NDArray[np.int32]
+    residual: FloatArray
+    max_strain: FloatArray
+    rod_steps: npt.NDArray[np.int32]
+    shapes: Optional[list[Optional[list[FloatArray]]]]
+    def __len__(self) -> int: ...
+
+class Robot:
+    name: str
+    E: float  # Pa
+    limbs: list[Limb]
+    extrinsics: Extrinsics
+    uncertainty: Optional[Uncertainty]
+    @property
+    def num_limbs(self) -> int: ...
+    def __init__(self) -> None: ...
+    @staticmethod
+    def default() -> Robot: ...
+    @staticmethod
+    def load(path: str) -> Robot: ...
+    @staticmethod
+    def from_json(text: str, source: str = "<string>") -> Robot: ...
+    def save(self, path: str) -> None: ...
+    def to_json(self) -> str: ...
+    def copy(self) -> Robot: ...
+    def replace(self, **changes: Any) -> Robot: ...
+    def with_limb(self, index: int, **changes: Any) -> Robot: ...
+    @overload
+    def forward(self, q: Sequence[float], *, warm_start: Optional[Solution] = None,
+                shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                options: Optional[SolverOptions] = None) -> Solution: ...
+    @overload
+    def forward(self, q: ArrayLike, *, warm_start: Optional[Solution] = None,
+                shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                options: Optional[SolverOptions] = None) -> Union[Solution, BatchResult]: ...
+    @overload
+    def inverse(self, pose: Pose, *, warm_start: Optional[Solution] = None,
+                shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                options: Optional[SolverOptions] = None) -> Solution: ...
+    @overload
+    def inverse(self, pose: ArrayLike, *, warm_start: Optional[Solution] = None,
+                shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                options: Optional[SolverOptions] = None) -> Union[Solution, BatchResult]: ...
+    def home(self, *, shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+             options: Optional[SolverOptions] = None) -> Solution: ...
+
+# ---- calibration (when has_calibration) ----------------------------------------------------
+class VirtualRobot:
+    def __init__(self, nominal: Robot, *, seed: int = 1, noise_position: float = 9.13e-9,
+                 noise_angle: float = 1.2e-6, misalignments: bool = False,
+                 misalignment_half_width: float = 5e-3, unequal_diameters: bool = False,
+                 diameter_half_width: float = 2e-6, force: Optional[ArrayLike] = None,
+                 moment: float = 0.0, options: Optional[SolverOptions] = None) -> None: ...
+    @property
+    def nominal(self) -> Robot: ...
+    @property
+    def truth(self) -> Robot: ...
+    @property
+    def load(self) -> tuple[FloatArray, float]: ...
+    def measure(self, q: ArrayLike) -> dict[str, Any]: ...
+
+def parameter_names(num_limbs: int) -> list[str]: ...
+def sensitivity_configurations(robot: Robot, step: float = 1e-3,
+                               centre: Optional[ArrayLike] = None) -> FloatArray: ...
+def platform_parameter_jacobian(robot: Robot, q: ArrayLike, *, force: ArrayLike = (0.0, 0.0),
+                                moment: float = 0.0,
+                                options: Optional[SolverOptions] = None) -> Optional[FloatArray]: ...
+def sensitivity(robot: Robot, *, step: float = 1e-3, centre: Optional[ArrayLike] = None,
+                force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                options: Optional[SolverOptions] = None) -> dict[str, Any]: ...
+def read_dataset(path: str, num_joints: int = -1) -> tuple[FloatArray, FloatArray]: ...
+def write_dataset(path: str, q: ArrayLike, measured: ArrayLike) -> None: ...
+def read_configurations(path: str, num_joints: int = -1) -> FloatArray: ...
+def write_configurations(path: str, q: ArrayLike) -> None: ...
+def admissible_configuration(robot: Robot, q: ArrayLike, strain_limit: float = 0.01) -> bool: ...
+def poisson_disc_sample(robot: Robot, *, count: int = 99, seed: int = 1,
+                        min_distance: float = 0.0, box_min: Optional[ArrayLike] = None,
+                        box_max: Optional[ArrayLike] = None, strain_limit: float = 0.01,
+                        attempts: int = 30, force: ArrayLike = (0.0, 0.0),
+                        moment: float = 0.0) -> dict[str, Any]: ...
+def default_stages() -> list[dict[str, Any]]: ...
+def load_calibration_stages(path: str) -> list[dict[str, Any]]: ...
+def pose_errors(robot: Robot, q: ArrayLike, measured: ArrayLike) -> dict[str, float]: ...
+def calibrate(nominal: Robot, q: ArrayLike, measured: ArrayLike, *,
+              stages: Union[None, str, list[dict[str, Any]]] = None,
+              orientation_weight: float = ..., residual_scale: float = 9.13e-9,
+              derivatives: str = "implicit", max_iterations: int = 100, fix_gauge: bool = True,
+              gauge_prior_weight: float = 1e-3, compute_covariance: bool = True,
+              progress: Optional[Callable[[str], None]] = None) -> tuple[Robot, dict[str, Any]]: ...

@@ -1,0 +1,22 @@
+// The pcr._pcr extension module: bindings of the pcr C++ library (see python/pcr/__init__.py).
+#include "bindings.hpp"
+
+#ifndef PCR_VERSION
+#define PCR_VERSION "unknown"
+#endif
+
+PYBIND11_MODULE(_pcr, m) {
+  namespace py = pybind11;
+  m.doc() = "pcr: planar parallel continuum robots (C++ bindings). SI units: m, rad, N, Pa.";
+  m.attr("__version__") = PCR_VERSION;
+  // pcr::InputError derives from std::invalid_argument, which pybind11 already maps to
+  // ValueError; other std::exception types become RuntimeError. Both keep the C++ message.
+  pcr::python::wrap_robot(m);
+  pcr::python::wrap_kinematics(m);
+#ifdef PCR_PYTHON_HAS_CALIB
+  pcr::python::wrap_calibration(m);
+  m.attr("has_calibration") = true;
+#else
+  m.attr("has_calibration") = false;
+#endif
+}

@@ -1,0 +1,132 @@
+#pragma once
+// The solve loops behind Robot.forward / Robot.inverse, kept out of the wrappers: one
+// configuration (warm start, then a cold retry, as `pcr fk` / `pcr ik` do) and the batch, warm-
+// started along the rows. Plain C++, called with the GIL released.
+
+#include <limits>
+
+#include "pcr/kinematics.hpp"
+
+namespace pcr::python {
+
+/// A result usable as the next warm start: converged, or (IK) a valid equilibrium out of range.
+inline bool usable_forward(const SolverSummary& s) { return s.converged(); }
+inline bool usable_inverse(const SolverSummary& s) {
+  return s.converged() || s.status == SolveStatus::kOutOfRange;
+}
+
+/// FK at q from `warm` when given (retried cold on failure); iterations of both attempts summed.
+inline ForwardSolution solve_forward(const RobotParams<double>& robot, const JointVector& q,
+                                     const ForwardSolution* warm, const SolverOptions& options,
+                                     const PlatformLoad<double>& load) {
+  ForwardSolution solution;
+  int iterations = 0;
+  if (warm != nullptr) {
+    solution = forward_kinematics(robot, q, *warm, options, load);
+    iterations += solution.summary.iterations;
+  }
+  if (warm == nullptr || !usable_forward(solution.summary)) {
+    solution = forward_kinematics(robot, q, options, load);
+    iterations += solution.summary.iterations;
+  }
+  solution.summary.iterations = iterations;
+  return solution;
+}
+
+inline InverseSolution solve_inverse(const RobotParams<double>& robot, const Pose2<double>& pose,
+                                     const InverseSolution* warm, const SolverOptions& options,
+                                     const PlatformLoad<double>& load) {
+  InverseSolution solution;
+  int iterations = 0;
+  if (warm != nullptr) {
+    solution = inverse_kinematics(robot, pose, *warm, options, load);
+    iterations += solution.summary.iterations;
+  }
+  if (warm == nullptr || !usable_inverse(solution.summary)) {
+    solution = inverse_kinematics(robot, pose, options, load);
+    iterations += solution.summary.iterations;
+  }
+  solution.summary.iterations = iterations;
+  return solution;
+}
+
+/// Row-major output buffers of a batch of N rows for a robot with n limbs.
+struct BatchBuffers {
+  double* q;           ///< N x n (m)
+  double* pose;        ///< N x 3 (m, m, rad)
+  double* wrenches;    ///< N x n x 3 (N, N, N m)
+  bool* converged;     ///< N
+  int* status;         ///< N, SolveStatus
+  int* iterations;     ///< N
+  double* residual;    ///< N
+  double* max_strain;  ///< N
+  int* rod_steps;      ///< N
+};
+
+/// Fills row r of the buffers; invalid results (not usable as a warm start) get NaN values.
+template <class Solution>
+void store_row(const Solution& s, bool usable, int n, std::ptrdiff_t r, const BatchBuffers& out) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i < n; ++i) {
+    out.q[r * n + i] = usable ? s.q(i) : nan;
+    out.wrenches[(r * n + i) * 3 + 0] = usable ? s.wrenches[i].nx : nan;
+    out.wrenches[(r * n + i) * 3 + 1] = usable ? s.wrenches[i].ny : nan;
+    out.wrenches[(r * n + i) * 3 + 2] = usable ? s.wrenches[i].m : nan;
+  }
+  out.pose[r * 3 + 0] = usable ? s.pose.x : nan;
+  out.pose[r * 3 + 1] = usable ? s.pose.y : nan;
+  out.pose[r * 3 + 2] = usable ? s.pose.theta : nan;
+  out.converged[r] = s.summary.converged();
+  out.status[r] = static_cast<int>(s.summary.status);
+  out.iterations[r] = s.summary.iterations;
+  out.residual[r] = s.summary.final_residual_norm;
+  out.max_strain[r] = usable ? s.summary.max_strain : nan;
+  out.rod_steps[r] = s.summary.rod_steps;
+}
+
+/// FK of every row of q (N x n, row-major), warm-started from the previous usable row.
+/// `solutions` (optional, size N) receives the full solutions (for the shapes).
+inline void forward_batch(const RobotParams<double>& robot, const double* q, std::ptrdiff_t rows,
+                          const SolverOptions& options, const PlatformLoad<double>& load,
+                          const BatchBuffers& out, ForwardSolution* solutions = nullptr) {
+  const int n = robot.num_limbs;
+  ForwardSolution previous;
+  bool have_previous = false;
+  JointVector joints(n);
+  for (std::ptrdiff_t r = 0; r < rows; ++r) {
+    for (int i = 0; i < n; ++i) joints(i) = q[r * n + i];
+    ForwardSolution s =
+        solve_forward(robot, joints, have_previous ? &previous : nullptr, options, load);
+    have_previous = usable_forward(s.summary);
+    if (have_previous) previous = s;
+    // FK's joints are the input, echoed even when the solve failed.
+    store_row(s, have_previous, n, r, out);
+    for (int i = 0; i < n; ++i) out.q[r * n + i] = joints(i);
+    if (solutions != nullptr) solutions[r] = s;
+  }
+}
+
+/// IK of every row of poses (N x 3, row-major), warm-started from the previous usable row.
+inline void inverse_batch(const RobotParams<double>& robot, const double* poses,
+                          std::ptrdiff_t rows, const SolverOptions& options,
+                          const PlatformLoad<double>& load, const BatchBuffers& out,
+                          InverseSolution* solutions = nullptr) {
+  const int n = robot.num_limbs;
+  InverseSolution previous;
+  bool have_previous = false;
+  for (std::ptrdiff_t r = 0; r < rows; ++r) {
+    const Pose2<double> pose{poses[r * 3], poses[r * 3 + 1], poses[r * 3 + 2]};
+    InverseSolution s =
+        solve_inverse(robot, pose, have_previous ? &previous : nullptr, options, load);
+    have_previous = usable_inverse(s.summary);
+    if (have_previous) previous = s;
+    store_row(s, have_previous, n, r, out);
+    // The requested pose is echoed; with 2 limbs theta is the solved one (NaN on failure).
+    out.pose[r * 3 + 0] = pose.x;
+    out.pose[r * 3 + 1] = pose.y;
+    if (n != 2) out.pose[r * 3 + 2] = pose.theta;
+    if (solutions != nullptr) solutions[r] = s;
+  }
+}
+
+}  // namespace pcr::python

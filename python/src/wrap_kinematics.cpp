@@ -1,0 +1,357 @@
+// Robot.forward / Robot.inverse / Robot.home, pcr.SolverOptions, pcr.Solution, pcr.BatchResult.
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "bindings.hpp"
+#include "solve.hpp"
+
+namespace pcr::python {
+
+PlatformLoad<double> make_load(const Eigen::Vector2d& force, double moment) {
+  if (!force.allFinite() || !std::isfinite(moment)) {
+    throw std::invalid_argument("force/moment: expected finite numbers (N, N m)");
+  }
+  return PlatformLoad<double>{force, moment};
+}
+
+namespace {
+
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+/// Arrays of a batch. `status` holds names (str array), `status_code` the SolveStatus values.
+struct BatchResult {
+  py::array_t<double> q, pose, wrenches, residual, max_strain;
+  py::array_t<bool> converged;
+  py::array_t<int> status_code, iterations, rod_steps;
+  py::object status = py::none();
+  py::object shapes = py::none();
+};
+
+/// The rods' shapes of a solution: one (steps + 1, 4) array per rod (s, x, y, theta).
+py::list rod_shapes(const RobotParams<double>& robot, const JointVector& q,
+                    const std::array<Wrench<double>, kMaxLimbs>& wrenches, int rod_steps) {
+  const int n = robot.num_limbs;
+  std::vector<RowMatrix> shapes(static_cast<std::size_t>(n), RowMatrix(rod_steps + 1, 4));
+  std::vector<int> rows(static_cast<std::size_t>(n), 0);
+  visit_rod_shapes(robot, q, wrenches, rod_steps, [&](int limb, double s, const RodState<double>& st) {
+    const auto i = static_cast<std::size_t>(limb);
+    shapes[i].row(rows[i]++) << s, st.x, st.y, st.theta;
+  });
+  py::list out;
+  for (const RowMatrix& shape : shapes) out.append(py::cast(shape));
+  return out;
+}
+
+/// The Python view of a solution. Not usable (failed): NaN values, except FK's q, which echoes
+/// `input_q` (the solver returns the last solved point of its path there).
+template <class S>
+Solution to_python(const RobotParams<double>& robot, const S& s, bool usable, bool shapes,
+                   const JointVector* input_q = nullptr) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Solution out;
+  out.num_limbs = robot.num_limbs;
+  out.summary = s.summary;
+  out.q = usable ? s.q : JointVector::Constant(robot.num_limbs, nan);
+  if (input_q != nullptr) out.q = *input_q;
+  out.pose = usable ? s.pose : Pose2<double>{nan, nan, nan};
+  out.wrenches = s.wrenches;
+  for (int i = 0; i < robot.num_limbs && !usable; ++i) out.wrenches[i] = Wrench<double>{nan, nan, nan};
+  if (!usable) out.summary.max_strain = nan;
+  if (usable && shapes) out.shapes = rod_shapes(robot, s.q, s.wrenches, s.summary.rod_steps);
+  return out;
+}
+
+ForwardSolution as_forward(const Solution& s) {
+  ForwardSolution out;
+  out.q = s.q;
+  out.pose = s.pose;
+  out.wrenches = s.wrenches;
+  out.summary = s.summary;
+  return out;
+}
+
+InverseSolution as_inverse(const Solution& s) {
+  InverseSolution out;
+  out.q = s.q;
+  out.pose = s.pose;
+  out.wrenches = s.wrenches;
+  out.summary = s.summary;
+  return out;
+}
+
+/// Array-like -> float64 C-contiguous array of 1 or 2 dimensions with `columns` columns.
+py::array_t<double, py::array::c_style | py::array::forcecast> input_array(
+    const py::object& object, int columns, const char* what, const char* unit) {
+  using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+  Array a;
+  try {
+    a = Array::ensure(object);
+  } catch (const py::error_already_set&) {
+  }
+  const std::string expected = std::string(what) + ": expected " + std::to_string(columns) +
+                               " numbers or an (N, " + std::to_string(columns) + ") array (" +
+                               unit + ")";
+  if (!a || a.ndim() < 1 || a.ndim() > 2 || a.shape(a.ndim() - 1) != columns) {
+    std::string got;
+    if (a) {
+      got = "shape (";
+      for (py::ssize_t d = 0; d < a.ndim(); ++d) got += (d ? ", " : "") + std::to_string(a.shape(d));
+      got += a.ndim() == 1 ? ",)" : ")";
+    } else {
+      got = py::repr(object).cast<std::string>();
+    }
+    throw std::invalid_argument(expected + ", got " + got);
+  }
+  const double* data = a.data();
+  for (py::ssize_t k = 0; k < a.size(); ++k) {
+    if (!std::isfinite(data[k])) {
+      const py::ssize_t row = k / columns, col = k % columns;
+      throw std::invalid_argument(std::string(what) + ": non-finite value " +
+                                  std::to_string(data[k]) + " at row " + std::to_string(row) +
+                                  ", column " + std::to_string(col));
+    }
+  }
+  return a;
+}
+
+SolverOptions options_or_default(const std::optional<SolverOptions>& options) {
+  return options ? *options : SolverOptions();
+}
+
+py::object status_names(const py::array_t<int>& codes) {
+  py::list names;
+  const int* c = codes.data();
+  for (py::ssize_t r = 0; r < codes.size(); ++r) {
+    names.append(to_string(static_cast<SolveStatus>(c[r])));
+  }
+  return py::module_::import("numpy").attr("array")(names, py::arg("dtype") = "U14");
+}
+
+BatchResult allocate_batch(py::ssize_t rows, int n, BatchBuffers& buffers) {
+  BatchResult b;
+  b.q = py::array_t<double>({rows, static_cast<py::ssize_t>(n)});
+  b.pose = py::array_t<double>({rows, py::ssize_t{3}});
+  b.wrenches = py::array_t<double>({rows, static_cast<py::ssize_t>(n), py::ssize_t{3}});
+  b.converged = py::array_t<bool>(rows);
+  b.status_code = py::array_t<int>(rows);
+  b.iterations = py::array_t<int>(rows);
+  b.residual = py::array_t<double>(rows);
+  b.max_strain = py::array_t<double>(rows);
+  b.rod_steps = py::array_t<int>(rows);
+  buffers = BatchBuffers{b.q.mutable_data(),         b.pose.mutable_data(),
+                         b.wrenches.mutable_data(),  b.converged.mutable_data(),
+                         b.status_code.mutable_data(), b.iterations.mutable_data(),
+                         b.residual.mutable_data(),  b.max_strain.mutable_data(),
+                         b.rod_steps.mutable_data()};
+  return b;
+}
+
+py::object forward(const RobotDescription& robot, const py::object& q_in,
+                   const std::optional<Solution>& warm_start, bool shapes,
+                   const Eigen::Vector2d& force, double moment,
+                   const std::optional<SolverOptions>& options_in) {
+  const RobotParams<double>& params = robot.params;
+  const int n = params.num_limbs;
+  const auto q = input_array(q_in, n, "q", "m");
+  const PlatformLoad<double> load = make_load(force, moment);
+  const SolverOptions options = options_or_default(options_in);
+  if (q.ndim() == 1) {
+    JointVector joints(n);
+    for (int i = 0; i < n; ++i) joints(i) = q.at(i);
+    std::unique_ptr<ForwardSolution> warm;
+    if (warm_start) warm = std::make_unique<ForwardSolution>(as_forward(*warm_start));
+    ForwardSolution s;
+    {
+      py::gil_scoped_release release;
+      s = solve_forward(params, joints, warm.get(), options, load);
+    }
+    return py::cast(to_python(params, s, usable_forward(s.summary), shapes, &joints));
+  }
+  if (warm_start) throw std::invalid_argument("warm_start: only for a single configuration");
+  const py::ssize_t rows = q.shape(0);
+  BatchBuffers buffers{};
+  BatchResult batch = allocate_batch(rows, n, buffers);
+  std::vector<ForwardSolution> solutions(shapes ? static_cast<std::size_t>(rows) : 0);
+  {
+    py::gil_scoped_release release;
+    forward_batch(params, q.data(), rows, options, load, buffers,
+                  shapes ? solutions.data() : nullptr);
+  }
+  batch.status = status_names(batch.status_code);
+  if (shapes) {
+    py::list all;
+    for (const ForwardSolution& s : solutions) {
+      all.append(usable_forward(s.summary)
+                     ? py::object(rod_shapes(params, s.q, s.wrenches, s.summary.rod_steps))
+                     : py::object(py::none()));
+    }
+    batch.shapes = all;
+  }
+  return py::cast(std::move(batch));
+}
+
+py::object inverse(const RobotDescription& robot, const py::object& pose_in,
+                   const std::optional<Solution>& warm_start, bool shapes,
+                   const Eigen::Vector2d& force, double moment,
+                   const std::optional<SolverOptions>& options_in) {
+  const RobotParams<double>& params = robot.params;
+  const int n = params.num_limbs;
+  if (n > 3) {
+    throw std::invalid_argument("inverse: robots with more than 3 limbs are not supported (got " +
+                                std::to_string(n) + " limbs)");
+  }
+  const PlatformLoad<double> load = make_load(force, moment);
+  const SolverOptions options = options_or_default(options_in);
+  py::object pose_like = pose_in;
+  if (py::isinstance<Pose2<double>>(pose_in)) {
+    const Pose2<double> p = pose_in.cast<Pose2<double>>();
+    pose_like = py::cast(Eigen::Vector3d(p.x, p.y, p.theta));
+  }
+  const auto poses = input_array(pose_like, 3, "pose", "x m, y m, theta rad");
+  if (poses.ndim() == 1) {
+    const Pose2<double> pose{poses.at(0), poses.at(1), poses.at(2)};
+    std::unique_ptr<InverseSolution> warm;
+    if (warm_start) warm = std::make_unique<InverseSolution>(as_inverse(*warm_start));
+    InverseSolution s;
+    {
+      py::gil_scoped_release release;
+      s = solve_inverse(params, pose, warm.get(), options, load);
+    }
+    return py::cast(to_python(params, s, usable_inverse(s.summary), shapes));
+  }
+  if (warm_start) throw std::invalid_argument("warm_start: only for a single pose");
+  const py::ssize_t rows = poses.shape(0);
+  BatchBuffers buffers{};
+  BatchResult batch = allocate_batch(rows, n, buffers);
+  std::vector<InverseSolution> solutions(shapes ? static_cast<std::size_t>(rows) : 0);
+  {
+    py::gil_scoped_release release;
+    inverse_batch(params, poses.data(), rows, options, load, buffers,
+                  shapes ? solutions.data() : nullptr);
+  }
+  batch.status = status_names(batch.status_code);
+  if (shapes) {
+    py::list all;
+    for (const InverseSolution& s : solutions) {
+      all.append(usable_inverse(s.summary)
+                     ? py::object(rod_shapes(params, s.q, s.wrenches, s.summary.rod_steps))
+                     : py::object(py::none()));
+    }
+    batch.shapes = all;
+  }
+  return py::cast(std::move(batch));
+}
+
+}  // namespace
+
+void wrap_kinematics(py::module_& m) {
+  py::enum_<SolveStatus>(m, "SolveStatus", "Outcome of a kinematics solve.")
+      .value("converged", SolveStatus::kConverged)
+      .value("max_iterations", SolveStatus::kMaxIterations)
+      .value("singular", SolveStatus::kSingular)
+      .value("non_finite", SolveStatus::kNonFinite)
+      .value("out_of_range", SolveStatus::kOutOfRange)
+      .value("unsupported", SolveStatus::kUnsupported)
+      .value("invalid_input", SolveStatus::kInvalidInput);
+
+  py::class_<SolverOptions>(m, "SolverOptions", "Newton shooting settings (pcr/kinematics.hpp).")
+      .def(py::init<>())
+      .def_readwrite("rod_steps", &SolverOptions::rod_steps,
+                     "RK4 steps per rod; 0 chooses them from the curvature")
+      .def_readwrite("rod_error_tolerance", &SolverOptions::rod_error_tolerance,
+                     "target RK4 tip error when rod_steps = 0 (m)")
+      .def_readwrite("min_rod_steps", &SolverOptions::min_rod_steps)
+      .def_readwrite("max_rod_steps", &SolverOptions::max_rod_steps)
+      .def_readwrite("max_iterations", &SolverOptions::max_iterations, "Newton iterations per solve")
+      .def_readwrite("tolerance", &SolverOptions::tolerance,
+                     "max-norm of the scaled residual (lengths / l, forces / (EI / l^2))")
+      .def_readwrite("max_line_search", &SolverOptions::max_line_search)
+      .def_readwrite("continuation", &SolverOptions::continuation)
+      .def_readwrite("max_continuation_steps", &SolverOptions::max_continuation_steps)
+      .def_readwrite("min_continuation_step", &SolverOptions::min_continuation_step);
+
+  py::class_<Solution>(m, "Solution",
+                       "One solved configuration. When the solve failed (converged is False; for "
+                       "IK also out_of_range is a valid equilibrium) q/pose/wrenches are NaN.")
+      .def_property_readonly("q", [](const Solution& s) -> Eigen::VectorXd { return s.q; },
+                             "joint values (m)")
+      .def_property_readonly("pose", [](const Solution& s) { return s.pose; },
+                             "platform pose ^W T_P (m, m, rad)")
+      .def_property_readonly("wrenches", [](const Solution& s) {
+        RowMatrix w(s.num_limbs, 3);
+        for (int i = 0; i < s.num_limbs; ++i) w.row(i) << s.wrenches[i].nx, s.wrenches[i].ny, s.wrenches[i].m;
+        return w;
+      }, "(n, 3) proximal wrench of each rod: nx, ny (N), m (N m)")
+      .def_property_readonly("converged", [](const Solution& s) { return s.summary.converged(); })
+      .def_property_readonly("status", [](const Solution& s) { return std::string(to_string(s.summary.status)); },
+                             "converged, singular, max_iterations, non_finite, out_of_range, "
+                             "unsupported, invalid_input")
+      .def_property_readonly("status_code", [](const Solution& s) { return s.summary.status; })
+      .def_property_readonly("iterations", [](const Solution& s) { return s.summary.iterations; },
+                             "Newton iterations (warm attempt and cold retry included)")
+      .def_property_readonly("residual", [](const Solution& s) { return s.summary.final_residual_norm; },
+                             "final max-norm of the scaled shooting residual")
+      .def_property_readonly("max_strain", [](const Solution& s) { return s.summary.max_strain; },
+                             "largest bending strain |kappa| d / 2 over the rods")
+      .def_property_readonly("rod_steps", [](const Solution& s) { return s.summary.rod_steps; },
+                             "RK4 steps per rod of this solution")
+      .def_property_readonly("continuation_steps", [](const Solution& s) { return s.summary.continuation_steps; })
+      .def_readonly("shapes", &Solution::shapes,
+                    "None, or (with shapes=True) one (steps + 1, 4) array per rod: s, x, y (m), "
+                    "theta (rad) along the rod, in W")
+      .def("__repr__", [](const Solution& s) {
+        return "<pcr.Solution " + std::string(to_string(s.summary.status)) + ", " +
+               std::to_string(s.summary.iterations) + " iterations>";
+      });
+
+  py::class_<BatchResult>(m, "BatchResult",
+                          "Results of a batch, one row per input row. Rows that failed have NaN "
+                          "values (FK keeps its input q, IK its input pose).")
+      .def_readonly("q", &BatchResult::q, "(N, n) joint values (m)")
+      .def_readonly("pose", &BatchResult::pose, "(N, 3) platform poses x, y (m), theta (rad)")
+      .def_readonly("wrenches", &BatchResult::wrenches, "(N, n, 3) proximal wrenches (N, N, N m)")
+      .def_readonly("converged", &BatchResult::converged, "(N,) bool")
+      .def_readonly("status", &BatchResult::status, "(N,) status names (str)")
+      .def_readonly("status_code", &BatchResult::status_code, "(N,) SolveStatus values (int)")
+      .def_readonly("iterations", &BatchResult::iterations, "(N,) Newton iterations")
+      .def_readonly("residual", &BatchResult::residual, "(N,) final scaled residual max-norm")
+      .def_readonly("max_strain", &BatchResult::max_strain, "(N,) largest bending strain")
+      .def_readonly("rod_steps", &BatchResult::rod_steps, "(N,) RK4 steps per rod")
+      .def_readonly("shapes", &BatchResult::shapes,
+                    "None, or a list (one per row) of None or per-rod (steps + 1, 4) arrays")
+      .def("__len__", [](const BatchResult& b) { return b.converged.size(); });
+
+  auto robot = py::reinterpret_borrow<py::class_<RobotDescription>>(m.attr("Robot"));
+  robot
+      .def("forward", &forward, py::arg("q"), py::kw_only(), py::arg("warm_start") = py::none(),
+           py::arg("shapes") = false, py::arg("force") = Eigen::Vector2d(0, 0),
+           py::arg("moment") = 0.0, py::arg("options") = py::none(),
+           "Forward kinematics. q: n joint values (m) -> Solution; or an (N, n) array -> "
+           "BatchResult, each row warm-started from the previous converged one (a failed warm "
+           "start is retried cold from home, as `pcr fk` does). force (fx, fy) in N and moment "
+           "in N m act on the platform at P's origin, in W. Releases the GIL.")
+      .def("inverse", &inverse, py::arg("pose"), py::kw_only(), py::arg("warm_start") = py::none(),
+           py::arg("shapes") = false, py::arg("force") = Eigen::Vector2d(0, 0),
+           py::arg("moment") = 0.0, py::arg("options") = py::none(),
+           "Inverse kinematics. pose: a Pose or (x m, y m, theta rad) -> Solution; or an (N, 3) "
+           "array -> BatchResult, warm-started along the rows like `pcr ik`. Joints outside "
+           "q_range give status out_of_range (converged False, q kept). With 2 limbs theta is "
+           "solved for. Releases the GIL.")
+      .def("home",
+           [](const RobotDescription& r, bool shapes, const Eigen::Vector2d& force, double moment,
+              const std::optional<SolverOptions>& options) {
+             const PlatformLoad<double> load = make_load(force, moment);
+             ForwardSolution s;
+             {
+               py::gil_scoped_release release;
+               s = home_solution(r.params, options_or_default(options), load);
+             }
+             return to_python(r.params, s, s.summary.converged(), shapes);
+           },
+           py::kw_only(), py::arg("shapes") = false, py::arg("force") = Eigen::Vector2d(0, 0),
+           py::arg("moment") = 0.0, py::arg("options") = py::none(),
+           "The home solution q = 0 (m).");
+}
+
+}  // namespace pcr::python

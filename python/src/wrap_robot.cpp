@@ -1,0 +1,237 @@
+// pcr.Robot (the pcr-robot description), pcr.Limb, pcr.Pose, pcr.Extrinsics, pcr.Uncertainty.
+// Attribute access returns references into the robot, so robot.limbs[0].l = 0.031 edits it.
+#include <cmath>
+#include <sstream>
+
+#include "bindings.hpp"
+
+namespace pcr::python {
+
+Pose2<double> to_pose(const py::handle& object, const char* what) {
+  if (py::isinstance<Pose2<double>>(object)) return object.cast<Pose2<double>>();
+  py::array_t<double, py::array::forcecast> a;
+  try {
+    a = py::array_t<double, py::array::forcecast>::ensure(object);
+  } catch (const py::error_already_set&) {
+  }
+  if (!a || a.ndim() != 1 || a.shape(0) != 3) {
+    throw std::invalid_argument(std::string(what) +
+                                ": expected a pcr.Pose or 3 numbers (x m, y m, theta rad), got " +
+                                py::repr(object).cast<std::string>());
+  }
+  return Pose2<double>{a.at(0), a.at(1), a.at(2)};
+}
+
+namespace {
+
+std::string pose_repr(const Pose2<double>& p) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "Pose(x=" << p.x << ", y=" << p.y << ", theta=" << p.theta << ")";
+  return s.str();
+}
+
+py::list limb_list(RobotDescription& robot, const py::object& owner) {
+  py::list limbs;
+  for (int i = 0; i < robot.params.num_limbs; ++i) {
+    limbs.append(py::cast(&robot.params.limb(i), py::return_value_policy::reference_internal,
+                          owner));
+  }
+  return limbs;
+}
+
+void set_limbs(RobotDescription& robot, const std::vector<LimbParams<double>>& limbs) {
+  if (limbs.size() < 2 || limbs.size() > static_cast<std::size_t>(kMaxLimbs)) {
+    throw InputError("Robot.limbs: expected 2 to " + std::to_string(kMaxLimbs) + " limbs, got " +
+                     std::to_string(limbs.size()));
+  }
+  robot.params.num_limbs = static_cast<int>(limbs.size());
+  for (std::size_t i = 0; i < static_cast<std::size_t>(kMaxLimbs); ++i) {
+    robot.params.limbs[i] = i < limbs.size() ? limbs[i] : LimbParams<double>();
+  }
+}
+
+}  // namespace
+
+void wrap_robot(py::module_& m) {
+  py::class_<Pose2<double>>(m, "Pose",
+                            "A planar pose ^A T_B: x, y (m) and theta (rad) of frame B in frame A.")
+      .def(py::init([](double x, double y, double theta) { return Pose2<double>{x, y, theta}; }),
+           py::arg("x") = 0.0, py::arg("y") = 0.0, py::arg("theta") = 0.0)
+      .def_readwrite("x", &Pose2<double>::x, "m")
+      .def_readwrite("y", &Pose2<double>::y, "m")
+      .def_readwrite("theta", &Pose2<double>::theta, "rad")
+      .def("to_array", [](const Pose2<double>& p) { return Eigen::Vector3d(p.x, p.y, p.theta); },
+           "[x, y, theta] as a NumPy array (m, m, rad).")
+      .def("__mul__", &Pose2<double>::operator*, py::arg("other"), "Composition ^A T_B * ^B T_C.")
+      .def("inverse", &Pose2<double>::inverse, "^B T_A.")
+      .def("__repr__", &pose_repr)
+      .def("__eq__", [](const Pose2<double>& a, const Pose2<double>& b) {
+        return a.x == b.x && a.y == b.y && a.theta == b.theta;
+      })
+      .def(py::pickle(
+          [](const Pose2<double>& p) { return py::make_tuple(p.x, p.y, p.theta); },
+          [](const py::tuple& t) {
+            return Pose2<double>{t[0].cast<double>(), t[1].cast<double>(), t[2].cast<double>()};
+          }))
+      .def("__copy__", [](const Pose2<double>& p) { return p; })
+      .def("__deepcopy__", [](const Pose2<double>& p, const py::dict&) { return p; },
+           py::arg("memo"));
+
+  py::class_<LimbParams<double>>(m, "Limb",
+                                 "One limb (rod + actuator), notation of Mauze et al. 2021 Fig. 3.")
+      .def(py::init<>())
+      .def_property(
+          "A", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.A; },
+          [](LimbParams<double>& l, const Eigen::Vector2d& v) { l.A = v; },
+          py::return_value_policy::reference_internal, "proximal clamp [x, y] in W at q = 0 (m)")
+      .def_readwrite("alpha", &LimbParams<double>::alpha,
+                     "rod tangent angle at the proximal clamp, in W (rad)")
+      .def_readwrite("gamma", &LimbParams<double>::gamma,
+                     "actuator misalignment: the clamp moves along alpha + gamma (rad)")
+      .def_property(
+          "B", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.B; },
+          [](LimbParams<double>& l, const Eigen::Vector2d& v) { l.B = v; },
+          py::return_value_policy::reference_internal, "distal clamp [x, y] in P (m)")
+      .def_readwrite("beta", &LimbParams<double>::beta,
+                     "rod tangent angle at the distal clamp, in P (rad)")
+      .def_readwrite("l", &LimbParams<double>::length, "stress-free rod length (m)")
+      .def_readwrite("d", &LimbParams<double>::diameter, "rod diameter (m)")
+      .def_readwrite("E", &LimbParams<double>::young_modulus, "Young's modulus of this rod (Pa)")
+      .def_property(
+          "q_range", [](const LimbParams<double>& l) { return std::make_pair(l.q_min, l.q_max); },
+          [](LimbParams<double>& l, const std::pair<double, double>& r) {
+            l.q_min = r.first;
+            l.q_max = r.second;
+          },
+          "actuator stroke (min, max) (m)")
+      .def_property_readonly("EI", &LimbParams<double>::bending_stiffness,
+                             "bending stiffness E pi d^4 / 64 (N m^2)")
+      .def("__copy__", [](const LimbParams<double>& l) { return l; })
+      .def("__deepcopy__", [](const LimbParams<double>& l, const py::dict&) { return l; },
+           py::arg("memo"))
+      .def("__repr__", [](const LimbParams<double>& l) {
+        std::ostringstream s;
+        s.precision(9);
+        s << "Limb(A=[" << l.A.x() << ", " << l.A.y() << "], alpha=" << l.alpha
+          << ", gamma=" << l.gamma << ", B=[" << l.B.x() << ", " << l.B.y() << "], beta=" << l.beta
+          << ", l=" << l.length << ", d=" << l.diameter << ", E=" << l.young_modulus
+          << ", q_range=(" << l.q_min << ", " << l.q_max << "))";
+        return s.str();
+      });
+
+  py::class_<Extrinsics<double>>(m, "Extrinsics",
+                                 "Measurement extrinsics (Eq. 5): ^W T_P = camera * ^Se T_M * pattern.")
+      .def(py::init<>())
+      .def_readwrite("camera", &Extrinsics<double>::camera, "^W T_Se: the camera frame in W")
+      .def_readwrite("pattern", &Extrinsics<double>::pattern, "^M T_P: the platform in the pattern frame")
+      .def("platform_from_measurement", &Extrinsics<double>::platform_from_measurement,
+           py::arg("camera_T_pattern"), "^W T_P from a measured pattern pose ^Se T_M.")
+      .def("measurement_from_platform", &Extrinsics<double>::measurement_from_platform,
+           py::arg("world_T_platform"), "^Se T_M that the camera sees for a platform pose ^W T_P.")
+      .def("__copy__", [](const Extrinsics<double>& e) { return e; })
+      .def("__deepcopy__", [](const Extrinsics<double>& e, const py::dict&) { return e; },
+           py::arg("memo"));
+
+  py::class_<LimbUncertainty>(m, "LimbUncertainty",
+                              "Half-widths of one limb's uncertainty intervals (SI units, rad).")
+      .def(py::init<>())
+      .def_property(
+          "A", [](LimbUncertainty& u) -> Eigen::Vector2d& { return u.A; },
+          [](LimbUncertainty& u, const Eigen::Vector2d& v) { u.A = v; },
+          py::return_value_policy::reference_internal, "m, on [A_x, A_y]")
+      .def_readwrite("alpha", &LimbUncertainty::alpha, "rad")
+      .def_readwrite("gamma", &LimbUncertainty::gamma, "rad")
+      .def_property(
+          "B", [](LimbUncertainty& u) -> Eigen::Vector2d& { return u.B; },
+          [](LimbUncertainty& u, const Eigen::Vector2d& v) { u.B = v; },
+          py::return_value_policy::reference_internal, "m, on [B_x, B_y]")
+      .def_readwrite("beta", &LimbUncertainty::beta, "rad")
+      .def_readwrite("l", &LimbUncertainty::length, "m")
+      .def_readwrite("d", &LimbUncertainty::diameter, "m")
+      .def_readwrite("E", &LimbUncertainty::young_modulus, "Pa")
+      .def("__copy__", [](const LimbUncertainty& u) { return u; })
+      .def("__deepcopy__", [](const LimbUncertainty& u, const py::dict&) { return u; },
+           py::arg("memo"));
+
+  py::class_<RobotUncertainty>(m, "Uncertainty",
+                               "Uncertainty half-widths: `global_` (top level), `limbs` (resolved "
+                               "per limb), camera and pattern ([x m, y m, theta rad]).")
+      .def(py::init<>())
+      .def_readwrite("global_", &RobotUncertainty::global, "the top-level half-widths")
+      .def_property(
+          "limbs",
+          [](py::object self) {
+            py::list limbs;
+            for (LimbUncertainty& u : self.cast<RobotUncertainty&>().limbs) {
+              limbs.append(py::cast(&u, py::return_value_policy::reference_internal, self));
+            }
+            return limbs;
+          },
+          [](RobotUncertainty& u, const std::vector<LimbUncertainty>& limbs) { u.limbs = limbs; },
+          "per-limb half-widths with the overrides applied (references, like Robot.limbs)")
+      .def_property(
+          "camera", [](RobotUncertainty& u) -> Eigen::Vector3d& { return u.camera; },
+          [](RobotUncertainty& u, const Eigen::Vector3d& v) { u.camera = v; },
+          py::return_value_policy::reference_internal, "on extrinsics.camera (m, m, rad)")
+      .def_property(
+          "pattern", [](RobotUncertainty& u) -> Eigen::Vector3d& { return u.pattern; },
+          [](RobotUncertainty& u, const Eigen::Vector3d& v) { u.pattern = v; },
+          py::return_value_policy::reference_internal, "on extrinsics.pattern (m, m, rad)")
+      .def("__copy__", [](const RobotUncertainty& u) { return u; })
+      .def("__deepcopy__", [](const RobotUncertainty& u, const py::dict&) { return u; },
+           py::arg("memo"));
+
+  py::class_<RobotDescription>(m, "Robot",
+                               "A planar parallel continuum robot: the pcr-robot JSON description "
+                               "(README, 'File formats'). SI units.")
+      .def(py::init([] { return default_robot(); }), "The default robot (same as Robot.default()).")
+      .def_static("default", &default_robot,
+                  "The paper's 3-PF robot (femto-3pf) with the paper's uncertainty intervals.")
+      .def_static("load", &load_robot, py::arg("path"),
+                  "Reads a pcr-robot JSON file (ValueError naming the file, field and value).")
+      .def_static("from_json", &parse_robot, py::arg("text"), py::arg("source") = "<string>",
+                  "Parses pcr-robot JSON text; `source` names it in error messages.")
+      .def("save", [](const RobotDescription& r, const std::string& path) { save_robot(r, path); },
+           py::arg("path"), "Validates and writes the description atomically (temp file + rename).")
+      .def("to_json", &robot_to_json, "The canonical JSON text (full precision).")
+      .def("copy", [](const RobotDescription& r) { return r; }, "A deep copy.")
+      .def("__copy__", [](const RobotDescription& r) { return r; })
+      .def("__deepcopy__", [](const RobotDescription& r, const py::dict&) { return r; },
+           py::arg("memo"))
+      .def(py::pickle([](const RobotDescription& r) { return robot_to_json(r); },
+                      [](const std::string& text) { return parse_robot(text, "<pickle>"); }))
+      .def_readwrite("name", &RobotDescription::name)
+      .def_property(
+          "E", [](const RobotDescription& r) { return r.young_modulus; },
+          [](RobotDescription& r, double e) {
+            r.young_modulus = e;
+            for (int i = 0; i < r.params.num_limbs; ++i) r.params.limb(i).young_modulus = e;
+          },
+          "the global Young's modulus (Pa); setting it sets every limb's E too")
+      .def_property_readonly("num_limbs", [](const RobotDescription& r) { return r.params.num_limbs; })
+      .def_property(
+          "limbs", [](py::object self) { return limb_list(self.cast<RobotDescription&>(), self); },
+          &set_limbs,
+          "the limbs (references: robot.limbs[0].l = x edits the robot); assign a list of Limb "
+          "to replace them")
+      .def_property(
+          "extrinsics",
+          [](RobotDescription& r) -> Extrinsics<double>& { return r.params.extrinsics; },
+          [](RobotDescription& r, const Extrinsics<double>& e) { r.params.extrinsics = e; },
+          py::return_value_policy::reference_internal, "measurement extrinsics (Eq. 5)")
+      .def_property(
+          "uncertainty",
+          [](py::object self) -> py::object {
+            RobotDescription& r = self.cast<RobotDescription&>();
+            if (!r.uncertainty) return py::none();
+            return py::cast(&*r.uncertainty, py::return_value_policy::reference_internal, self);
+          },
+          [](RobotDescription& r, std::optional<RobotUncertainty> u) { r.uncertainty = std::move(u); },
+          "uncertainty half-widths, or None (every parameter known exactly)")
+      .def("__repr__", [](const RobotDescription& r) {
+        return "<pcr.Robot '" + r.name + "' with " + std::to_string(r.params.num_limbs) + " limbs>";
+      });
+}
+
+}  // namespace pcr::python

@@ -1,0 +1,39 @@
+"""Shared fixtures. The `pcr` CLI comes from $PCR_CLI (set by ctest), else build*/apps/pcr."""
+import glob
+import os
+import shutil
+
+import matplotlib
+import pytest
+
+matplotlib.use("Agg")
+
+import pcr  # noqa: E402
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+
+
+def _find_cli():
+    path = os.environ.get("PCR_CLI")
+    if path:
+        return path
+    for candidate in [os.path.join(ROOT, "build", "apps", "pcr")] + sorted(
+            glob.glob(os.path.join(ROOT, "build*", "apps", "pcr"))):
+        if os.access(candidate, os.X_OK):
+            return candidate
+    return shutil.which("pcr")
+
+
+@pytest.fixture(scope="session")
+def cli():
+    path = _find_cli()
+    if os.environ.get("PCR_CLI") and not os.access(path, os.X_OK):
+        pytest.fail(f"PCR_CLI={path} is not an executable")
+    if not path or not os.access(path, os.X_OK):
+        pytest.skip("the pcr CLI was not found (set PCR_CLI)")
+    return path
+
+
+@pytest.fixture
+def robot():
+    return pcr.Robot.default()

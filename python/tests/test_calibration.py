@@ -1,0 +1,139 @@
+"""Calibration bindings: sensitivity, Jacobian vs finite differences, virtual robot vs FK of its
+truth, datasets, Poisson-disc sampling, a small identification."""
+import math
+
+import numpy as np
+import pytest
+
+import pcr
+
+pytestmark = pytest.mark.skipif(not pcr.has_calibration, reason="pcr::calib not built")
+
+
+def test_sensitivity_table_shape(robot):
+    report = pcr.sensitivity(robot)
+    assert report["configurations"].shape == (26, 3)  # 3^3 grid minus its centre
+    assert [r["kind"] for r in report["rows"]][:2] == ["E", "D"]
+    assert sorted(report["ranking"]) == list(range(len(report["rows"])))
+    first = report["rows"][report["ranking"][0]]
+    assert all(first["position_error"] >= r["position_error"] for r in report["rows"])
+    assert "alpha" in report["table"]
+
+
+def test_parameter_jacobian_matches_finite_differences(robot):
+    q = np.array([0.002, -0.001, 0.0005])
+    jac = pcr.platform_parameter_jacobian(robot, q)
+    names = pcr.parameter_names(3)
+    assert jac.shape == (3, 30) and names[2] == "l[0]" and names[14] == "A_y[1]"
+    # central differences of FK on l[0], A_y[1], alpha[2]
+    for index, attr, limb, h in ((2, "l", 0, 1e-7), (14, "A", 1, 1e-7), (25, "alpha", 2, 1e-6)):
+        poses = []
+        for sign in (1, -1):
+            r = robot.copy()
+            if attr == "A":
+                r.limbs[limb].A[1] += sign * h
+            else:
+                setattr(r.limbs[limb], attr, getattr(r.limbs[limb], attr) + sign * h)
+            poses.append(r.forward(q).pose.to_array())
+        fd = (poses[0] - poses[1]) / (2 * h)
+        assert jac[:, index] == pytest.approx(fd, rel=1e-4, abs=1e-6 * np.max(np.abs(fd)))
+
+
+def test_virtual_robot_measures_fk_of_its_truth(robot):
+    v = pcr.VirtualRobot(robot, seed=4, noise_position=0.0, noise_angle=0.0)
+    truth = v.truth
+    assert truth.limbs[0].l != robot.limbs[0].l  # drawn inside the interval
+    assert abs(truth.limbs[0].l - robot.limbs[0].l) <= robot.uncertainty.limbs[0].l
+    q = np.array([[0.001, 0.002, -0.001], [0.003, -0.002, 0.0]])
+    m = v.measure(q)
+    assert m["ok"].all()
+    fk = truth.forward(q)
+    assert m["platform"] == pytest.approx(fk.pose, abs=1e-12)
+    ext = truth.extrinsics
+    for k in range(2):
+        expected = ext.measurement_from_platform(pcr.Pose(*fk.pose[k])).to_array()
+        assert m["measured"][k] == pytest.approx(expected, abs=1e-12)
+    single = v.measure(q[0])
+    assert single["ok"] and isinstance(single["measured"], pcr.Pose)
+
+
+def test_noise_has_the_requested_size(robot):
+    v = pcr.VirtualRobot(robot, seed=2, noise_position=1e-6, noise_angle=1e-5)
+    q = np.tile([0.001, 0.0, -0.001], (200, 1))
+    m = v.measure(q)
+    assert np.std(m["measured"][:, 0] - m["exact"][:, 0]) == pytest.approx(1e-6, rel=0.2)
+    assert np.std(m["measured"][:, 2] - m["exact"][:, 2]) == pytest.approx(1e-5, rel=0.2)
+
+
+def test_dataset_round_trip_and_errors(tmp_path):
+    q = np.array([[0.001, 0.002, 0.003], [-1e-3, 1.0 / 3.0 * 1e-3, 0.0]])
+    measured = np.array([[1e-4, 2e-4, 0.01], [math.pi * 1e-5, -1e-6, -0.02]])
+    path = str(tmp_path / "data.csv")
+    pcr.write_dataset(path, q, measured)
+    q2, m2 = pcr.read_dataset(path)
+    assert np.array_equal(q2, q) and np.array_equal(m2, measured)
+    (tmp_path / "bad.csv").write_text("q1,q2,q3,x,y,theta\n0,0,0,0,0,0\n0,abc,0,0,0,0\n")
+    with pytest.raises(ValueError, match=r"bad\.csv:3:2"):
+        pcr.read_dataset(str(tmp_path / "bad.csv"))
+    with pytest.raises(ValueError, match="measured"):
+        pcr.write_dataset(path, q, measured[:1])
+    pcr.write_configurations(str(tmp_path / "q.csv"), q)
+    assert np.array_equal(pcr.read_configurations(str(tmp_path / "q.csv")), q)
+
+
+def test_poisson_disc_sample_spacing(robot):
+    out = pcr.poisson_disc_sample(robot, count=12, seed=5, box_min=[-2e-3] * 3,
+                                  box_max=[2e-3] * 3)
+    q = out["configurations"]
+    assert q.shape == (12, 3) and out["complete"]
+    assert (q >= -2e-3).all() and (q <= 2e-3).all()
+    d = np.linalg.norm(q[:, None, :] - q[None, :, :], axis=-1)
+    assert d[~np.eye(12, dtype=bool)].min() >= out["min_distance"] * (1 - 1e-12)
+    assert pcr.admissible_configuration(robot, q[0])
+    with pytest.raises(ValueError):
+        pcr.poisson_disc_sample(robot, count=0)
+
+
+def test_calibration_recovers_extrinsics(robot):
+    # A nominal whose only uncertain parameters are the extrinsics: the virtual robot's truth then
+    # differs from it by its extrinsics only, and the extrinsics stage alone must explain the data.
+    nominal = robot.copy()
+    u = pcr.Uncertainty()
+    u.camera = robot.uncertainty.camera
+    u.pattern = robot.uncertainty.pattern
+    u.limbs = [pcr.LimbUncertainty() for _ in range(3)]
+    nominal.uncertainty = u
+    v_ext = pcr.VirtualRobot(nominal, seed=7, noise_position=0.0, noise_angle=0.0)
+    assert v_ext.truth.limbs[0].l == nominal.limbs[0].l
+    assert v_ext.truth.extrinsics.camera.x != 0.0
+    q = pcr.sensitivity_configurations(nominal, 2e-3)[:10]
+    measured = v_ext.measure(q)["measured"]
+    lines = []
+    identified, report = pcr.calibrate(
+        nominal, q, measured, stages=[{"name": "ext", "free": ["extrinsics"]}],
+        compute_covariance=False, fix_gauge=False, progress=lines.append)
+    assert report["stages"][0]["name"] == "ext" and report["stages"][0]["usable"]
+    assert report["stages"][0]["final_cost"] < report["stages"][0]["initial_cost"]
+    truth = v_ext.truth
+    # with a fixed robot, the camera-pattern pair is only known up to its combined effect
+    # on the measurement: compare predictions instead of the parameters themselves
+    e_p, e_t = pcr.pose_errors_per_configuration(identified, q, measured)
+    e_nominal, _ = pcr.pose_errors_per_configuration(nominal, q, measured)
+    assert np.max(e_p) < 1e-9 and np.max(e_nominal) > 1e-5
+    stats = pcr.pose_errors(identified, q, measured)
+    assert stats["count"] == 10
+    assert stats["max_p"] == pytest.approx(np.max(e_p), rel=1e-6, abs=1e-15)
+    assert stats["mean_theta"] == pytest.approx(np.mean(e_t), rel=1e-6, abs=1e-15)
+    assert truth.name == nominal.name
+    assert lines and all(isinstance(line, str) for line in lines)
+
+    def broken(line):
+        raise KeyError("from progress")
+
+    with pytest.raises(KeyError, match="from progress"):
+        pcr.calibrate(nominal, q, measured, stages=[{"name": "ext", "free": ["extrinsics"]}],
+                      compute_covariance=False, progress=broken)
+    with pytest.raises(ValueError, match="kind|unknown"):
+        pcr.calibrate(nominal, q, measured, stages=[{"name": "x", "free": ["lenght"]}])
+    with pytest.raises(ValueError, match="measured"):
+        pcr.calibrate(nominal, q, measured[:3])

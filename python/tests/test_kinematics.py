@@ -1,0 +1,138 @@
+"""Robot.forward / Robot.inverse: agreement with the `pcr fk` / `pcr ik` CLI, batched vs looped,
+geometric checks (rod tips on the platform's clamps, IK(FK(q)) = q), bad inputs."""
+import csv
+import io
+import math
+import subprocess
+
+import numpy as np
+import pytest
+
+import pcr
+
+Q = np.array([[0.0, 0.0, 0.0],
+              [0.002, -0.001, 0.0005],
+              [0.004, 0.003, -0.002],
+              [-0.006, 0.001, 0.003],
+              [0.008, -0.007, 0.002]])
+
+
+def run_cli(cli, command, rows, header, *extra):
+    text = ",".join(header) + "\n" + "".join(",".join(repr(float(v)) for v in r) + "\n" for r in rows)
+    out = subprocess.run([cli, command, *extra], input=text, capture_output=True, text=True,
+                         check=False, timeout=120)
+    assert out.returncode in (0, 1), out.stderr
+    return list(csv.DictReader(io.StringIO(out.stdout)))
+
+
+def test_forward_agrees_with_cli(cli, robot):
+    rows = run_cli(cli, "fk", Q, ["q1", "q2", "q3"])
+    batch = robot.forward(Q)
+    for k, row in enumerate(rows):
+        assert row["status"] == batch.status[k] == "converged"
+        expected = [float(row["x"]), float(row["y"]), float(row["theta"])]
+        assert batch.pose[k] == pytest.approx(expected, abs=1e-12)
+        assert batch.max_strain[k] == pytest.approx(float(row["max_strain"]), rel=1e-6, abs=1e-12)
+    # single calls from home against one-row CLI runs (cold starts on both sides)
+    single = robot.forward(Q[2])
+    (row,) = run_cli(cli, "fk", Q[2:3], ["q1", "q2", "q3"])
+    assert single.converged and single.status == "converged"
+    assert single.pose.to_array() == pytest.approx(
+        [float(row["x"]), float(row["y"]), float(row["theta"])], abs=1e-12)
+
+
+def test_forward_with_external_load_agrees_with_cli(cli, robot):
+    rows = run_cli(cli, "fk", Q[1:3], ["q1", "q2", "q3"], "--force", "0.005,-0.002", "--moment",
+                   "1e-5")
+    batch = robot.forward(Q[1:3], force=(0.005, -0.002), moment=1e-5)
+    unloaded = robot.forward(Q[1:3])
+    for k, row in enumerate(rows):
+        expected = [float(row["x"]), float(row["y"]), float(row["theta"])]
+        assert batch.pose[k] == pytest.approx(expected, abs=1e-12)
+        # the load moves the platform by much more than the tolerance
+        assert np.max(np.abs(batch.pose[k] - unloaded.pose[k])) > 1e-8
+
+
+def test_inverse_agrees_with_cli(cli, robot):
+    poses = robot.forward(Q).pose
+    rows = run_cli(cli, "ik", poses, ["x", "y", "theta"])
+    batch = robot.inverse(poses)
+    for k, row in enumerate(rows):
+        assert row["status"] == batch.status[k] == "converged"
+        assert batch.q[k] == pytest.approx([float(row[f"q{i}"]) for i in (1, 2, 3)], abs=1e-12)
+        assert batch.q[k] == pytest.approx(Q[k], abs=1e-9)  # IK(FK(q)) = q
+    single = robot.inverse(pcr.Pose(*poses[4]))
+    assert single.q == pytest.approx(Q[4], abs=1e-9)
+    assert robot.inverse(poses[4]).q == pytest.approx(single.q, abs=0)
+
+
+def test_batched_equals_looped(robot):
+    rng = np.random.default_rng(3)
+    q = np.cumsum(rng.uniform(-1e-3, 1e-3, size=(12, 3)), axis=0)
+    batch = robot.forward(q)
+    previous = None
+    for k in range(len(q)):
+        s = robot.forward(q[k], warm_start=previous)
+        previous = s if s.converged else None
+        assert batch.status[k] == s.status
+        assert batch.iterations[k] == s.iterations
+        assert batch.pose[k] == pytest.approx(s.pose.to_array(), abs=0)
+        assert batch.wrenches[k] == pytest.approx(s.wrenches, abs=0)
+    poses = batch.pose
+    ik = robot.inverse(poses)
+    previous = None
+    for k in range(len(q)):
+        s = robot.inverse(poses[k], warm_start=previous)
+        previous = s if s.status in ("converged", "out_of_range") else None
+        assert ik.status[k] == s.status
+        assert ik.q[k] == pytest.approx(s.q, abs=0)
+
+
+def test_shapes_end_on_the_platform_clamps(robot):
+    s = robot.forward(Q[4], shapes=True)
+    assert len(s.shapes) == 3
+    c, sn = math.cos(s.pose.theta), math.sin(s.pose.theta)
+    for limb, shape, q in zip(robot.limbs, s.shapes, Q[4]):
+        assert shape.shape == (s.rod_steps + 1, 4)
+        direction = np.array([math.cos(limb.alpha + limb.gamma), math.sin(limb.alpha + limb.gamma)])
+        assert shape[0, 1:3] == pytest.approx(limb.A + q * direction, abs=1e-15)
+        assert shape[-1, 0] == pytest.approx(limb.l)
+        tip = [s.pose.x + c * limb.B[0] - sn * limb.B[1], s.pose.y + sn * limb.B[0] + c * limb.B[1]]
+        assert shape[-1, 1:3] == pytest.approx(tip, abs=1e-9)  # closure: rod tip = B_i in W
+        assert shape[-1, 3] == pytest.approx(s.pose.theta + limb.beta, abs=1e-9)
+    batch = robot.forward(Q[:2], shapes=True)
+    assert len(batch.shapes) == 2 and len(batch.shapes[1]) == 3
+    assert robot.forward(Q[4]).shapes is None
+
+
+def test_home_is_the_origin(robot):
+    home = robot.home()
+    assert home.converged
+    assert home.pose.to_array() == pytest.approx([0, 0, 0], abs=1e-15)
+    assert home.wrenches == pytest.approx(np.zeros((3, 3)), abs=1e-12)
+
+
+def test_failures_are_statuses_not_exceptions(robot):
+    out = robot.inverse(np.array([[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.001, 0.0, 0.0]]))
+    assert list(out.converged) == [True, False, True]
+    assert np.isnan(out.q[1]).all() and out.status[1] != "converged"
+    assert out.pose[1, :2] == pytest.approx([0.5, 0.0])
+
+
+def test_bad_inputs_raise(robot):
+    with pytest.raises(ValueError, match=r"q: expected 3 numbers.*shape \(2,\)"):
+        robot.forward([0.0, 0.0])
+    with pytest.raises(ValueError, match=r"shape \(4, 2\)"):
+        robot.forward(np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="non-finite"):
+        robot.forward([0.0, float("nan"), 0.0])
+    with pytest.raises(ValueError, match="pose"):
+        robot.inverse("abc")
+    with pytest.raises(ValueError, match="force"):
+        robot.forward([0, 0, 0], force=(float("inf"), 0))
+    with pytest.raises(TypeError):
+        robot.forward([0, 0, 0], shapes="yes", options=3)
+    six = robot.copy()
+    six.limbs = list(robot.limbs) * 2
+    with pytest.raises(ValueError, match="more than 3 limbs"):
+        six.inverse([0, 0, 0])

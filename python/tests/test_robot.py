@@ -1,0 +1,97 @@
+"""pcr.Robot: the description, attribute access, copies, load/save, errors."""
+import json
+import math
+import os
+import pickle
+
+import numpy as np
+import pytest
+
+import pcr
+
+
+def test_default_robot_matches_readme(robot):
+    # README "The default robot": A_i on a circle of 60 mm cos 20 deg, l = 30 mm, d = 125 um.
+    assert robot.name == "femto-3pf"
+    assert robot.num_limbs == 3
+    for i, limb in enumerate(robot.limbs):
+        phi = math.radians(-90 + 120 * i)
+        r = 0.060 * math.cos(math.radians(20))
+        assert limb.A == pytest.approx([r * math.cos(phi), r * math.sin(phi)], abs=1e-15)
+        assert limb.alpha == pytest.approx(phi + math.radians(160))
+        assert limb.l == 0.03 and limb.d == 125e-6 and limb.E == 69e9
+        assert limb.q_range == (-0.0105, 0.0105)
+        assert limb.EI == pytest.approx(69e9 * math.pi * 125e-6 ** 4 / 64)
+    assert robot.uncertainty.global_.l == pytest.approx(126e-6)
+    assert list(robot.uncertainty.camera) == pytest.approx([1e-3, 1e-3, 0.05])
+
+
+def test_attribute_edits_are_in_place(robot):
+    robot.limbs[1].l = 0.031
+    robot.limbs[2].A[0] = 0.001
+    robot.extrinsics.camera.x = 0.002
+    robot.uncertainty.limbs[0].l = 1e-5
+    assert robot.limbs[1].l == 0.031
+    assert robot.limbs[2].A[0] == 0.001
+    assert robot.extrinsics.camera.x == 0.002
+    data = json.loads(robot.to_json())
+    assert data["limbs"][1]["l"] == 0.031
+    assert data["limbs"][2]["A"][0] == 0.001
+    assert data["extrinsics"]["camera"][0] == 0.002
+    assert data["uncertainty"]["limbs"][0]["l"] == 1e-5
+
+
+def test_copy_with_changes_leaves_original(robot):
+    other = robot.replace(name="other", E=70e9)
+    assert other.name == "other" and other.E == 70e9
+    assert all(l.E == 70e9 for l in other.limbs)
+    assert robot.name == "femto-3pf" and robot.E == 69e9 and robot.limbs[0].E == 69e9
+    third = robot.with_limb(1, l=0.0301)
+    assert third.limbs[1].l == 0.0301 and robot.limbs[1].l == 0.03
+    assert pcr.Pose(1, 2, 3).replace(theta=0.5) == pcr.Pose(1, 2, 0.5)
+    with pytest.raises(AttributeError):
+        robot.replace(lenght=1)
+    again = pickle.loads(pickle.dumps(robot))
+    assert again.to_json() == robot.to_json()
+
+
+def test_save_load_round_trip(robot, tmp_path):
+    robot.limbs[0].gamma = 1.234567890123e-3
+    robot.limbs[2].E = 70.5e9
+    robot.extrinsics.pattern = pcr.Pose(1e-3, -2e-3, 0.1)
+    path = str(tmp_path / "robot.json")
+    robot.save(path)
+    loaded = pcr.Robot.load(path)
+    assert loaded.to_json() == robot.to_json()
+    assert loaded.limbs[0].gamma == 1.234567890123e-3  # bit-exact
+    assert loaded.limbs[2].E == 70.5e9 and loaded.limbs[1].E == 69e9
+    assert loaded.extrinsics.pattern == pcr.Pose(1e-3, -2e-3, 0.1)
+    assert os.listdir(tmp_path) == ["robot.json"]  # no temporary left behind
+
+
+def test_load_errors_are_value_errors(tmp_path):
+    bad = json.loads(pcr.Robot.default().to_json())
+    bad["limbs"][2]["l"] = -0.03
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(bad))
+    with pytest.raises(ValueError, match=r"bad\.json: limbs\[2\]\.l: must be positive, got -0\.03"):
+        pcr.Robot.load(str(path))
+    with pytest.raises(ValueError, match="missing.json"):
+        pcr.Robot.load(str(tmp_path / "missing.json"))
+    with pytest.raises(ValueError, match="syntax"):
+        pcr.Robot.from_json("{", "text")
+
+
+def test_save_refuses_invalid_description(robot, tmp_path):
+    robot.limbs[0].d = -1.0
+    with pytest.raises(ValueError, match=r"limbs\[0\]\.d"):
+        robot.save(str(tmp_path / "x.json"))
+    assert not os.listdir(tmp_path)
+
+
+def test_limbs_assignment_checks_count(robot):
+    with pytest.raises(ValueError, match="2 to 6 limbs"):
+        robot.limbs = [robot.limbs[0]]
+    two = robot.copy()
+    two.limbs = robot.limbs[:2]
+    assert two.num_limbs == 2
