@@ -14,9 +14,9 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT=$(pwd)
 
-# The main job. Switch to `demo` once `pcr demo` exists (and add its targets below).
-MAIN_JOB=(build/apps/pcr workspace)
-MAIN_TARGETS=(pcr_cli)
+# The main job: the whole method on the built-in virtual robot, written to pcr-demo/.
+MAIN_JOB=(build/apps/pcr demo)  # writes pcr-demo/ (pcr demo --output)
+MAIN_TARGETS=(pcr_cli _pcr)
 
 APT_PACKAGES=(
   build-essential cmake ninja-build pkg-config
@@ -109,11 +109,21 @@ build_main() {
 # ---- commands --------------------------------------------------------------------------------
 run_demo() {
   install_system_packages
+  setup_venv
   local targets=() t
   for t in "${MAIN_TARGETS[@]}"; do targets+=(--target "$t"); done
   build_main "${targets[@]}"
   log "Running ${MAIN_JOB[*]} $*"
   "${MAIN_JOB[@]}" "$@"
+  # The plots (matplotlib, through the Python package built in build/python).
+  local out=pcr-demo arg previous=
+  for arg in "$@"; do
+    [[ $previous == --output ]] && out=$arg
+    [[ $arg == --output=* ]] && out=${arg#--output=}
+    previous=$arg
+  done
+  log "Plotting into $out/plots"
+  PYTHONPATH=$ROOT/build/python MPLBACKEND=Agg "$VENV/bin/python" python/examples/demo_plots.py "$out"
 }
 
 run_tests() {

@@ -22,6 +22,8 @@ void register_workspace_command(CLI::App& app);
 void register_simulate_command(CLI::App& app);
 void register_sample_command(CLI::App& app);
 void register_sensitivity_command(CLI::App& app);
+void register_accuracy_command(CLI::App& app);
+void register_demo_command(CLI::App& app);
 #endif
 #ifdef PCR_HAS_VISION
 void register_measure_command(CLI::App& app);

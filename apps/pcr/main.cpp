@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
   register_simulate_command(app);
   register_sample_command(app);
   register_sensitivity_command(app);
+  register_accuracy_command(app);
+  register_demo_command(app);
 #endif
 #ifdef PCR_HAS_VISION
   register_measure_command(app);

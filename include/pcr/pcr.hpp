@@ -8,3 +8,5 @@
 #include "pcr/shooting.hpp"
 #include "pcr/implicit_kinematics.hpp"
 #include "pcr/parameters.hpp"
+#include "pcr/trajectory.hpp"
+#include "pcr/controller.hpp"

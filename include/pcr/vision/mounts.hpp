@@ -55,4 +55,7 @@ struct MountLayout {
 MountLayout parse_mounts(const std::string& json_text, const std::string& source);
 MountLayout load_mounts(const std::string& path);
 
+/// The default robot's layout (data/mounts-femto-3pf.json, compiled in).
+MountLayout default_mounts();
+
 }  // namespace pcr::vision

@@ -1,0 +1,479 @@
+// pcr demo: the paper's whole method on the built-in virtual robot, in one seeded command
+// (issue 6, section 3): measure -> sensitivity -> sampling and simulated measurements ->
+// three-stage calibration -> trajectories and ISO 9283 accuracy -> report.
+#ifdef PCR_HAS_CALIB
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "pcr/calib/accuracy.hpp"
+#include "pcr/calib/calibration_report.hpp"
+#include "pcr/calib/sampling.hpp"
+#include "pcr/calib/sensitivity.hpp"
+#include "pcr/calib/virtual_robot.hpp"
+#ifdef PCR_HAS_VISION
+#include "pcr/vision/camera.hpp"
+#include "pcr/vision/image.hpp"
+#include "pcr/vision/measure.hpp"
+#include "pcr/vision/render.hpp"
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::ordered_json;
+
+struct DemoArgs {
+  std::string output = "pcr-demo";
+  std::uint64_t seed = 1;
+  int calibration_count = pcr::kDefaultCalibrationCount;
+  int validation_count = pcr::kDefaultValidationCount;
+  int repeat = 30;
+  int path_poses = 40;
+  bool vision = true;
+  bool quiet = false;
+  std::vector<std::string> effects;  ///< unmodelled effects of the virtual robot
+};
+
+/// The virtual robot's unmodelled effects from --effects names.
+pcr::UnmodelledEffects parse_effects(const std::vector<std::string>& names) {
+  pcr::UnmodelledEffects effects;
+  for (const std::string& name : names) {
+    const bool all = name == "all";
+    if (all || name == "misalignments") effects.misalignments = true;
+    if (all || name == "diameters") effects.unequal_diameters = true;
+    if (all || name == "load") effects.external_load = true;
+  }
+  return effects;
+}
+
+/// Stage-by-stage progress on stderr, with the time each stage took.
+class Progress {
+ public:
+  Progress(int stages, bool quiet) : stages_(stages), quiet_(quiet) {}
+  void begin(const std::string& name) {
+    ++stage_;
+    start_ = std::chrono::steady_clock::now();
+    say("[" + std::to_string(stage_) + "/" + std::to_string(stages_) + "] " + name);
+  }
+  void end() {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "      done in %.1f s", seconds_since(start_));
+    say(buf);
+  }
+  void say(const std::string& line) const {
+    if (!quiet_) std::cerr << line << "\n";
+  }
+  static double seconds_since(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  }
+
+ private:
+  int stages_, stage_ = 0;
+  bool quiet_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+/// The output directory: created, or reused only when a previous demo made it (never someone
+/// else's files).
+fs::path prepare_output(const std::string& dir) {
+  const fs::path out(dir);
+  const fs::path marker = out / ".pcr-demo";
+  if (fs::exists(out)) {
+    if (!fs::is_directory(out)) throw pcr::InputError("--output: " + dir + " is not a directory");
+    if (!fs::is_empty(out) && !fs::exists(marker)) {
+      throw pcr::InputError("--output: " + dir +
+                            " exists and was not written by pcr demo; refusing to overwrite it");
+    }
+  }
+  fs::create_directories(out);
+  pcr::write_file_atomically(marker.string(), "written by pcr demo\n");
+  return out;
+}
+
+std::string fmt(const char* format, double a, double b = 0, double c = 0, double d = 0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, format, a, b, c, d);
+  return buf;
+}
+
+#ifdef PCR_HAS_VISION
+/// Step 1: photograph the true robot's mounts (rendered) and measure the nominal description.
+/// The mounts are machined with errors inside the layout's offset uncertainty; the paper's close-up
+/// image brings the 840 um along the tag's x axis down to 160 um, used here as the layout's.
+pcr::RobotDescription measure_nominal(const pcr::RobotDescription& design,
+                                      const pcr::RobotDescription& truth, std::uint64_t seed,
+                                      const fs::path& out, json& report, std::string& markdown,
+                                      const Progress& progress) {
+  using namespace pcr::vision;
+  MountLayout layout = default_mounts();
+  for (Mount& m : layout.mounts) m.clamp_offset_uncertainty.x() = 160e-6;
+  MountLayout machined = layout;
+  std::mt19937_64 rng(seed ^ 0x6d6f756e74ULL);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (Mount& m : machined.mounts) {
+    m.clamp_offset += Eigen::Vector2d(u(rng) * m.clamp_offset_uncertainty.x(),
+                                      u(rng) * m.clamp_offset_uncertainty.y());
+    m.rod_angle += u(rng) * m.rod_angle_uncertainty;
+  }
+
+  Scene scene;  // 1700 x 1700 px, 100 um/px at 0.5 m, with distortion
+  scene.camera.width = scene.camera.height = 1700;
+  scene.camera.K << 5000, 0, 851.3, 0, 5000, 848.9, 0, 0, 1;
+  scene.camera.distortion[0] = -0.15;
+  scene.camera.distortion[1] = 0.1;
+  scene.plane = PlanePose::looking_down(0.5, 0.01, -0.02);
+  RenderOptions render;
+  render.supersampling = 3;
+  render.blur_sigma_px = 0.8;
+  render.noise_sigma = 0.02;
+  render.gradient = 0.3;
+  render.seed = static_cast<unsigned>(seed);
+
+  const int n = truth.params.num_limbs;
+  const pcr::JointVector home_q = pcr::JointVector::Zero(n);
+  const pcr::ForwardSolution home = pcr::forward_kinematics(truth.params, home_q);
+  if (!home.summary.converged()) throw std::runtime_error("demo: the true robot has no home pose");
+  scene.tags = mount_tags(machined, truth.params, home.pose, {}, &scene.segments);
+  const GrayImage image = render_scene(scene, render);
+  fs::create_directories(out / "images");
+  write_png(image, (out / "images" / "home.png").string());
+  save_camera(scene.camera, (out / "camera.yaml").string());
+  RobotMeasurement m = measure_robot(image, "home.png", layout, scene.camera, design.params);
+
+  // Actuator directions: each limb's proximal mount over a 1 mm stroke in 125 um steps.
+  for (int limb = 0; limb < n; ++limb) {
+    std::vector<GrayImage> images;
+    std::vector<std::string> names;
+    const int proximal_id = machined.mounts[machined.find(limb, MountRole::kProximal)].id;
+    for (int k = 0; k <= 8; ++k) {
+      std::vector<double> q(n, 0.0);
+      q[limb] = -0.5e-3 + 125e-6 * k;
+      Scene sweep = scene;
+      sweep.segments.clear();
+      sweep.tags.clear();
+      for (const RenderTag& t : mount_tags(machined, truth.params, home.pose, q)) {
+        if (t.id == proximal_id) sweep.tags.push_back(t);
+      }
+      render.seed = static_cast<unsigned>(seed * 1000 + 10 * limb + k);
+      images.push_back(render_scene(sweep, render));
+      names.push_back("sweep limb " + std::to_string(limb) + " step " + std::to_string(k));
+    }
+    const SweepResult r = measure_sweep(images, names, limb, layout, scene.camera, m);
+    progress.say(fmt("      limb %.0f: actuator direction line rms %.2f um", limb, r.line_rms * 1e6));
+  }
+  write_annotated(image, m, layout, scene.camera, (out / "images" / "home-annotated.png").string());
+  const pcr::RobotDescription nominal = measured_description(design, m);
+
+  markdown += "## 1. Measurement (rendered images, AprilTag)\n\n";
+  markdown += fmt("Plane fit: corner rms %.4f px; registration rms A %.1f um, B %.1f um.\n\n",
+                  m.fit.corner_rms_px, m.registration_rms_A * 1e6, m.registration_rms_B * 1e6);
+  markdown += "| limb | A_x err (um) | A_y err (um) | +- (um) | alpha err (mrad) | +- (mrad) | "
+              "gamma err (mrad) | +- (mrad) |\n|---|---|---|---|---|---|---|---|\n";
+  json limbs = json::array();
+  for (int i = 0; i < n; ++i) {
+    // Errors against the truth after the same registration (the measured frames are the design's
+    // best fit, so compare A - truth A up to that rigid motion: small next to the half-widths).
+    const pcr::LimbParams<double>& t = truth.params.limb(i);
+    const LimbMeasurement& l = m.limbs[i];
+    const double gamma_err = l.gamma ? *l.gamma - t.gamma : std::nan("");
+    markdown += "| " + std::to_string(i) +
+                fmt(" | %.1f | %.1f | %.1f", (l.A.x() - t.A.x()) * 1e6, (l.A.y() - t.A.y()) * 1e6,
+                    l.A_halfwidth.maxCoeff() * 1e6) +
+                fmt(" | %.3f | %.3f | %.3f | %.3f |\n", (l.alpha - t.alpha) * 1e3,
+                    l.alpha_halfwidth * 1e3, gamma_err * 1e3,
+                    l.gamma_halfwidth ? *l.gamma_halfwidth * 1e3 : std::nan(""));
+    limbs.push_back({{"A_m", {l.A.x(), l.A.y()}},
+                     {"A_halfwidth_m", {l.A_halfwidth.x(), l.A_halfwidth.y()}},
+                     {"alpha_rad", l.alpha},
+                     {"B_m", {l.B.x(), l.B.y()}},
+                     {"beta_rad", l.beta},
+                     {"gamma_rad", l.gamma ? *l.gamma : std::nan("")}});
+  }
+  markdown += "\n(errors include the best-fit registration of the measured frames onto the "
+              "design's; calibration absorbs it with the extrinsics)\n\n";
+  report["measurement"] = {{"images", "images/home.png"},
+                           {"annotated", "images/home-annotated.png"},
+                           {"camera", "camera.yaml"},
+                           {"corner_rms_px", m.fit.corner_rms_px},
+                           {"registration_rms_A_m", m.registration_rms_A},
+                           {"registration_rms_B_m", m.registration_rms_B},
+                           {"limbs", limbs}};
+  return nominal;
+}
+#endif
+
+std::string table2_markdown(const pcr::SensitivityReport& s) {
+  std::string md =
+      "| rank | parameter | max abs dx/dp | max abs dy/dp | max abs dtheta/dp | half-width | "
+      "position error (um) | orientation error (urad) |\n|---|---|---|---|---|---|---|---|\n";
+  int rank = 0;
+  for (int index : s.ranking) {
+    const pcr::SensitivityRow& r = s.rows[index];
+    md += "| " + std::to_string(++rank) + " | " + r.kind +
+          fmt(" | %.3e | %.3e | %.3e | %.3e", r.dx, r.dy, r.dtheta, r.half_width) +
+          fmt(" | %.2f | %.2f |\n", r.position_error * 1e6, r.orientation_error * 1e6);
+  }
+  return md;
+}
+
+json stats_json(const pcr::PoseErrorStats& s) {
+  return {{"e_p_m", {{"max", s.max_p}, {"mean", s.mean_p}, {"min", s.min_p}}},
+          {"e_theta_rad", {{"max", s.max_theta}, {"mean", s.mean_theta}, {"min", s.min_theta}}}};
+}
+
+std::string table3_row(const std::string& label, const pcr::PoseErrorStats& s) {
+  return "| " + label +
+         fmt(" | %.4f | %.4f | %.4f", s.max_p * 1e6, s.mean_p * 1e6, s.min_p * 1e6) +
+         fmt(" | %.3f | %.3f | %.3f |\n", s.max_theta * 1e6, s.mean_theta * 1e6,
+             s.min_theta * 1e6);
+}
+
+/// Per-configuration errors for the plots (Figures 8 and 9).
+std::string errors_csv(const pcr::CalibrationResult& result,
+                       const std::vector<pcr::CalibrationSample>& calibration,
+                       const std::vector<pcr::CalibrationSample>& validation) {
+  std::ostringstream csv;
+  csv.precision(10);
+  csv << "set,configuration,model,e_p,e_theta\n";
+  const auto add = [&](const char* set, const std::vector<pcr::CalibrationSample>& data) {
+    for (const auto& [model, params] :
+         {std::pair<const char*, const pcr::RobotParams<double>*>{"nominal", &result.extrinsics_only},
+          {"identified", &result.identified}}) {
+      const pcr::ConfigurationErrors e = pcr::configuration_errors(*params, data);
+      for (std::size_t j = 0; j < e.e_p.size(); ++j) {
+        csv << set << "," << j << "," << model << "," << e.e_p[j] << "," << e.e_theta[j] << "\n";
+      }
+    }
+  };
+  add("calibration", calibration);
+  add("validation", validation);
+  return csv.str();
+}
+
+/// Step 5: the paper's square and circle commanded with the nominal and the identified model,
+/// each pose repeated `repeat` times on the virtual robot. The attained poses are what the camera
+/// measures, mapped to W with the commanding model's extrinsics, as on the real robot: each model
+/// defines its own W (the gauge of the calibration), so this is the frame its commands are in.
+std::string accuracy_section(const pcr::CalibrationResult& calibrated, pcr::VirtualRobot& robot,
+                             const DemoArgs& args, const fs::path& out, json& report,
+                             const Progress& progress) {
+  pcr::SquarePath square;
+  square.num_poses = args.path_poses;
+  pcr::CirclePath circle;
+  circle.num_poses = args.path_poses;
+  pcr::AccuracyOptions options;
+  options.repeat = args.repeat;
+  options.frame = pcr::AttainedFrame::kModelExtrinsics;
+
+  std::string md;
+  std::vector<std::pair<std::string, pcr::Iso9283Result>> results;
+  for (const auto& [path_name, path] :
+       {std::pair<std::string, std::vector<pcr::Pose2<double>>>{"square", pcr::square_path(square)},
+        {"circle", pcr::circle_path(circle)}}) {
+    for (const auto& [model_name, model] :
+         {std::pair<std::string, const pcr::RobotParams<double>*>{"nominal", &calibrated.extrinsics_only},
+          {"identified", &calibrated.identified}}) {
+      const pcr::AccuracyEvaluation e =
+          pcr::evaluate_on_virtual_robot(*model, robot, path, options);
+      pcr::write_file_atomically(
+          (out / ("attained-" + path_name + "-" + model_name + ".csv")).string(),
+          pcr::measured_to_csv(e.commanded, e.attained));
+      pcr::write_file_atomically((out / ("accuracy-" + path_name + "-" + model_name + ".csv")).string(),
+                                 pcr::iso9283_poses_csv(e.iso));
+      progress.say("      " + path_name + ", " + model_name +
+                   fmt(" model: AP_p max %.4f um, mean %.4f um", e.iso.ap_p.max * 1e6,
+                       e.iso.ap_p.mean * 1e6));
+      results.emplace_back(path_name + ", " + model_name + " model", e.iso);
+    }
+  }
+  std::vector<std::pair<std::string, const pcr::Iso9283Result*>> rows;
+  for (const auto& [name, iso] : results) rows.emplace_back(name, &iso);
+  report["accuracy"] = json::parse(pcr::iso9283_json(rows));
+  report["accuracy"]["repeat"] = args.repeat;
+  report["accuracy"]["poses_per_path"] = args.path_poses;
+  md += pcr::iso9283_table_markdown(rows);
+  md += "\nEach pose repeated " + std::to_string(args.repeat) +
+        " times, approached from the previous pose; attained poses measured by the camera (with "
+        "its noise) and mapped to W with each model's identified extrinsics, as in the paper.\n";
+  return md;
+}
+
+void run_demo(const DemoArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path out = prepare_output(args.output);
+  Progress progress(5, args.quiet);
+  json report;
+  report["seed"] = args.seed;
+  report["unmodelled_effects"] = args.effects;
+  std::string md = "# pcr demo: the method of Mauze et al. (2021) on the built-in virtual robot\n\n";
+  md += "Seed " + std::to_string(args.seed) + ", unmodelled effects: " +
+        (args.effects.empty() ? std::string("none") : CLI::detail::join(args.effects, ", ")) +
+        ". Units: um and urad in the tables, SI in every file. Files: see report.json.\n\n";
+
+  // The virtual robot: a truth drawn from the design inside the paper's uncertainty intervals,
+  // true extrinsics, the paper's repeatability as measurement noise.
+  const pcr::RobotDescription design = pcr::default_robot();
+  pcr::VirtualRobotOptions vr_options;
+  vr_options.seed = args.seed;
+  vr_options.effects = parse_effects(args.effects);
+  pcr::VirtualRobot robot(design, vr_options);
+  pcr::save_robot(design, (out / "design.json").string());
+  pcr::save_robot(robot.truth(), (out / "truth.json").string());
+
+  // 1. Nominal description.
+  progress.begin("measurement: render the mounts, detect the tags, measure the nominal robot");
+  pcr::RobotDescription nominal = design;
+  bool measured = false;
+#ifdef PCR_HAS_VISION
+  if (args.vision) {
+    nominal = measure_nominal(design, robot.truth(), args.seed, out, report, md, progress);
+    measured = true;
+  }
+#endif
+  if (!measured) {
+    const std::string why =
+        "measurement skipped (vision not built or --no-vision): starting from the design with the "
+        "paper's uncertainties";
+    progress.say("      " + why);
+    md += "## 1. Measurement\n\n" + why + ".\n\n";
+    report["measurement"] = why;
+  }
+  nominal.name = "femto-3pf (measured)";
+  pcr::save_robot(nominal, (out / "nominal.json").string());
+  progress.end();
+
+  // 2. Sensitivity.
+  progress.begin("sensitivity analysis (Table 2)");
+  const pcr::SensitivityReport sensitivity = pcr::sensitivity_analysis(nominal);
+  pcr::write_file_atomically((out / "sensitivity.csv").string(), pcr::sensitivity_csv(sensitivity));
+  report["sensitivity"] = json::parse(pcr::sensitivity_json(sensitivity));
+  md += "## 2. Sensitivity analysis (Table 2), most influential first\n\n" +
+        table2_markdown(sensitivity) + "\n";
+  progress.end();
+
+  // 3. Configurations and simulated measurements.
+  progress.begin("Poisson-disc sampling and simulated measurements");
+  pcr::SamplingOptions sampling;
+  sampling.count = args.calibration_count + args.validation_count;
+  sampling.seed = args.seed;
+  const pcr::SamplingResult sampled = pcr::poisson_disc_sample(nominal.params, sampling);
+  if (!sampled.complete) throw std::runtime_error("demo: sampling found too few configurations");
+  std::vector<pcr::JointVector> calibration_q, validation_q;
+  pcr::split_configurations(sampled.configurations, args.calibration_count, &calibration_q,
+                            &validation_q);
+  const auto simulate = [&](const std::vector<pcr::JointVector>& qs) {
+    pcr::Dataset data;
+    data.num_joints = nominal.params.num_limbs;
+    for (const pcr::JointVector& q : qs) data.add(q, robot.measure_or_throw(q));
+    return data;
+  };
+  const pcr::Dataset calibration_data = simulate(calibration_q);
+  const pcr::Dataset validation_data = simulate(validation_q);
+  pcr::write_dataset(calibration_data, (out / "calibration.csv").string());
+  pcr::write_dataset(validation_data, (out / "validation.csv").string());
+  progress.say(fmt("      %.0f + %.0f configurations, Poisson-disc radius %.3f mm",
+                   calibration_data.size(), validation_data.size(), sampled.min_distance * 1e3));
+  report["configurations"] = {{"calibration", calibration_data.size()},
+                              {"validation", validation_data.size()},
+                              {"min_distance_m", sampled.min_distance},
+                              {"files", {"calibration.csv", "validation.csv"}}};
+  progress.end();
+
+  // 4. Calibration.
+  progress.begin("three-stage calibration (Table 3)");
+  const std::vector<pcr::CalibrationSample> calibration = pcr::calibration_samples(calibration_data);
+  const std::vector<pcr::CalibrationSample> validation = pcr::calibration_samples(validation_data);
+  pcr::CalibrationOptions calib_options;
+  if (!args.quiet) calib_options.progress = [](const std::string& l) { std::cerr << "      " << l << "\n"; };
+  const pcr::CalibrationResult calibrated = pcr::calibrate(nominal, calibration, calib_options);
+  pcr::RobotDescription identified = nominal;
+  identified.name = "femto-3pf (identified)";
+  identified.params = calibrated.identified;
+  pcr::save_robot(identified, (out / "identified.json").string());
+  const pcr::CalibrationTable table3 = pcr::calibration_table(calibrated, calibration, validation);
+  pcr::write_file_atomically((out / "calibration-report.txt").string(),
+                             pcr::calibration_report_text(calibrated, table3));
+  pcr::write_file_atomically((out / "calibration-errors.csv").string(),
+                             errors_csv(calibrated, calibration, validation));
+  report["calibration"] = json::parse(pcr::calibration_report_json(calibrated, table3));
+  md += "## 3. Calibration (Table 3)\n\n| model, set | e_p max (um) | e_p mean (um) | e_p min (um) | "
+        "e_theta max (urad) | e_theta mean (urad) | e_theta min (urad) |\n|---|---|---|---|---|---|---|\n";
+  md += table3_row("nominal, calibration", table3.nominal_calibration);
+  md += table3_row("nominal, validation", table3.nominal_validation);
+  md += table3_row("identified, calibration", table3.identified_calibration);
+  md += table3_row("identified, validation", table3.identified_validation);
+  md += "\nNominal model: the measured geometry with identified extrinsics (the paper's first "
+        "stage). Stages:\n\n";
+  for (const pcr::StageReport& s : calibrated.stages) {
+    md += "- " + s.name + ": " + std::to_string(s.free_parameters.size()) + " free parameters, " +
+          std::to_string(s.iterations) + " iterations, " +
+          fmt("cost %.3e -> %.3e m^2, %.2f s\n", s.initial_cost, s.final_cost, s.time_s);
+  }
+  md += "\nFull report (identified values with standard deviations, bounds, gauge): "
+        "calibration-report.txt.\n\n";
+  progress.say(fmt("      validation mean e_p: nominal %.3f um, identified %.4f um",
+                   table3.nominal_validation.mean_p * 1e6, table3.identified_validation.mean_p * 1e6));
+  progress.end();
+
+  // 5. Trajectories and accuracy.
+  progress.begin("square and circle trajectories, ISO 9283 accuracy (Table 4)");
+  md += "## 4. Trajectory accuracy, ISO 9283 (Table 4)\n\n" +
+        accuracy_section(calibrated, robot, args, out, report, progress);
+  progress.end();
+
+  report["files"] = {"report.md", "report.json", "design.json", "truth.json", "nominal.json",
+                     "identified.json", "sensitivity.csv", "calibration.csv", "validation.csv",
+                     "calibration-report.txt", "calibration-errors.csv",
+                     "accuracy-{square,circle}-{nominal,identified}.csv",
+                     "attained-{square,circle}-{nominal,identified}.csv", "images/"};
+  report["time_s"] = Progress::seconds_since(start);
+  md += fmt("\nTotal time %.1f s.\n", Progress::seconds_since(start));
+  pcr::write_file_atomically((out / "report.json").string(), report.dump(2) + "\n");
+  pcr::write_file_atomically((out / "report.md").string(), md);
+  std::cout << md;
+  progress.say("wrote " + (out / "report.md").string());
+}
+
+}  // namespace
+
+void register_demo_command(CLI::App& app) {
+  auto args = std::make_shared<DemoArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "demo", "the whole method on the built-in virtual robot: measure, sensitivity, sampling, "
+              "calibration, trajectory accuracy; writes a report directory");
+  cmd->add_option("--output", args->output, "output directory")->capture_default_str();
+  cmd->add_option("--seed", args->seed, "seed of the virtual robot, images, sampling, noise")
+      ->capture_default_str();
+  cmd->add_option("--calibration", args->calibration_count, "calibration configurations")
+      ->check(CLI::Range(10, 10000))
+      ->capture_default_str();
+  cmd->add_option("--validation", args->validation_count, "validation configurations")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  cmd->add_option("--repeat", args->repeat, "ISO 9283 cycles per pose")
+      ->check(CLI::Range(2, 1000))
+      ->capture_default_str();
+  cmd->add_option("--poses", args->path_poses, "poses per trajectory")
+      ->check(CLI::Range(4, 100000))
+      ->capture_default_str();
+  cmd->add_option("--effects", args->effects,
+                  "unmodelled effects of the virtual robot: misalignments (beta, gamma), diameters "
+                  "(unequal), load (on the platform), all")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"misalignments", "diameters", "load", "all"}));
+  cmd->add_flag("!--no-vision", args->vision, "start from the design instead of measuring");
+  cmd->add_flag("--quiet", args->quiet, "no progress on stderr");
+  cmd->callback([args]() { run_demo(*args); });
+}
+#endif

@@ -1,0 +1,149 @@
+#pragma once
+// Cartesian paths at constant platform orientation (Mauze et al. 2021, Section 6.1: a square of
+// side 2 mm and a circle of diameter 3 mm, theta = 0) and inverse kinematics along a path,
+// warm-started pose to pose.
+//
+// Real-time safe like kinematics.hpp: no heap, no exceptions. Paths are pose generators (pose(k),
+// at(fraction)) or fill a caller-provided buffer; the allocating conveniences (std::vector, CSV)
+// live in pcr/calib/accuracy.hpp.
+
+#include <cmath>
+
+#include "pcr/kinematics.hpp"
+
+namespace pcr {
+
+inline constexpr double kPaperSquareSide = 2e-3;      ///< m
+inline constexpr double kPaperCircleDiameter = 3e-3;  ///< m
+/// Bending strain a pose may reach (|kappa| d / 2): the same default as the sampling of issue 3.
+inline constexpr double kDefaultStrainLimit = 0.01;
+
+/// A square traversed counter-clockwise from its corner (-side/2, -side/2) (before `rotation`),
+/// at the constant platform orientation `theta`. With num_poses a multiple of 4 the corners are
+/// poses; the path is closed: pose(num_poses) == pose(0), which is not repeated.
+struct SquarePath {
+  Vector2<double> centre{0.0, 0.0};  ///< m, in W
+  double side = kPaperSquareSide;     ///< m
+  double rotation = 0.0;              ///< rad, of the square's sides with respect to W
+  double theta = 0.0;                 ///< rad, constant platform orientation
+  int num_poses = 40;
+
+  /// The pose at `fraction` of the perimeter (wrapped into [0, 1)).
+  Pose2<double> at(double fraction) const noexcept {
+    double f = fraction - std::floor(fraction);
+    const double s = 4.0 * f;  // sides travelled
+    const int edge = static_cast<int>(s) & 3;
+    const double u = s - std::floor(s);
+    // Corners of the unit square (-1/2 .. 1/2), counter-clockwise from bottom-left.
+    static constexpr double kCx[5] = {-0.5, 0.5, 0.5, -0.5, -0.5};
+    static constexpr double kCy[5] = {-0.5, -0.5, 0.5, 0.5, -0.5};
+    const double lx = side * (kCx[edge] + u * (kCx[edge + 1] - kCx[edge]));
+    const double ly = side * (kCy[edge] + u * (kCy[edge + 1] - kCy[edge]));
+    const double c = std::cos(rotation), sn = std::sin(rotation);
+    return Pose2<double>{centre.x() + c * lx - sn * ly, centre.y() + sn * lx + c * ly, theta};
+  }
+  Pose2<double> pose(int k) const noexcept {
+    return at(num_poses > 0 ? static_cast<double>(k) / num_poses : 0.0);
+  }
+  int size() const noexcept { return num_poses; }
+};
+
+/// A circle traversed counter-clockwise from the polar angle `start_angle`, at the constant
+/// platform orientation `theta`; closed like SquarePath.
+struct CirclePath {
+  Vector2<double> centre{0.0, 0.0};       ///< m, in W
+  double diameter = kPaperCircleDiameter;  ///< m
+  double start_angle = 0.0;                ///< rad, polar angle of the first pose about the centre
+  double theta = 0.0;                      ///< rad, constant platform orientation
+  int num_poses = 36;
+
+  Pose2<double> at(double fraction) const noexcept {
+    const double phi = start_angle + 2.0 * M_PI * (fraction - std::floor(fraction));
+    const double r = 0.5 * diameter;
+    return Pose2<double>{centre.x() + r * std::cos(phi), centre.y() + r * std::sin(phi), theta};
+  }
+  Pose2<double> pose(int k) const noexcept {
+    return at(num_poses > 0 ? static_cast<double>(k) / num_poses : 0.0);
+  }
+  int size() const noexcept { return num_poses; }
+};
+
+/// Writes min(path.size(), capacity) poses into `out`; returns how many were written.
+template <class Path>
+int fill_path(const Path& path, Pose2<double>* out, int capacity) noexcept {
+  const int count = path.size() < capacity ? path.size() : capacity;
+  for (int k = 0; k < count; ++k) out[k] = path.pose(k);
+  return count < 0 ? 0 : count;
+}
+
+/// Outcome of one pose of a path.
+enum class PathPoseStatus {
+  kOk,              ///< IK converged, q inside the strokes, strain below the limit
+  kNoSolution,      ///< IK did not converge (outside the workspace, or a singularity on the way)
+  kOutOfRange,      ///< a joint lies outside [q_min, q_max]
+  kStrainExceeded,  ///< the largest bending strain exceeds the limit
+};
+
+inline const char* to_string(PathPoseStatus status) noexcept {
+  switch (status) {
+    case PathPoseStatus::kOk: return "ok";
+    case PathPoseStatus::kNoSolution: return "no_solution";
+    case PathPoseStatus::kOutOfRange: return "out_of_range";
+    case PathPoseStatus::kStrainExceeded: return "strain_exceeded";
+  }
+  return "unknown";
+}
+
+struct PathStepOptions {
+  double strain_limit = kDefaultStrainLimit;
+  SolverOptions solver;
+  PlatformLoad<double> load;
+  /// When the warm-started solve fails, try a cold start from home (the reference branch).
+  bool cold_start_fallback = true;
+};
+
+struct PathStep {
+  InverseSolution solution;  ///< q, the wrenches (the next warm start) and the solver summary
+  PathPoseStatus status = PathPoseStatus::kNoSolution;
+  int iterations = 0;        ///< Newton iterations, fallback included
+  bool ok() const noexcept { return status == PathPoseStatus::kOk; }
+};
+
+/// Classifies a solved pose: convergence, strokes, strain.
+inline PathPoseStatus classify_pose(const InverseSolution& solution, double strain_limit) noexcept {
+  const SolveStatus s = solution.summary.status;
+  if (s == SolveStatus::kOutOfRange) return PathPoseStatus::kOutOfRange;
+  if (s != SolveStatus::kConverged) return PathPoseStatus::kNoSolution;
+  if (!(solution.summary.max_strain <= strain_limit)) return PathPoseStatus::kStrainExceeded;
+  return PathPoseStatus::kOk;
+}
+
+/// One step of IK along a path: from the previous pose's solution to `pose`.
+inline PathStep path_ik_step(const RobotParams<double>& robot, const Pose2<double>& pose,
+                             const InverseSolution& previous,
+                             const PathStepOptions& options = PathStepOptions()) noexcept {
+  PathStep step;
+  step.solution = inverse_kinematics(robot, pose, previous, options.solver, options.load);
+  step.iterations = step.solution.summary.iterations;
+  const SolveStatus s = step.solution.summary.status;
+  if (options.cold_start_fallback && s != SolveStatus::kConverged &&
+      s != SolveStatus::kOutOfRange && s != SolveStatus::kInvalidInput &&
+      s != SolveStatus::kUnsupported) {
+    step.solution = inverse_kinematics(robot, pose, options.solver, options.load);
+    step.iterations += step.solution.summary.iterations;
+  }
+  step.status = classify_pose(step.solution, options.strain_limit);
+  return step;
+}
+
+/// The first pose of a path: IK from home (a cold start).
+inline PathStep path_ik_start(const RobotParams<double>& robot, const Pose2<double>& pose,
+                              const PathStepOptions& options = PathStepOptions()) noexcept {
+  PathStep step;
+  step.solution = inverse_kinematics(robot, pose, options.solver, options.load);
+  step.iterations = step.solution.summary.iterations;
+  step.status = classify_pose(step.solution, options.strain_limit);
+  return step;
+}
+
+}  // namespace pcr

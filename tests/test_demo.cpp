@@ -1,0 +1,85 @@
+// pcr demo end to end (issue 6, section 3), small: the report's numbers against the noise floor
+// and the truth, and the output directory's safety rules.
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+int run_demo(const std::string& args) {
+  const std::string command = std::string(PCR_CLI_PATH) + " demo --quiet " + args + " > " +
+                              (fs::temp_directory_path() / "pcr-test-demo.out").string() + " 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+nlohmann::json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+TEST(Demo, SmallRunReachesTheNoiseFloor) {
+  const fs::path out = fs::temp_directory_path() / "pcr-test-demo";
+  fs::remove_all(out);
+  // Vision included when built: it is the nominal description's source.
+  ASSERT_EQ(run_demo("--output " + out.string() +
+                     " --calibration 40 --validation 12 --repeat 6 --poses 8 --seed 3"),
+            0);
+  const nlohmann::json report = read_json(out / "report.json");
+  const auto& table3 = report["calibration"]["table3"];
+  // The paper's repeatability is 9.13 nm per axis: e_p ~ 11 nm on average at the noise floor.
+  EXPECT_LT(table3["identified_model_validation_set"]["e_p_m"]["mean"].get<double>(), 0.05e-6);
+  EXPECT_LT(table3["identified_model_validation_set"]["e_theta_rad"]["mean"].get<double>(), 5e-6);
+  EXPECT_GT(table3["nominal_model_validation_set"]["e_p_m"]["mean"].get<double>(), 1e-6);
+  int rows = 0;
+  for (const auto& row : report["accuracy"]["iso9283"]) {
+    const std::string name = row["path"].get<std::string>();
+    const double ap_max = row["ap_p"]["max"].get<double>();  // m
+    if (name.find("identified") != std::string::npos) {
+      EXPECT_LT(ap_max, 0.05e-6) << name;
+    } else {
+      EXPECT_GT(ap_max, 1e-6) << name;
+    }
+    ++rows;
+  }
+  EXPECT_EQ(rows, 4);
+  for (const char* file : {"report.md", "identified.json", "nominal.json", "calibration.csv",
+                           "validation.csv", "sensitivity.csv", "calibration-errors.csv"}) {
+    EXPECT_TRUE(fs::exists(out / file)) << file;
+  }
+  // Running again into its own directory is allowed.
+  EXPECT_EQ(run_demo("--output " + out.string() +
+                     " --calibration 20 --validation 4 --repeat 3 --poses 4 --no-vision"),
+            0);
+  fs::remove_all(out);
+}
+
+TEST(Demo, RefusesSomeoneElsesDirectory) {
+  const fs::path out = fs::temp_directory_path() / "pcr-test-demo-foreign";
+  fs::remove_all(out);
+  fs::create_directories(out);
+  { std::ofstream(out / "thesis.tex") << "precious\n"; }
+  EXPECT_NE(run_demo("--output " + out.string() + " --no-vision"), 0);
+  std::ifstream in(out / "thesis.tex");
+  std::stringstream s;
+  s << in.rdbuf();
+  EXPECT_EQ(s.str(), "precious\n");
+  EXPECT_FALSE(fs::exists(out / "report.json"));
+  fs::remove_all(out);
+}
+
+TEST(Demo, RejectsAnUnknownEffect) {
+  EXPECT_NE(run_demo("--effects gravity --output " +
+                     (fs::temp_directory_path() / "pcr-test-demo-x").string()),
+            0);
+}
+
+}  // namespace
