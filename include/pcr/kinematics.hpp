@@ -83,6 +83,9 @@ struct ForwardSolution {
   Pose2<double> pose;                                ///< platform pose ^W T_P
   std::array<Wrench<double>, kMaxLimbs> wrenches{};  ///< proximal wrench (n, m)(0) of each rod
   SolverSummary summary;
+  /// The last Jacobian the solver evaluated (scaled units; empty if none): a warm start from this
+  /// solution uses it for its first, chord, step instead of evaluating a new one.
+  JacobianMatrix jacobian;
 };
 
 struct InverseSolution {
@@ -90,6 +93,8 @@ struct InverseSolution {
   JointVector q;                                     ///< joint values (m)
   std::array<Wrench<double>, kMaxLimbs> wrenches{};  ///< proximal wrench (n, m)(0) of each rod
   SolverSummary summary;
+  /// As ForwardSolution::jacobian, for the inverse problem.
+  JacobianMatrix jacobian;
 };
 
 namespace internal {
@@ -182,6 +187,7 @@ class ShootingProblem {
   /// Residual and, on request, the Jacobian w.r.t. the scaled unknowns. Returns max strain.
   double evaluate(const ShootingVector& z, ShootingVector& r, JacobianMatrix* jacobian) const {
     const ShootingPoint<double> p = unpack(z);
+
     ResidualVector<double> res;
     const double strain = shooting_residual(robot_, p, load_, scale_, steps_, res,
                                             jacobian ? &partials_ : nullptr);
@@ -243,16 +249,24 @@ struct NewtonResult {
 /// followed by chord steps with the same factorisation, which keep contracting by about as much
 /// (the Jacobian barely changes over the step). A chord step that does not contract that well,
 /// and every step far from the solution, falls back to a fresh Jacobian and a line search.
+///
+/// `chord` (optional) carries a Jacobian between solves: on entry, one evaluated near z (say, at
+/// the previous solution of a control loop) to try as the chord matrix of the first step when z is
+/// near the solution; on exit, the last Jacobian evaluated.
 inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector& z,
-                                 const SolverOptions& options, SolverSummary& summary) {
+                                 const SolverOptions& options, SolverSummary& summary,
+                                 JacobianMatrix* chord = nullptr) {
   // Residual norms below this ask for no Jacobian at the trial point: Newton from there is
   // expected to contract by kChordContraction, so the old factorisation will do.
   constexpr double kWarmNorm = 1e-2;
   constexpr double kChordContraction = 0.1;
   NewtonResult result;
-  ShootingVector r, r_trial, z_trial, step;
+  ShootingVector r, r_trial, z_trial, step, r_corrected, z_corrected;
   JacobianMatrix J, J_trial;
-  result.max_strain = problem.evaluate(z, r, &J);
+  Eigen::PartialPivLU<JacobianMatrix> lu_corrector;
+  const bool try_chord = chord && chord->rows() == problem.size() &&
+                         chord->cols() == problem.size();
+  result.max_strain = problem.evaluate(z, r, try_chord ? nullptr : &J);
   ++summary.residual_evaluations;
   double norm = max_norm(r);
   result.initial_norm = norm;
@@ -264,6 +278,50 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
   Eigen::PartialPivLU<JacobianMatrix> lu;
   bool jacobian_at_z = true;  // J is the Jacobian at z (else: at an earlier iterate, chord)
   bool factorised = false;    // lu holds the factorisation of J
+  if (try_chord) {
+    if (norm <= kWarmNorm || norm <= options.tolerance) {
+      J = *chord;
+      jacobian_at_z = false;
+    } else {
+      result.max_strain = problem.evaluate(z, r, &J);  // far: the carried one would not do
+      ++summary.residual_evaluations;
+    }
+  }
+  // Hands the last evaluated Jacobian back to the caller on every exit.
+  struct ChordOut {
+    JacobianMatrix* out;
+    const JacobianMatrix& J;
+    ~ChordOut() {
+      if (out && J.rows() > 0) *out = J;
+    }
+  } chord_out{chord, J};
+  // Near a fold a full step from a warm start (a tangent predictor) overshoots along the nearly
+  // singular direction, and halving it crawls (tens of evaluations). A Newton corrector from the
+  // overshot point z_trial usually lands next to the solution: kept if it beats z.
+  double corrected_strain = 0;
+  const auto try_corrector = [&](double norm2) {
+    corrected_strain = problem.evaluate(z_trial, r_trial, &J_trial);
+    ++summary.residual_evaluations;
+    lu_corrector.compute(J_trial);
+    if (!(lu_corrector.rcond() > 1e-14)) return false;
+    z_corrected = z_trial - lu_corrector.solve(r_trial);
+    corrected_strain = problem.evaluate(z_corrected, r_corrected, nullptr);
+    ++summary.residual_evaluations;
+    const double corrected2 = r_corrected.squaredNorm();
+    return std::isfinite(corrected2) && corrected2 <= (1.0 - 1e-4) * norm2;
+  };
+  const auto accept_corrector = [&]() {
+    // Chord from the corrected point with the factorisation at the predictor.
+    z = z_corrected;
+    r = r_corrected;
+    norm = max_norm(r);
+    result.final_norm = norm;
+    result.max_strain = corrected_strain;
+    J = J_trial;
+    lu = lu_corrector;
+    factorised = true;
+    jacobian_at_z = false;
+  };
   for (int iter = 0; iter <= options.max_iterations; ++iter) {
     if (norm <= options.tolerance) {
       result.status = SolveStatus::kConverged;
@@ -273,6 +331,10 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
     ++summary.iterations;
     if (!jacobian_at_z) {
       // Chord step: accepted only if it contracts as a Newton step near the solution would.
+      if (!factorised) {
+        lu.compute(J);  // a carried Jacobian; a bad one fails the contraction test
+        factorised = true;
+      }
       step = -lu.solve(r);
       z_trial = z + step;
       const double strain = problem.evaluate(z_trial, r_trial, nullptr);
@@ -287,10 +349,18 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
         result.max_strain = strain;
         continue;
       }
+      if (std::isfinite(trial_norm) && trial_norm < norm) {
+        z = z_trial;  // not contracting well, but still progress: keep it
+      } else if (std::isfinite(trial_norm) && trial_norm <= kWarmNorm &&
+                 try_corrector(r.squaredNorm())) {
+        accept_corrector();
+        continue;
+      }
       // Refresh the Jacobian at z and take a Newton step from there instead.
       result.max_strain = problem.evaluate(z, r, &J);
       ++summary.residual_evaluations;
       norm = max_norm(r);
+      result.final_norm = norm;
       jacobian_at_z = true;
       factorised = false;
     }
@@ -310,6 +380,7 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
     double t = 1.0;
     bool accepted = false;
     bool trial_has_jacobian = false;
+    bool corrected = false;
     double strain = result.max_strain;
     for (int ls = 0; ls <= options.max_line_search; ++ls, t *= 0.5) {
       z_trial = z + t * step;
@@ -326,6 +397,19 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
         accepted = true;
         break;
       }
+      // Near a fold the full step (a tangent predictor, warm) overshoots along the nearly
+      // singular direction and halving it crawls (tens of evaluations). A Newton corrector from
+      // the overshot point usually lands next to the solution: keep it if it beats the start.
+      if (warm && ls == 0 && std::isfinite(trial2) && max_norm(r_trial) <= kWarmNorm &&
+          try_corrector(norm2)) {
+        corrected = true;
+        break;
+      }
+    }
+    if (corrected) {
+      ++summary.iterations;
+      accept_corrector();
+      continue;
     }
     if (!accepted) {
       // No descent along the Newton direction: a minimum of |r| with r != 0 has J^T r = 0.
@@ -379,10 +463,10 @@ inline double jacobian_rcond(const ShootingProblem& problem, const ShootingVecto
 inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const ShootingVector& u0,
                                              const ShootingVector& u1, ShootingVector& z,
                                              const SolverOptions& options,
-                                             SolverSummary& summary) {
+                                             SolverSummary& summary, JacobianMatrix* chord) {
   const ShootingVector z0 = z;
   problem.set_input(u1);
-  NewtonResult direct = newton_solve(problem, z, options, summary);
+  NewtonResult direct = newton_solve(problem, z, options, summary, chord);
   summary.initial_residual_norm = direct.initial_norm;
   summary.final_residual_norm = direct.final_norm;
   summary.max_strain = direct.max_strain;
@@ -402,6 +486,8 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   };
   while (t < 1.0) {
     if (summary.continuation_steps >= options.max_continuation_steps) {
+      z = z_last;  // the last solved point of the path
+      problem.set_input(u0 + t * (u1 - u0));
       return singular_ahead() ? SolveStatus::kSingular : SolveStatus::kMaxIterations;
     }
     ++summary.continuation_steps;
@@ -410,7 +496,7 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
     // Secant predictor from the last two solutions on the path.
     z = z_last;
     if (t > t_prev) z += (z_last - z_prev) * ((t_next - t) / (t - t_prev));
-    NewtonResult sub = newton_solve(problem, z, options, summary);
+    NewtonResult sub = newton_solve(problem, z, options, summary, chord);
     if (sub.status == SolveStatus::kConverged) {
       z_prev = z_last;
       t_prev = t;
@@ -443,12 +529,12 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
 /// is solved again (from itself: one or two Newton iterations) at the step count it calls for.
 inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
                                     const SolverOptions& options, SolverSummary& summary,
-                                    SolveStatus status) {
+                                    SolveStatus status, JacobianMatrix* chord) {
   for (int pass = 0; pass < 2 && status == SolveStatus::kConverged; ++pass) {
     const int needed = problem.required_rod_steps(summary.max_strain);
     if (needed == problem.rod_steps()) break;
     problem.set_rod_steps(needed);
-    const NewtonResult refined = newton_solve(problem, z, options, summary);
+    const NewtonResult refined = newton_solve(problem, z, options, summary, chord);
     status = refined.status;
     summary.final_residual_norm = refined.final_norm;
     summary.max_strain = refined.max_strain;
@@ -462,10 +548,11 @@ inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
 inline SolveStatus solve_along_path(ShootingProblem& problem, const ShootingVector& u0,
                                     const ShootingVector& u1, ShootingVector& z,
                                     const SolverOptions& options, SolverSummary& summary,
-                                    double start_strain) {
+                                    double start_strain, JacobianMatrix* chord) {
   problem.set_rod_steps(problem.required_rod_steps(start_strain));
-  const SolveStatus status = solve_path_at_fixed_steps(problem, u0, u1, z, options, summary);
-  return refine_rod_steps(problem, z, options, summary, status);
+  const SolveStatus status =
+      solve_path_at_fixed_steps(problem, u0, u1, z, options, summary, chord);
+  return refine_rod_steps(problem, z, options, summary, status, chord);
 }
 
 inline bool valid_robot(const RobotParams<double>& robot) {
@@ -479,7 +566,8 @@ void copy_wrenches(const ShootingPoint<double>& p, int n, Solution& solution) {
 
 /// The solution at q = 0 from the unloaded straight guess (exact for a stress-free robot).
 inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& options,
-                                    SolverSummary& summary, SolveStatus& status) {
+                                    SolverSummary& summary, SolveStatus& status,
+                                    JacobianMatrix* chord) {
   ShootingVector u = ShootingVector::Zero(fk.num_inputs());
   fk.set_input(u);
   ShootingVector z = ShootingVector::Zero(fk.size());
@@ -511,7 +599,7 @@ inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& op
   }
   summary.final_residual_norm = home.final_norm;
   summary.max_strain = home.max_strain;
-  status = refine_rod_steps(fk, z, options, summary, home.status);
+  status = refine_rod_steps(fk, z, options, summary, home.status, chord);
   return z;
 }
 
@@ -541,9 +629,10 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
   ShootingVector u0 = warm_start.q, u1 = q;
   problem.set_input(u0);
   ShootingVector z = problem.pack(start);
+  solution.jacobian = warm_start.jacobian;
   solution.summary.status =
       internal::solve_along_path(problem, u0, u1, z, options, solution.summary,
-                                 warm_start.summary.max_strain);
+                                 warm_start.summary.max_strain, &solution.jacobian);
   // On failure this is the last solved point of the path, with its joints.
   const ShootingPoint<double> p = problem.unpack(z);
   for (int i = 0; i < n; ++i) solution.q(i) = p.q[i];
@@ -564,7 +653,8 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot,
   internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load,
                                     options);
   SolveStatus status;
-  ShootingVector z = internal::home_unknowns(problem, options, home.summary, status);
+  ShootingVector z =
+      internal::home_unknowns(problem, options, home.summary, status, &home.jacobian);
   home.summary.status = status;
   home.q = JointVector::Zero(robot.num_limbs);
   const ShootingPoint<double> p = problem.unpack(z);
@@ -620,8 +710,10 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
   u1 << pose.x, pose.y, n == 2 ? warm_start.pose.theta : pose.theta;
   problem.set_input(u0);
   ShootingVector z = problem.pack(start);
+  solution.jacobian = warm_start.jacobian;
   SolveStatus status = internal::solve_along_path(problem, u0, u1, z, options, solution.summary,
-                                                  warm_start.summary.max_strain);
+                                                  warm_start.summary.max_strain,
+                                                  &solution.jacobian);
   const ShootingPoint<double> p = problem.unpack(z);
   solution.pose = p.pose;
   solution.q = JointVector(n);

@@ -59,7 +59,10 @@ template <class T, bool Sens>
 struct RodStepper {
   T nx, ny, x, y, c, s, th, m;
   T inv_ei, h, half_h, sixth_h, max_abs_moment;
-  T tx[3], ty[3], tc[3], ts[3], tth[3], tm[3];  // tangents, column j: d / d wrench_j
+  // Tangents, column j: d / d wrench_j, as one padded 4-vector per state (column 3 stays zero)
+  // so that in double the three columns step together in SIMD registers.
+  using Cols = Eigen::Array<T, 4, 1>;
+  Cols tx, ty, tc, ts, tth, tm;
 
   void init(const RodState<T>& start, const T& ei, const T& length, int steps) {
     using std::abs;
@@ -74,7 +77,12 @@ struct RodStepper {
     th = start.theta;
     m = start.m;
     if constexpr (Sens) {
-      for (int j = 0; j < 3; ++j) tx[j] = ty[j] = tc[j] = ts[j] = tth[j] = tm[j] = T(0);
+      tx.setZero();
+      ty.setZero();
+      tc.setZero();
+      ts.setZero();
+      tth.setZero();
+      tm.setZero();
       tm[2] = T(1);  // only dm/dm0 starts non-zero
     }
     inv_ei = T(1) / ei;
@@ -88,7 +96,7 @@ struct RodStepper {
     using std::abs;
     // Stage values (the rhs of x, y, theta are c, s, k) and slopes of (c, s, m).
     T sc[4], ss[4], sk[4], dc[4], ds[4], dm[4];
-    T gc[4][3], gs[4][3], gk[4][3], gdc[4][3], gds[4][3], gdm[4][3];
+    Cols gc[4], gs[4], gk[4], gdc[4], gds[4], gdm[4];
     for (int st = 0; st < 4; ++st) {
       const T a = st == 3 ? h : half_h;
       const int p = st == 0 ? 0 : st - 1;
@@ -103,18 +111,18 @@ struct RodStepper {
       ds[st] = cc * k;
       dm[st] = nx * sv - ny * cc;
       if constexpr (Sens) {
-        for (int j = 0; j < 3; ++j) {
-          const T vc = st == 0 ? tc[j] : tc[j] + a * gdc[p][j];
-          const T vs = st == 0 ? ts[j] : ts[j] + a * gds[p][j];
-          const T vm = st == 0 ? tm[j] : tm[j] + a * gdm[p][j];
-          const T dk = vm * inv_ei;
-          gc[st][j] = vc;
-          gs[st][j] = vs;
-          gk[st][j] = dk;
-          gdc[st][j] = -vs * k - sv * dk;
-          gds[st][j] = vc * k + cc * dk;
-          gdm[st][j] = nx * vs - ny * vc;
+        if (st == 0) {
+          gc[0] = tc;
+          gs[0] = ts;
+          gk[0] = tm * inv_ei;
+        } else {
+          gc[st] = tc + a * gdc[p];
+          gs[st] = ts + a * gds[p];
+          gk[st] = (tm + a * gdm[p]) * inv_ei;
         }
+        gdc[st] = -gs[st] * k - sv * gk[st];
+        gds[st] = gc[st] * k + cc * gk[st];
+        gdm[st] = nx * gs[st] - ny * gc[st];
         gdm[st][0] += sv;  // d/dn_x of n_x s
         gdm[st][1] -= cc;  // d/dn_y of -n_y c
       }
@@ -129,17 +137,15 @@ struct RodStepper {
     rk4(th, sk);
     rk4(m, dm);
     if constexpr (Sens) {
-      for (int j = 0; j < 3; ++j) {
-        const auto rk4j = [this, j](T& v, const T(&k)[4][3]) {
-          v += sixth_h * (k[0][j] + T(2) * (k[1][j] + k[2][j]) + k[3][j]);
-        };
-        rk4j(tx[j], gc);
-        rk4j(ty[j], gs);
-        rk4j(tc[j], gdc);
-        rk4j(ts[j], gds);
-        rk4j(tth[j], gk);
-        rk4j(tm[j], gdm);
-      }
+      const auto rk4c = [this](Cols& v, const Cols(&k)[4]) {
+        v += sixth_h * (k[0] + T(2) * (k[1] + k[2]) + k[3]);
+      };
+      rk4c(tx, gc);
+      rk4c(ty, gs);
+      rk4c(tc, gdc);
+      rk4c(ts, gds);
+      rk4c(tth, gk);
+      rk4c(tm, gdm);
     }
     const T abs_m = abs(m);
     if (abs_m > max_abs_moment) max_abs_moment = abs_m;
