@@ -44,6 +44,42 @@ if has_calibration:
         write_configurations,
         write_dataset,
     )
+    # Trajectories and ISO 9283 accuracy (pcr/trajectory.hpp, pcr/calib/accuracy.hpp).
+    from ._pcr import (  # noqa: F401
+        PAPER_CIRCLE_DIAMETER,
+        PAPER_SQUARE_SIDE,
+        AccuracyEvaluation,
+        Iso9283Result,
+        circle_path,
+        command_path,
+        evaluate_on_virtual_robot,
+        iso9283,
+        iso9283_json,
+        iso9283_table,
+        load_measured_csv,
+        load_path_csv,
+        measured_to_csv,
+        square_path,
+    )
+
+from ._pcr import has_vision  # noqa: E402,F401
+
+if has_vision:
+    # Measurement from camera images (pcr::vision).
+    from ._pcr import (  # noqa: F401
+        Camera,
+        MountLayout,
+        RobotMeasurement,
+        default_mounts,
+        load_camera,
+        load_mounts,
+        measure_robot,
+        measured_description,
+        mount_tags,
+        read_image,
+        render_robot,
+        write_png,
+    )
 
 
 def _replace(self, **changes):

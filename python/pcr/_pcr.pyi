@@ -8,6 +8,7 @@ import numpy.typing as npt
 
 __version__: str
 has_calibration: bool
+has_vision: bool
 
 ArrayLike = npt.ArrayLike
 FloatArray = npt.NDArray[np.float64]
@@ -214,3 +215,137 @@ def calibrate(nominal: Robot, q: ArrayLike, measured: ArrayLike, *,
               derivatives: str = "implicit", max_iterations: int = 100, fix_gauge: bool = True,
               gauge_prior_weight: float = 1e-3, compute_covariance: bool = True,
               progress: Optional[Callable[[str], None]] = None) -> tuple[Robot, dict[str, Any]]: ...
+
+# ---- trajectories and ISO 9283 accuracy (when has_calibration) -----------------------------
+PAPER_SQUARE_SIDE: float  # 2e-3 m
+PAPER_CIRCLE_DIAMETER: float  # 3e-3 m
+
+def square_path(side: float = 2e-3, *, centre: ArrayLike = (0.0, 0.0), rotation: float = 0.0,
+                theta: float = 0.0, count: int = 40) -> FloatArray: ...  # (count, 3)
+def circle_path(diameter: float = 3e-3, *, centre: ArrayLike = (0.0, 0.0),
+                start_angle: float = 0.0, theta: float = 0.0,
+                count: int = 36) -> FloatArray: ...  # (count, 3)
+def load_path_csv(path: str) -> FloatArray: ...  # (N, 3)
+def command_path(robot: Robot, path: ArrayLike, *, strain_limit: float = 0.01,
+                 force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                 options: Optional[SolverOptions] = None,
+                 cold_start_fallback: bool = True) -> dict[str, Any]: ...  # q, poses, max_strain, iterations
+
+class Iso9283Result:
+    @property
+    def commanded(self) -> FloatArray: ...  # (N, 3)
+    @property
+    def barycentre(self) -> FloatArray: ...  # (N, 3)
+    @property
+    def cycles(self) -> npt.NDArray[np.int32]: ...
+    @property
+    def ap_x(self) -> FloatArray: ...  # (N,) m
+    @property
+    def ap_y(self) -> FloatArray: ...  # (N,) m
+    @property
+    def ap_p(self) -> FloatArray: ...  # (N,) m, Eq. 10
+    @property
+    def ap_theta(self) -> FloatArray: ...  # (N,) rad, Eq. 11 (signed)
+    @property
+    def l_bar(self) -> FloatArray: ...
+    @property
+    def s_l(self) -> FloatArray: ...
+    @property
+    def rp_l(self) -> FloatArray: ...  # (N,) m
+    @property
+    def s_theta(self) -> FloatArray: ...
+    @property
+    def rp_theta(self) -> FloatArray: ...  # (N,) rad, RP_theta = +-rp_theta
+    @property
+    def summary(self) -> dict[str, dict[str, float]]: ...  # ap_p, ap_theta_abs, rp_l, rp_theta
+    def poses_csv(self) -> str: ...
+    def to_json(self, name: str = "result") -> str: ...
+    def __len__(self) -> int: ...
+
+def iso9283(commanded: ArrayLike,
+            attained: Union[ArrayLike, Sequence[ArrayLike]]) -> Iso9283Result: ...
+def iso9283_table(rows: Union[Iso9283Result, dict[str, Iso9283Result],
+                              Sequence[tuple[str, Iso9283Result]]]) -> str: ...
+def iso9283_json(rows: Union[Iso9283Result, dict[str, Iso9283Result],
+                             Sequence[tuple[str, Iso9283Result]]]) -> str: ...
+
+class AccuracyEvaluation:
+    @property
+    def commanded(self) -> FloatArray: ...  # (N, 3)
+    @property
+    def q(self) -> FloatArray: ...  # (N, n) m
+    @property
+    def command(self) -> dict[str, Any]: ...
+    @property
+    def attained(self) -> FloatArray: ...  # (N, R, 3) ^W T_P, [pose, cycle]
+    @property
+    def iso(self) -> Iso9283Result: ...
+    def __len__(self) -> int: ...
+
+def evaluate_on_virtual_robot(model: Robot, robot: VirtualRobot, path: ArrayLike, *,
+                              repeat: int = 30, frame: str = "model", strain_limit: float = 0.01,
+                              force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                              options: Optional[SolverOptions] = None) -> AccuracyEvaluation: ...
+def load_measured_csv(path: str) -> tuple[FloatArray, Union[FloatArray, list[FloatArray]]]: ...
+def measured_to_csv(commanded: ArrayLike,
+                    attained: Union[ArrayLike, Sequence[ArrayLike]]) -> str: ...
+
+# ---- measurement from images (when has_vision) ---------------------------------------------
+class Camera:
+    width: int  # px
+    height: int  # px
+    K: FloatArray  # (3, 3) px
+    distortion: FloatArray  # OpenCV order k1 k2 p1 p2 [k3 [k4 k5 k6]]
+    def __init__(self, width: int, height: int, K: ArrayLike,
+                 distortion: Optional[ArrayLike] = None) -> None: ...
+    def project(self, point_camera: ArrayLike) -> FloatArray: ...  # (2,) px
+    def save(self, path: str) -> None: ...
+
+def load_camera(path: str) -> Camera: ...
+
+class MountLayout:
+    @property
+    def num_limbs(self) -> int: ...
+    @property
+    def mounts(self) -> list[dict[str, Any]]: ...
+    def without_uncertainty(self) -> MountLayout: ...
+    @staticmethod
+    def from_json(text: str, source: str = "<string>") -> MountLayout: ...
+    def __len__(self) -> int: ...
+
+def load_mounts(path: str) -> MountLayout: ...
+def default_mounts() -> MountLayout: ...
+def read_image(path: str) -> npt.NDArray[np.float32]: ...  # (H, W) in [0, 1]
+def write_png(path: str, image: ArrayLike, bits: int = 8) -> None: ...
+def mount_tags(robot: Robot, mounts: MountLayout, platform: Union[Pose, ArrayLike] = ...,
+               q: Optional[Sequence[float]] = None) -> list[dict[str, Any]]: ...
+def render_robot(robot: Robot, mounts: MountLayout, *, camera: Optional[Camera] = None,
+                 height: float = 0.5, tilt_x: float = 0.0, tilt_y: float = 0.0,
+                 q: Optional[Sequence[float]] = None, platform: Union[Pose, ArrayLike] = ...,
+                 rods: bool = True, supersampling: int = 4, blur: float = 0.0,
+                 noise: float = 0.0, gradient: float = 0.0,
+                 seed: int = 1) -> npt.NDArray[np.float32]: ...
+
+class RobotMeasurement:
+    @property
+    def limbs(self) -> list[dict[str, Any]]: ...
+    @property
+    def corner_rms_px(self) -> float: ...
+    @property
+    def corner_sigma_px(self) -> float: ...
+    @property
+    def world_in_plane(self) -> Pose: ...
+    @property
+    def platform_in_plane(self) -> Pose: ...
+    @property
+    def registration_rms_A(self) -> float: ...  # m
+    @property
+    def registration_rms_B(self) -> float: ...  # m
+    @property
+    def markers(self) -> list[dict[str, Any]]: ...
+
+def measure_robot(image: ArrayLike, mounts: MountLayout, camera: Camera, design: Robot, *,
+                  source: str = "<image>", coverage_factor: float = 3.0,
+                  family: str = "tag36h11", min_margin: float = 30.0,
+                  max_hamming: int = 0) -> RobotMeasurement: ...
+def measured_description(design: Robot, measurement: RobotMeasurement) -> Robot: ...

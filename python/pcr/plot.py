@@ -140,14 +140,39 @@ def plot_calibration_errors(nominal, identified, calibration, validation=None, p
     return _finish(fig, path)
 
 
-def plot_trajectory_accuracy(commanded, attained, path=None, fig=None):
+def _barycentre(commanded, attained):
+    """ISO 9283 mean of (N, R, 3) attained poses, theta averaged about the commanded one."""
+    d = attained[..., 2] - commanded[:, None, 2]
+    theta = commanded[:, 2] + np.mean(np.arctan2(np.sin(d), np.cos(d)), axis=1)
+    return np.column_stack([attained[..., 0].mean(axis=1), attained[..., 1].mean(axis=1), theta])
+
+
+def plot_trajectory_accuracy(commanded, attained=None, path=None, fig=None):
     """Accuracy along a trajectory (the paper's Figures 11 and 12): position error (um) and
-    orientation error (urad) per pose, from (N, 3) arrays of commanded and attained poses
-    (x m, y m, theta rad)."""
+    orientation error (urad) per pose.
+
+    Either (N, 3) arrays of commanded and attained poses (x m, y m, theta rad); or attained as an
+    (N, R, 3) array of R cycles per pose, whose ISO 9283 barycentres are compared; or, alone, the
+    result of ``pcr.evaluate_on_virtual_robot`` (an AccuracyEvaluation) or of ``pcr.iso9283``
+    (an Iso9283Result: its barycentres).
+    """
     import matplotlib.pyplot as plt
 
+    cloud = None
+    if attained is None:
+        if hasattr(commanded, "attained") and hasattr(commanded, "commanded"):  # evaluation
+            commanded, attained = commanded.commanded, commanded.attained
+        elif hasattr(commanded, "barycentre"):  # Iso9283Result
+            commanded, attained = commanded.commanded, commanded.barycentre
+        else:
+            raise ValueError("attained: required unless commanded is an AccuracyEvaluation or "
+                             "an Iso9283Result")
     commanded = np.atleast_2d(np.asarray(commanded, dtype=float))
-    attained = np.atleast_2d(np.asarray(attained, dtype=float))
+    attained = np.asarray(attained, dtype=float)
+    if attained.ndim == 3 and attained.shape[0] == commanded.shape[0] and attained.shape[2] == 3:
+        cloud = attained.reshape(-1, 3)
+        attained = _barycentre(commanded, attained)
+    attained = np.atleast_2d(attained)
     if commanded.shape != attained.shape or commanded.shape[1] != 3:
         raise ValueError(f"commanded, attained: expected two (N, 3) arrays, got "
                          f"{commanded.shape} and {attained.shape}")
@@ -158,7 +183,10 @@ def plot_trajectory_accuracy(commanded, attained, path=None, fig=None):
         fig = plt.figure(figsize=(10, 6))
     ax_path, ax_p, ax_t = fig.subplots(3, 1)
     ax_path.plot(commanded[:, 0] * 1e3, commanded[:, 1] * 1e3, "k-", lw=1, label="commanded")
-    ax_path.plot(attained[:, 0] * 1e3, attained[:, 1] * 1e3, ".", ms=3, label="attained")
+    if cloud is not None:
+        ax_path.plot(cloud[:, 0] * 1e3, cloud[:, 1] * 1e3, ",", color="0.6", label="cycles")
+    ax_path.plot(attained[:, 0] * 1e3, attained[:, 1] * 1e3, ".", ms=3,
+                 label="attained" if cloud is None else "attained (barycentre)")
     ax_path.set_xlabel("x (mm)")
     ax_path.set_ylabel("y (mm)")
     ax_path.set_aspect("equal", adjustable="datalim")

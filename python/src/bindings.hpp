@@ -21,6 +21,8 @@ namespace py = pybind11;
 void wrap_robot(py::module_& m);
 void wrap_kinematics(py::module_& m);
 void wrap_calibration(py::module_& m);
+void wrap_accuracy(py::module_& m);  // needs pcr::calib
+void wrap_vision(py::module_& m);    // needs pcr::vision
 
 /// A solved configuration (FK or IK) as Python sees it: the solver's result plus, on request,
 /// the rods' shapes (one (steps + 1, 4) array per rod: s, x, y, theta in m, m, m, rad).

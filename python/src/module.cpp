@@ -15,8 +15,15 @@ PYBIND11_MODULE(_pcr, m) {
   pcr::python::wrap_kinematics(m);
 #ifdef PCR_PYTHON_HAS_CALIB
   pcr::python::wrap_calibration(m);
+  pcr::python::wrap_accuracy(m);  // after wrap_calibration: uses VirtualRobot
   m.attr("has_calibration") = true;
 #else
   m.attr("has_calibration") = false;
+#endif
+#ifdef PCR_PYTHON_HAS_VISION
+  pcr::python::wrap_vision(m);
+  m.attr("has_vision") = true;
+#else
+  m.attr("has_vision") = false;
 #endif
 }
