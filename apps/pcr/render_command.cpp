@@ -30,7 +30,8 @@ std::vector<double> parse_list(const std::string& text, std::size_t n, const std
 void register_render_command(CLI::App& app) {
   struct Args {
     std::string robot, mounts, camera, camera_out, output, truth, q, platform = "0,0,0";
-    double height = 0.5, tilt_x = 0, tilt_y = 0;
+    std::string chessboard, board_pose = "0,0,0";
+    double height = 0.5, tilt_x = 0, tilt_y = 0, wafer = 0.100, square = 0.005;
     pcr::vision::RenderOptions render;
     int bits = 8;
     bool rods = true;
@@ -38,7 +39,7 @@ void register_render_command(CLI::App& app) {
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand("render", "render the rod-mount tags seen by a camera (PNG + JSON truth)");
   pcr::cli::add_robot_option(*cmd, args->robot);
-  cmd->add_option("--mounts", args->mounts, "mount layout JSON (e.g. data/mounts-femto-3pf.json)")->required();
+  cmd->add_option("--mounts", args->mounts, "mount layout JSON (e.g. data/mounts-femto-3pf.json); required unless --chessboard");
   cmd->add_option("--camera", args->camera, "OpenCV camera YAML (default: 4000 x 4000 px, f = 8000 px)");
   cmd->add_option("--camera-out", args->camera_out, "write the camera used as OpenCV YAML");
   cmd->add_option("--output", args->output, "PNG to write")->required();
@@ -54,12 +55,17 @@ void register_render_command(CLI::App& app) {
   cmd->add_option("--gradient", args->render.gradient, "illumination change across the image (fraction)");
   cmd->add_option("--seed", args->render.seed, "noise seed");
   cmd->add_option("--bits", args->bits, "PNG bits per pixel (8 or 16)")->check(CLI::IsMember({8, 16}));
-  cmd->add_flag("!--no-rods", args->rods, "do not draw the rods");
+  cmd->add_flag("!--no-rods", args->rods, "do not draw the rods nor the platform outline");
+  cmd->add_option("--wafer-diameter", args->wafer, "platform outline: wafer circle centred on P (m, 0 = none)")
+      ->capture_default_str();
+  cmd->add_option("--chessboard", args->chessboard, "also draw a chessboard of COLSxROWS inner corners (for pcr camera)");
+  cmd->add_option("--square", args->square, "chessboard square edge (m)")->capture_default_str();
+  cmd->add_option("--board-pose", args->board_pose, "chessboard centre pose x,y,theta in the plane (m, rad)");
   cmd->callback([args]() {
     using namespace pcr;
     using namespace pcr::vision;
+    if (args->mounts.empty() && args->chessboard.empty()) throw InputError("pcr render: give --mounts or --chessboard");
     const RobotDescription robot = load_robot_or_default(args->robot);
-    const MountLayout layout = load_mounts(args->mounts);
     Scene scene;
     if (args->camera.empty()) {
       scene.camera.width = scene.camera.height = 4000;
@@ -71,7 +77,23 @@ void register_render_command(CLI::App& app) {
     const std::vector<double> q = args->q.empty() ? std::vector<double>{} : parse_list(args->q, robot.params.num_limbs, "--q");
     const std::vector<double> pl = parse_list(args->platform, 3, "--platform");
     const Pose2<double> platform{pl[0], pl[1], pl[2]};
-    scene.tags = mount_tags(layout, robot.params, platform, q, args->rods ? &scene.segments : nullptr);
+    if (!args->mounts.empty()) {
+      scene.tags = mount_tags(load_mounts(args->mounts), robot.params, platform, q, args->rods ? &scene.segments : nullptr);
+      // The platform is a 100 mm silicon wafer (paper, Sec. 4.1); only an outline, the tags stay on top.
+      if (args->rods && args->wafer > 0) scene.circles.push_back(RenderCircle{platform.translation(), 0.5 * args->wafer});
+    }
+    if (!args->chessboard.empty()) {
+      RenderChessboard board;
+      if (std::sscanf(args->chessboard.c_str(), "%dx%d", &board.cols, &board.rows) != 2 || board.cols < 2 || board.rows < 2)
+        throw InputError("--chessboard: expected COLSxROWS (inner corners), got '" + args->chessboard + "'");
+      if (!(args->square > 0)) throw InputError("--square: must be > 0, got " + std::to_string(args->square));
+      board.square_m = args->square;
+      const std::vector<double> c = parse_list(args->board_pose, 3, "--board-pose");
+      // Corner (0, 0) from the board's centre pose.
+      board.pose = Pose2<double>{c[0], c[1], c[2]} *
+                   Pose2<double>{-0.5 * (board.cols - 1) * board.square_m, -0.5 * (board.rows - 1) * board.square_m, 0.0};
+      scene.chessboard = board;
+    }
     const GrayImage image = render_scene(scene, args->render);
     write_png(image, args->output, args->bits);
     if (!args->camera_out.empty()) save_camera(scene.camera, args->camera_out);
@@ -79,6 +101,13 @@ void register_render_command(CLI::App& app) {
       nlohmann::json j;
       j["format"] = "pcr-render-truth";
       j["image"] = args->output;
+      if (!args->mounts.empty() && args->rods && args->wafer > 0)
+        j["wafer_outline"] = {{"centre_W", {platform.x, platform.y}}, {"diameter", args->wafer}};
+      if (scene.chessboard) {
+        const RenderChessboard& b = *scene.chessboard;
+        j["chessboard"] = {{"cols", b.cols}, {"rows", b.rows}, {"square", b.square_m},
+                           {"corner0_pose", {b.pose.x, b.pose.y, b.pose.theta}}};
+      }
       j["plane_in_camera"] = {{"rotation", std::vector<double>(scene.plane.rotation.data(), scene.plane.rotation.data() + 9)},
                               {"translation", {scene.plane.translation.x(), scene.plane.translation.y(), scene.plane.translation.z()}},
                               {"note", "rotation column-major; plane frame = W"}};
@@ -90,7 +119,7 @@ void register_render_command(CLI::App& app) {
                                 return c;
                               }()}});
       }
-      for (int i = 0; i < robot.params.num_limbs; ++i) {
+      for (int i = 0; i < (args->mounts.empty() ? 0 : robot.params.num_limbs); ++i) {
         const LimbParams<double>& l = robot.params.limb(i);
         const double qi = i < static_cast<int>(q.size()) ? q[i] : 0.0;
         const Eigen::Vector2d A = l.proximal_position(qi), B = platform.transform(l.B);

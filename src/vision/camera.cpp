@@ -181,9 +181,11 @@ CalibrationResult calibrate_camera(const std::vector<std::string>& image_paths,
     cv::Mat f(image.height, image.width, CV_32F, const_cast<float*>(image.pixels.data())), u8;
     f.convertTo(u8, CV_8U, 255.0);
     std::vector<cv::Point2f> corners;
+    // FAST_CHECK: an image without the board (a wrong file) is rejected at once instead of
+    // after minutes of adaptive-threshold search.
     const bool found = cv::findChessboardCorners(
         u8, cv::Size(board.cols, board.rows), corners,
-        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK);
     if (!found) {
       result.rejected.push_back(path);
       continue;

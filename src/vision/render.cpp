@@ -41,6 +41,9 @@ struct Painter {
         if (i >= -1 && i <= b.cols - 1 && j >= -1 && j <= b.rows - 1 && ((i + j) & 1) == 0) value = opt.black;
       }
     }
+    for (const RenderCircle& c : scene.circles) {
+      if (std::abs((p - c.centre).norm() - c.radius_m) <= 0.5 * c.width_m) value = c.intensity;
+    }
     for (const RenderSegment& s : scene.segments) {
       const Eigen::Vector2d ab = s.b - s.a;
       const double t = std::clamp((p - s.a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
@@ -122,6 +125,15 @@ GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
     const double w = 0.5 * s.width_m;
     boxes.push_back(pixel_box(scene, {s.a - w * n - w * t, s.b - w * n + w * t, s.b + w * n + w * t,
                                       s.a + w * n - w * t}));
+  }
+  for (const RenderCircle& c : scene.circles) {
+    // Boxes around short arcs only, so the disc's interior is not supersampled.
+    constexpr int kArcs = 72;
+    const double h = M_PI / kArcs, r0 = std::max(0.0, c.radius_m - c.width_m), r1 = (c.radius_m + c.width_m) / std::cos(h);
+    for (int k = 0; k < kArcs; ++k) {
+      const Eigen::Vector2d u0(std::cos(2 * h * k), std::sin(2 * h * k)), u1(std::cos(2 * h * (k + 1)), std::sin(2 * h * (k + 1)));
+      boxes.push_back(pixel_box(scene, {c.centre + r0 * u0, c.centre + r1 * u0, c.centre + r1 * u1, c.centre + r0 * u1}));
+    }
   }
   if (scene.chessboard) {
     const RenderChessboard& b = *scene.chessboard;

@@ -32,6 +32,15 @@ struct RenderSegment {
   float intensity{0.15f};
 };
 
+/// A dark circle outline (the platform's 100 mm wafer, for a person looking at the image): a band of
+/// `width_m` centred on the circle of `radius_m`, drawn under the tags.
+struct RenderCircle {
+  Eigen::Vector2d centre{0, 0};
+  double radius_m{0.05};
+  double width_m{300e-6};
+  float intensity{0.25f};
+};
+
 /// A chessboard with `cols` x `rows` inner corners; its corner (0, 0) at `pose`, squares along +x, +y,
 /// with a one-square white margin.
 struct RenderChessboard {
@@ -47,6 +56,7 @@ struct Scene {
   std::vector<RenderTag> tags;
   std::vector<RenderSegment> segments;
   std::optional<RenderChessboard> chessboard;
+  std::vector<RenderCircle> circles;
 };
 
 struct RenderOptions {
