@@ -235,11 +235,6 @@ std::string table2_markdown(const pcr::SensitivityReport& s) {
   return md;
 }
 
-json stats_json(const pcr::PoseErrorStats& s) {
-  return {{"e_p_m", {{"max", s.max_p}, {"mean", s.mean_p}, {"min", s.min_p}}},
-          {"e_theta_rad", {{"max", s.max_theta}, {"mean", s.mean_theta}, {"min", s.min_theta}}}};
-}
-
 std::string table3_row(const std::string& label, const pcr::PoseErrorStats& s) {
   return "| " + label +
          fmt(" | %.4f | %.4f | %.4f", s.max_p * 1e6, s.mean_p * 1e6, s.min_p * 1e6) +

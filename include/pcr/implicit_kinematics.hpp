@@ -13,6 +13,40 @@
 
 namespace pcr {
 
+namespace internal {
+
+/// The forward shooting problem of `robot` linearised at its converged solution: the packed point
+/// z* and the LU factors of the residual's Jacobian there, at the solution's RK4 step count.
+/// `ok` is false when the solution did not converge or the Jacobian is singular.
+struct LinearisedForward {
+  LinearisedForward(const RobotParams<double>& robot, const PlatformLoad<double>& load,
+                    const ForwardSolution& solution, const SolverOptions& options)
+      : problem(ShootingProblem::Kind::kForward, robot, load, options) {
+    if (!solution.summary.converged()) return;
+    problem.set_input(solution.q);
+    problem.set_rod_steps(solution.summary.rod_steps);
+    point.pose = solution.pose;
+    for (int i = 0; i < robot.num_limbs; ++i) {
+      point.q[i] = solution.q(i);
+      point.wrenches[i] = solution.wrenches[i];
+    }
+    z = problem.pack(point);
+    ShootingVector r;
+    JacobianMatrix J;
+    problem.evaluate(z, r, &J);
+    lu.compute(J);
+    ok = lu.rcond() > 1e-14;
+  }
+
+  ShootingProblem problem;
+  ShootingPoint<double> point;
+  ShootingVector z;
+  Eigen::PartialPivLU<JacobianMatrix> lu;
+  bool ok = false;
+};
+
+}  // namespace internal
+
 /// Platform pose ^W T_P as a function of `robot_t` (scalar T), at the converged double solution
 /// `solution` of `robot` (the same parameters as plain values). Returns false when the solution
 /// did not converge or its Jacobian is singular.
@@ -21,24 +55,13 @@ bool forward_pose_implicit(const RobotParams<T>& robot_t, const PlatformLoad<T>&
                            const RobotParams<double>& robot, const PlatformLoad<double>& load,
                            const ForwardSolution& solution, const SolverOptions& options,
                            Pose2<T>* pose) {
-  if (!solution.summary.converged()) return false;
+  const internal::LinearisedForward linear(robot, load, solution, options);
+  if (!linear.ok) return false;
   const int n = robot.num_limbs;
-  internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load,
-                                    options);
-  problem.set_input(solution.q);
-  problem.set_rod_steps(solution.summary.rod_steps);
-  ShootingPoint<double> point;
-  point.pose = solution.pose;
-  for (int i = 0; i < n; ++i) {
-    point.q[i] = solution.q(i);
-    point.wrenches[i] = solution.wrenches[i];
-  }
-  const ShootingVector z = problem.pack(point);
-  ShootingVector r;
-  JacobianMatrix J;
-  problem.evaluate(z, r, &J);
-  const Eigen::PartialPivLU<JacobianMatrix> lu(J);
-  if (!(lu.rcond() > 1e-14)) return false;
+  const internal::ShootingProblem& problem = linear.problem;
+  const ShootingPoint<double>& point = linear.point;
+  const ShootingVector& z = linear.z;
+  const auto& lu = linear.lu;
   const JacobianMatrix inverse = lu.inverse();  // only its pose rows are used
   const auto pose_rows = inverse.middleRows(3 * n, 3);
 

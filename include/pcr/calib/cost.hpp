@@ -139,25 +139,12 @@ inline bool platform_pose_jacobian(const RobotParams<double>& robot,
                                    const PlatformLoad<double>& load,
                                    const ForwardSolution& solution, const SolverOptions& options,
                                    double* jacobian) {
-  if (!solution.summary.converged()) return false;
+  const internal::LinearisedForward linear(robot, load, solution, options);
+  if (!linear.ok) return false;
   const int n = robot.num_limbs;
   const int count = num_parameters(n);
-  internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load,
-                                    options);
-  problem.set_input(solution.q);
-  problem.set_rod_steps(solution.summary.rod_steps);
-  ShootingPoint<double> point;
-  point.pose = solution.pose;
-  for (int i = 0; i < n; ++i) {
-    point.q[i] = solution.q(i);
-    point.wrenches[i] = solution.wrenches[i];
-  }
-  const ShootingVector z = problem.pack(point);
-  ShootingVector r;
-  JacobianMatrix J;
-  problem.evaluate(z, r, &J);
-  const Eigen::PartialPivLU<JacobianMatrix> lu(J);
-  if (!(lu.rcond() > 1e-14)) return false;
+  const internal::ShootingProblem& problem = linear.problem;
+  const auto& lu = linear.lu;
   // Pose rows of J^-1, as the columns of Y with J^T Y = [e_3n, e_3n+1, e_3n+2].
   const int m = 3 * n + 3;
   Eigen::Matrix<double, Eigen::Dynamic, 3, 0, kMaxResiduals, 3> e =
