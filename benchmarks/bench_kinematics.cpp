@@ -76,49 +76,77 @@ void BM_ResidualAndJacobian(benchmark::State& state) {
 }
 BENCHMARK(BM_ResidualAndJacobian);
 
+/// Times each solve of a warm-start benchmark: the target is on the median solve, which the
+/// mean Google Benchmark reports is not (a rare slow solve moves the mean, not the median).
+class SolveTimer {
+ public:
+  template <class Solve>
+  void time(Solve&& solve) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const SolverSummary summary = solve();
+    times_us_.push_back(
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    iterations_ += summary.iterations;
+    evaluations_ += summary.residual_evaluations;
+    failures_ += summary.converged() ? 0 : 1;
+  }
+  void report(benchmark::State& state) {
+    const auto per_solve = [&](double total) {
+      return benchmark::Counter(total, benchmark::Counter::kAvgIterations);
+    };
+    state.counters["newton_iterations"] = per_solve(static_cast<double>(iterations_));
+    state.counters["residual_evaluations"] = per_solve(static_cast<double>(evaluations_));
+    state.counters["failures"] = static_cast<double>(failures_);
+    std::nth_element(times_us_.begin(), times_us_.begin() + times_us_.size() / 2, times_us_.end());
+    state.counters["median_solve_us"] = times_us_[times_us_.size() / 2];
+  }
+
+ private:
+  std::vector<double> times_us_;
+  long iterations_ = 0, evaluations_ = 0, failures_ = 0;
+};
+
 // FK from the solution of joints 10 um away (each joint), as in a control loop.
 void BM_ForwardWarm(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
   const std::vector<ForwardSolution> solutions = reachable_solutions(64);
   std::size_t k = 0;
-  long iterations = 0, evaluations = 0;
+  SolveTimer timer;
   for (auto _ : state) {
     const ForwardSolution& warm = solutions[k++ % solutions.size()];
     JointVector q = warm.q;
     q.array() += 10e-6;
-    const ForwardSolution fk = forward_kinematics(robot, q, warm);
-    iterations += fk.summary.iterations;
-    evaluations += fk.summary.residual_evaluations;
-    benchmark::DoNotOptimize(fk.pose.x);
+    timer.time([&] {
+      const ForwardSolution fk = forward_kinematics(robot, q, warm);
+      benchmark::DoNotOptimize(fk.pose.x);
+      return fk.summary;
+    });
   }
-  state.counters["newton_iterations"] =
-      benchmark::Counter(static_cast<double>(iterations), benchmark::Counter::kAvgIterations);
-  state.counters["residual_evaluations"] =
-      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kAvgIterations);
+  timer.report(state);
 }
 BENCHMARK(BM_ForwardWarm);
 
-// IK from the solution of the pose 10 um / 1 mrad away.
+// IK from the solution of the pose 10 um / 1 mrad away. The warm starts are IK solutions, as in a
+// control loop (each carries its IK Jacobian for the first, chord, step).
 void BM_InverseWarm(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
-  const std::vector<ForwardSolution> solutions = reachable_solutions(64);
   std::vector<InverseSolution> warm;
-  for (const ForwardSolution& fk : solutions) warm.push_back(as_inverse_warm_start(fk));
+  for (const ForwardSolution& fk : reachable_solutions(64)) {
+    warm.push_back(inverse_kinematics(robot, fk.pose, as_inverse_warm_start(fk)));
+  }
   std::size_t k = 0;
-  long iterations = 0, evaluations = 0;
+  SolveTimer timer;
   for (auto _ : state) {
     const InverseSolution& start = warm[k++ % warm.size()];
     const Pose2<double> target{start.pose.x + 7.07e-6, start.pose.y + 7.07e-6,
                                start.pose.theta + 1e-3};
-    const InverseSolution ik = inverse_kinematics(robot, target, start);
-    iterations += ik.summary.iterations;
-    evaluations += ik.summary.residual_evaluations;
-    benchmark::DoNotOptimize(ik.q(0));
+    timer.time([&] {
+      const InverseSolution ik = inverse_kinematics(robot, target, start);
+      benchmark::DoNotOptimize(ik.q(0));
+      return ik.summary;
+    });
   }
-  state.counters["newton_iterations"] =
-      benchmark::Counter(static_cast<double>(iterations), benchmark::Counter::kAvgIterations);
-  state.counters["residual_evaluations"] =
-      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kAvgIterations);
+  timer.report(state);
 }
 BENCHMARK(BM_InverseWarm);
 
@@ -143,14 +171,20 @@ void BM_InverseCold(benchmark::State& state) {
 }
 BENCHMARK(BM_InverseCold);
 
-// Outcome of cold FK over 1000 random configurations of the whole stroke box.
+// Outcome of cold FK over 1000 random configurations of the whole stroke box. A failure is
+// accounted for when the path stopped at a singularity (the Jacobian's conditioning extrapolates
+// to zero ahead) or when its last solved point already bends a rod beyond the 1% strain limit of
+// fused silica; `unexplained_failures` counts the rest (target: 0).
 void BM_ColdSurvey(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
-  double direct = 0, continued = 0, singular = 0, over_strain = 0, failed = 0;
+  constexpr double kStrainLimit = 0.01;
+  double direct = 0, continued = 0, over_strain = 0, singular = 0, singular_over_strain = 0,
+         failed_over_strain = 0, unexplained = 0;
   std::vector<double> solve_us;  // wall time of each solve (the median is what the target is on)
   for (auto _ : state) {
     std::mt19937 rng(2021);
-    direct = continued = singular = over_strain = failed = 0;
+    direct = continued = over_strain = singular = singular_over_strain = failed_over_strain =
+        unexplained = 0;
     solve_us.clear();
     for (int k = 0; k < 1000; ++k) {
       const JointVector q = random_joints(rng, robot);
@@ -158,13 +192,15 @@ void BM_ColdSurvey(benchmark::State& state) {
       const ForwardSolution fk = forward_kinematics(robot, q);
       solve_us.push_back(
           std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+      const bool beyond_strain_limit = fk.summary.max_strain > kStrainLimit;
       if (fk.summary.converged()) {
         (fk.summary.continuation_steps == 0 ? direct : continued) += 1;
-        if (fk.summary.max_strain > 0.01) over_strain += 1;
+        over_strain += beyond_strain_limit;
       } else if (fk.summary.status == SolveStatus::kSingular) {
         singular += 1;
+        singular_over_strain += beyond_strain_limit;
       } else {
-        failed += 1;
+        (beyond_strain_limit ? failed_over_strain : unexplained) += 1;
       }
     }
   }
@@ -172,7 +208,9 @@ void BM_ColdSurvey(benchmark::State& state) {
   state.counters["continuation"] = continued;
   state.counters["converged_over_1pct_strain"] = over_strain;
   state.counters["singular"] = singular;
-  state.counters["other_failures"] = failed;
+  state.counters["singular_past_1pct_strain"] = singular_over_strain;
+  state.counters["failed_past_1pct_strain"] = failed_over_strain;
+  state.counters["unexplained_failures"] = unexplained;
   std::nth_element(solve_us.begin(), solve_us.begin() + 500, solve_us.end());
   state.counters["median_solve_us"] = solve_us[500];
 }

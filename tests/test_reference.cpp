@@ -295,6 +295,25 @@ TEST(ReferenceFk, AgreesWithFineRk4UnderPlatformLoad) {
   EXPECT_GT(pose_error(unloaded.pose, ref.pose).position, 1e-6);
 }
 
+TEST(ReferenceFk, ColdSolveFindsStronglyBentSolutionsNearAFold) {
+  // Cold FK to these joints ends, after a continuation from home at the coarse step count of the
+  // straight rods, at a 1.35% bending strain whose step count (192) is too far from the coarse
+  // one for a single Newton solve: the solver ramps the count up rung by rung. The answer is the
+  // one CVODE gives, to the default accuracy.
+  const pcr::RobotParams<double> robot = pcr::femto_3pf();
+  pcr::JointVector q(3);
+  q << -0.0034541402081974151, -0.010240264538673199, 0.0070414799077143488;
+  const pcr::ForwardSolution rk4 = pcr::forward_kinematics(robot, q);
+  ASSERT_TRUE(rk4.summary.converged()) << pcr::to_string(rk4.summary.status);
+  EXPECT_GT(rk4.summary.max_strain, kStrainLimit);
+  EXPECT_GT(rk4.summary.continuation_steps, 0);
+  const pcr::ForwardSolution ref = pcr::forward_kinematics_reference(robot, q, rk4);
+  ASSERT_TRUE(ref.summary.converged());
+  const PoseError e = pose_error(rk4.pose, ref.pose);
+  EXPECT_LE(e.position, 1e-9);
+  EXPECT_LE(e.angle, 1e-6);
+}
+
 TEST(ReferenceFk, RejectsWrongSizes) {
   const pcr::RobotParams<double> robot = pcr::femto_3pf();
   const pcr::ForwardSolution home = pcr::home_solution(robot);

@@ -62,6 +62,9 @@ struct SolverOptions {
   bool continuation = true;
   /// Sub-solves a continuation may use in total.
   int max_continuation_steps = 64;
+  /// Newton iterations per sub-solve of a continuation. From its predictor a sub-solve converges
+  /// in a few iterations or crawls along its line search: a shorter step is cheaper than more.
+  int max_continuation_iterations = 8;
   /// Smallest continuation increment, as a fraction of the whole path.
   double min_continuation_step = 1.0 / 1024.0;
 };
@@ -133,11 +136,23 @@ class ShootingProblem {
     // Round up on a ladder of x1.5 / x1.33 steps, so that FK and IK of one configuration, solved
     // along different paths, settle on the same discrete model.
     int ladder = options_.min_rod_steps;
-    while (ladder < steps && ladder < options_.max_rod_steps) {
-      ladder = ladder % 3 == 0 ? ladder / 3 * 4 : ladder / 2 * 3;
-    }
+    while (ladder < steps && ladder < options_.max_rod_steps) ladder = next_rung(ladder);
     return std::min(ladder, options_.max_rod_steps);
   }
+
+  /// The step count after `steps` on the ladder towards `target` (which is on the ladder).
+  int rung_towards(int steps, int target) const {
+    if (options_.rod_steps > 0 || steps == target) return target;
+    int ladder = options_.min_rod_steps, below = ladder;
+    while (ladder < std::max(steps, target) && ladder < options_.max_rod_steps) {
+      if (ladder < steps) below = ladder;
+      ladder = next_rung(ladder);
+      if (target > steps && ladder > steps) return std::min(ladder, target);
+    }
+    return std::max(below, target);
+  }
+
+  static int next_rung(int steps) { return steps % 3 == 0 ? steps / 3 * 4 : steps / 2 * 3; }
 
   int size() const { return kind_ == Kind::kForward ? 3 * n_ + 3 : 4 * n_ + (n_ == 2 ? 1 : 0); }
   int num_inputs() const { return kind_ == Kind::kForward ? n_ : 3; }
@@ -460,6 +475,7 @@ inline double jacobian_rcond(const ShootingProblem& problem, const ShootingVecto
 /// Jacobian's conditioning along the solved part of the path tells a singularity ahead (no
 /// solution on this branch: rcond^2, linear in t near a fold, extrapolates to zero before the
 /// end of the path) from a plain failure to converge.
+
 inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const ShootingVector& u0,
                                              const ShootingVector& u1, ShootingVector& z,
                                              const SolverOptions& options,
@@ -472,6 +488,8 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   summary.max_strain = direct.max_strain;
   if (direct.status == SolveStatus::kConverged || !options.continuation) return direct.status;
 
+  SolverOptions sub_options = options;
+  sub_options.max_iterations = options.max_continuation_iterations;
   ShootingVector z_last = z0, z_prev = z0;
   double t = 0.0, t_prev = 0.0, dt = 0.5;
   // (t, rcond) at the last two solved points of the path.
@@ -496,7 +514,7 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
     // Secant predictor from the last two solutions on the path.
     z = z_last;
     if (t > t_prev) z += (z_last - z_prev) * ((t_next - t) / (t - t_prev));
-    NewtonResult sub = newton_solve(problem, z, options, summary, chord);
+    NewtonResult sub = newton_solve(problem, z, sub_options, summary, chord);
     if (sub.status == SolveStatus::kConverged) {
       z_prev = z_last;
       t_prev = t;
@@ -508,7 +526,7 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
       if (t < 1.0) {
         rc_prev = rc_last;
         t_rc_prev = t_rc_last;
-        rc_last = jacobian_rcond(problem, z, summary);
+        rc_last = jacobian_rcond(problem, z_last, summary);
         t_rc_last = t;
       }
       continue;
@@ -532,9 +550,22 @@ inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
                                     SolveStatus status, JacobianMatrix* chord) {
   for (int pass = 0; pass < 2 && status == SolveStatus::kConverged; ++pass) {
     const int needed = problem.required_rod_steps(summary.max_strain);
-    if (needed == problem.rod_steps()) break;
+    const int start = problem.rod_steps();
+    if (needed == start) break;
+    const ShootingVector z_start = z;
     problem.set_rod_steps(needed);
-    const NewtonResult refined = newton_solve(problem, z, options, summary, chord);
+    NewtonResult refined = newton_solve(problem, z, options, summary, chord);
+    if (refined.status != SolveStatus::kConverged) {
+      // Near a fold the models of two step counts can be too far apart for Newton: ramp the
+      // count up (or down) the ladder one rung at a time instead.
+      z = z_start;
+      for (int steps = start; steps != needed;) {
+        steps = problem.rung_towards(steps, needed);
+        problem.set_rod_steps(steps);
+        refined = newton_solve(problem, z, options, summary, chord);
+        if (refined.status != SolveStatus::kConverged) break;
+      }
+    }
     status = refined.status;
     summary.final_residual_norm = refined.final_norm;
     summary.max_strain = refined.max_strain;
@@ -752,7 +783,9 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
   return solution;
 }
 
-/// Inverse kinematics warm-started from a forward solution (same unknowns, other inputs).
+/// Inverse kinematics warm-started from a forward solution (same unknowns, other inputs). The FK
+/// Jacobian is left behind: its pose columns are not the IK's joint columns, so the first IK solve
+/// evaluates its own.
 inline InverseSolution as_inverse_warm_start(const ForwardSolution& fk) {
   InverseSolution warm;
   warm.pose = fk.pose;

@@ -89,6 +89,7 @@ class SolverOptions:
     max_line_search: int
     continuation: bool
     max_continuation_steps: int
+    max_continuation_iterations: int
     min_continuation_step: float
     def __init__(self) -> None: ...
     def replace(self, **changes: Any) -> SolverOptions: ...

@@ -269,6 +269,8 @@ void wrap_kinematics(py::module_& m) {
       .def_readwrite("max_line_search", &SolverOptions::max_line_search)
       .def_readwrite("continuation", &SolverOptions::continuation)
       .def_readwrite("max_continuation_steps", &SolverOptions::max_continuation_steps)
+      .def_readwrite("max_continuation_iterations", &SolverOptions::max_continuation_iterations,
+                     "Newton iterations per sub-solve of a continuation")
       .def_readwrite("min_continuation_step", &SolverOptions::min_continuation_step);
 
   py::class_<Solution>(m, "Solution",
