@@ -2,7 +2,8 @@
 # One entry point for a fresh Debian 12 machine (root, or a user with sudo):
 #
 #   bash scripts/run.sh demo    install what is missing, build, run the main job
-#   bash scripts/run.sh test    install what is missing, build, run every test (ctest), then the
+#   bash scripts/run.sh test    install what is missing, build, pip install ./python into .venv,
+#                               run every test (ctest; pytest on the installed package), then the
 #                               C++ tests again under AddressSanitizer + UndefinedBehaviorSanitizer
 #   bash scripts/run.sh setup   only install what is missing (system packages + .venv)
 #   bash scripts/run.sh build   setup, then configure and build build/ (Release)
@@ -94,16 +95,30 @@ configure() {
   cmake -S "$ROOT" -B "$dir" "${generator[@]}" "$@"
 }
 
+# build_main [--pytest-installed] [cmake --build args]: configure and build build/ (Release), with
+# the pybind11 module against .venv. --pytest-installed: ctest's pytest runs on the package
+# installed in .venv (install_python_package) instead of the build tree's.
 build_main() {
-  local python_args=()
-  # The pybind11 module (issue 5) is built, against .venv, as soon as python/ has a CMakeLists.
-  if [[ -f $ROOT/python/CMakeLists.txt && -x $VENV/bin/python ]]; then
-    python_args=(-DPCR_BUILD_PYTHON=ON "-DPython_EXECUTABLE=$VENV/bin/python"
-      "-Dpybind11_DIR=$("$VENV/bin/python" -m pybind11 --cmakedir)")
+  local pytest_installed=OFF
+  if [[ ${1:-} == --pytest-installed ]]; then
+    pytest_installed=ON
+    shift
   fi
+  local python_args=(-DPCR_BUILD_PYTHON=ON "-DPython_EXECUTABLE=$VENV/bin/python"
+    "-Dpybind11_DIR=$("$VENV/bin/python" -m pybind11 --cmakedir)"
+    "-DPCR_PYTEST_INSTALLED=$pytest_installed")
   log "Building build/ (Release, $JOBS jobs)"
   configure build -DCMAKE_BUILD_TYPE=Release "${python_args[@]}"
   cmake --build build -j "$JOBS" "$@"
+}
+
+# `pip install ./python` into .venv, as the README tells users, with the build tools .venv
+# already has (no download) and a kept build directory (build/pip) so that a re-run only
+# recompiles what changed.
+install_python_package() {
+  log "pip install ./python into $VENV"
+  CMAKE_BUILD_PARALLEL_LEVEL=$JOBS "$VENV/bin/python" -m pip install --disable-pip-version-check \
+    --quiet --no-build-isolation --no-deps -C "build-dir=$ROOT/build/pip" "$ROOT/python"
 }
 
 # ---- commands --------------------------------------------------------------------------------
@@ -130,7 +145,8 @@ run_tests() {
   local start=$SECONDS failed=()
   install_system_packages
   setup_venv
-  build_main
+  build_main --pytest-installed
+  install_python_package
   log "ctest in build/"
   ctest --test-dir build --output-on-failure -j "$JOBS" --timeout 900 || failed+=("ctest build/")
   local main_done=$SECONDS

@@ -89,10 +89,7 @@ void register_render_command(CLI::App& app) {
       if (!(args->square > 0)) throw InputError("--square: must be > 0, got " + std::to_string(args->square));
       board.square_m = args->square;
       const std::vector<double> c = parse_list(args->board_pose, 3, "--board-pose");
-      // Corner (0, 0) from the board's centre pose.
-      board.pose = Pose2<double>{c[0], c[1], c[2]} *
-                   Pose2<double>{-0.5 * (board.cols - 1) * board.square_m, -0.5 * (board.rows - 1) * board.square_m, 0.0};
-      scene.chessboard = board;
+      scene.chessboard = RenderChessboard::centred(board.cols, board.rows, board.square_m, {c[0], c[1], c[2]});
     }
     const GrayImage image = render_scene(scene, args->render);
     write_png(image, args->output, args->bits);

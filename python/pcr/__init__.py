@@ -68,15 +68,20 @@ if has_vision:
     # Measurement from camera images (pcr::vision).
     from ._pcr import (  # noqa: F401
         Camera,
+        CameraCalibration,
         MountLayout,
         RobotMeasurement,
+        SweepResult,
+        calibrate_camera,
         default_mounts,
         load_camera,
         load_mounts,
         measure_robot,
+        measure_sweep,
         measured_description,
         mount_tags,
         read_image,
+        render_chessboard,
         render_robot,
         write_png,
     )

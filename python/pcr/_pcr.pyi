@@ -350,3 +350,30 @@ def measure_robot(image: ArrayLike, mounts: MountLayout, camera: Camera, design:
                   family: str = "tag36h11", min_margin: float = 30.0,
                   max_hamming: int = 0) -> RobotMeasurement: ...
 def measured_description(design: Robot, measurement: RobotMeasurement) -> Robot: ...
+
+class SweepResult:
+    gamma: float  # rad
+    gamma_halfwidth: float  # rad
+    direction_plane: float  # rad
+    direction_sigma: float  # rad
+    @property
+    def centres(self) -> npt.NDArray[np.float64]: ...  # (N, 2), m
+    line_rms: float  # m
+
+def measure_sweep(images: Sequence[ArrayLike], limb: int, mounts: MountLayout, camera: Camera,
+                  home: RobotMeasurement, *, sources: Optional[Sequence[str]] = None,
+                  coverage_factor: float = 3.0) -> SweepResult: ...
+def render_chessboard(*, camera: Optional[Camera] = None, cols: int = 9, rows: int = 6,
+                      square: float = 0.005, board_pose: Union[Pose, ArrayLike] = ...,
+                      height: float = 0.5, tilt_x: float = 0.0, tilt_y: float = 0.0,
+                      supersampling: int = 4, blur: float = 0.0, noise: float = 0.0,
+                      gradient: float = 0.0, seed: int = 1) -> npt.NDArray[np.float32]: ...
+
+class CameraCalibration:
+    camera: Camera
+    rms_px: float
+    used: list[str]
+    rejected: list[str]
+
+def calibrate_camera(images: Sequence[str], *, cols: int = 9, rows: int = 6,
+                     square: float = 0.005) -> CameraCalibration: ...

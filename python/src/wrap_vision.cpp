@@ -1,6 +1,7 @@
 // Measurement (pcr::vision): camera models, mount layouts, images as float32 (H, W) NumPy arrays
 // in [0, 1], synthetic renders of a robot's mount tags, and the measurement of A, alpha, B, beta
-// from one image (-> a measured pcr.Robot).
+// from one image, actuator directions from sweeps, and chessboard camera calibration (-> a
+// measured pcr.Robot).
 #include <cmath>
 #include <optional>
 
@@ -66,6 +67,37 @@ CameraModel default_render_camera() {
   c.width = c.height = 4000;
   c.K << 8000, 0, 1999.5, 0, 8000, 1999.5, 0, 0, 1;
   return c;
+}
+
+Scene camera_scene(const std::optional<CameraModel>& camera, double height, double tilt_x,
+                   double tilt_y) {
+  if (!(height > 0)) {
+    throw std::invalid_argument("height: expected > 0 m, got " + std::to_string(height));
+  }
+  Scene scene;
+  scene.camera = camera ? *camera : default_render_camera();
+  scene.plane = PlanePose::looking_down(height, tilt_x, tilt_y);
+  return scene;
+}
+
+py::array_t<float> render(const Scene& scene, int supersampling, double blur, double noise,
+                          double gradient, unsigned seed) {
+  if (supersampling < 1) {
+    throw std::invalid_argument("supersampling: expected >= 1, got " +
+                                std::to_string(supersampling));
+  }
+  RenderOptions o;
+  o.supersampling = supersampling;
+  o.blur_sigma_px = blur;
+  o.noise_sigma = noise;
+  o.gradient = gradient;
+  o.seed = seed;
+  GrayImage image;
+  {
+    py::gil_scoped_release release;
+    image = render_scene(scene, o);
+  }
+  return to_array(image);
 }
 
 }  // namespace
@@ -190,31 +222,11 @@ void wrap_vision(py::module_& m) {
             throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
                                         " values (m), got " + std::to_string(q->size()));
           }
-          if (supersampling < 1) {
-            throw std::invalid_argument("supersampling: expected >= 1, got " +
-                                        std::to_string(supersampling));
-          }
-          if (!(height > 0)) {
-            throw std::invalid_argument("height: expected > 0 m, got " + std::to_string(height));
-          }
-          Scene scene;
-          scene.camera = camera ? *camera : default_render_camera();
-          scene.plane = PlanePose::looking_down(height, tilt_x, tilt_y);
+          Scene scene = camera_scene(camera, height, tilt_x, tilt_y);
           scene.tags = mount_tags(layout, robot.params, to_pose(platform, "platform"),
                                   q.value_or(std::vector<double>{}),
                                   rods ? &scene.segments : nullptr);
-          RenderOptions o;
-          o.supersampling = supersampling;
-          o.blur_sigma_px = blur;
-          o.noise_sigma = noise;
-          o.gradient = gradient;
-          o.seed = seed;
-          GrayImage image;
-          {
-            py::gil_scoped_release release;
-            image = render_scene(scene, o);
-          }
-          return to_array(image);
+          return render(scene, supersampling, blur, noise, gradient, seed);
         },
         py::arg("robot"), py::arg("mounts"), py::kw_only(), py::arg("camera") = py::none(),
         py::arg("height") = 0.5, py::arg("tilt_x") = 0.0, py::arg("tilt_y") = 0.0,
@@ -226,6 +238,29 @@ void wrap_vision(py::module_& m) {
         "tilted by tilt_x, tilt_y (rad); proximal tags at A_i + q_i, distal tags on the platform "
         "at `platform` (^W T_P). blur (px), noise (fraction of full scale), gradient "
         "(illumination change). Releases the GIL.");
+
+  m.def("render_chessboard",
+        [](const std::optional<CameraModel>& camera, int cols, int rows, double square,
+           const py::object& board_pose, double height, double tilt_x, double tilt_y,
+           int supersampling, double blur, double noise, double gradient, unsigned seed) {
+          if (cols < 2 || rows < 2 || !(square > 0)) {
+            throw std::invalid_argument("chessboard: expected at least 2 x 2 inner corners and "
+                                        "square > 0 m, got " + std::to_string(cols) + " x " +
+                                        std::to_string(rows) + ", " + std::to_string(square));
+          }
+          Scene scene = camera_scene(camera, height, tilt_x, tilt_y);
+          scene.chessboard =
+              RenderChessboard::centred(cols, rows, square, to_pose(board_pose, "board_pose"));
+          return render(scene, supersampling, blur, noise, gradient, seed);
+        },
+        py::kw_only(), py::arg("camera") = py::none(), py::arg("cols") = 9, py::arg("rows") = 6,
+        py::arg("square") = 0.005, py::arg("board_pose") = Eigen::Vector3d(0, 0, 0),
+        py::arg("height") = 0.5, py::arg("tilt_x") = 0.0, py::arg("tilt_y") = 0.0,
+        py::arg("supersampling") = 4, py::arg("blur") = 0.0, py::arg("noise") = 0.0,
+        py::arg("gradient") = 0.0, py::arg("seed") = 1u,
+        "A synthetic image of a chessboard (cols x rows inner corners, `square` m) lying in the "
+        "work plane with its centre at board_pose (x, y, theta), as `pcr render --chessboard`; "
+        "the camera and the options as render_robot. For calibrate_camera.");
 
   py::class_<RobotMeasurement>(m, "RobotMeasurement",
                                "A, alpha, B, beta of each limb measured from one image, in the "
@@ -276,6 +311,71 @@ void wrap_vision(py::module_& m) {
         "plane, and registers the clamps onto `design` -> RobotMeasurement. `source` names the "
         "image in error messages (ValueError for a missing marker, a size mismatch). Releases "
         "the GIL.");
+  py::class_<SweepResult>(m, "SweepResult",
+                          "One actuator's direction from its proximal tag over a sweep of images.")
+      .def_readonly("gamma", &SweepResult::gamma, "actuator misalignment: line angle - alpha (rad)")
+      .def_readonly("gamma_halfwidth", &SweepResult::gamma_halfwidth, "rad")
+      .def_readonly("direction_plane", &SweepResult::direction_plane,
+                    "angle of the fitted line in the plane frame (rad)")
+      .def_readonly("direction_sigma", &SweepResult::direction_sigma, "rad")
+      .def_property_readonly("centres", [](const SweepResult& r) {
+        Eigen::MatrixX2d out(r.centres.size(), 2);
+        for (std::size_t k = 0; k < r.centres.size(); ++k) out.row(k) = r.centres[k].transpose();
+        return out;
+      }, "(N, 2) tag centres in the plane frame (m), one per image")
+      .def_readonly("line_rms", &SweepResult::line_rms, "rms distance of the centres to the line (m)");
+
+  m.def("measure_sweep",
+        [](const std::vector<py::object>& images, int limb, const MountLayout& layout,
+           const CameraModel& camera, RobotMeasurement& home,
+           const std::optional<std::vector<std::string>>& sources, double coverage_factor) {
+          if (sources && sources->size() != images.size()) {
+            throw std::invalid_argument("sources: expected " + std::to_string(images.size()) +
+                                        " names (one per image), got " +
+                                        std::to_string(sources->size()));
+          }
+          std::vector<GrayImage> grays;
+          std::vector<std::string> names;
+          for (std::size_t k = 0; k < images.size(); ++k) {
+            names.push_back(sources ? (*sources)[k] : "<sweep image " + std::to_string(k) + ">");
+            grays.push_back(from_array(images[k], names.back()));
+            check_image_size(camera, grays.back().width, grays.back().height, "camera",
+                             names.back());
+          }
+          MeasureOptions o;
+          o.coverage_factor = coverage_factor;
+          py::gil_scoped_release release;
+          return measure_sweep(grays, names, limb, layout, camera, home, o);
+        },
+        py::arg("images"), py::arg("limb"), py::arg("mounts"), py::arg("camera"),
+        py::arg("home"), py::kw_only(), py::arg("sources") = py::none(),
+        py::arg("coverage_factor") = 3.0,
+        "Actuator direction of `limb` from `images` (in stroke order) of its proximal tag as the "
+        "actuator moves, the work plane held where `home` (a RobotMeasurement) found it: a total "
+        "least-squares line through the tag centres -> SweepResult. Also stores gamma and its "
+        "half-width in home.limbs[limb], which measured_description() then uses. Releases the "
+        "GIL.");
+
+  py::class_<CalibrationResult>(m, "CameraCalibration", "cv::calibrateCamera over chessboards.")
+      .def_readonly("camera", &CalibrationResult::camera)
+      .def_readonly("rms_px", &CalibrationResult::rms_px, "reprojection error (px)")
+      .def_readonly("used", &CalibrationResult::used, "images whose board was found")
+      .def_readonly("rejected", &CalibrationResult::rejected, "images without a board");
+  m.def("calibrate_camera",
+        [](const std::vector<std::string>& paths, int cols, int rows, double square) {
+          ChessboardSpec board;
+          board.cols = cols;
+          board.rows = rows;
+          board.square_m = square;
+          py::gil_scoped_release release;
+          return calibrate_camera(paths, board);
+        },
+        py::arg("images"), py::kw_only(), py::arg("cols") = 9, py::arg("rows") = 6,
+        py::arg("square") = 0.005,
+        "Camera intrinsics and distortion from image files of a chessboard with cols x rows "
+        "inner corners and `square` (m) squares, as `pcr camera` -> CameraCalibration (at least "
+        "3 images with a board; ValueError naming the files otherwise). Releases the GIL.");
+
   m.def("measured_description", &measured_description, py::arg("design"), py::arg("measurement"),
         "`design` with the measured A, alpha, B, beta (gamma when swept) and an uncertainty "
         "section with the measured half-widths -> Robot.");

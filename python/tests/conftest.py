@@ -13,6 +13,11 @@ import pcr  # noqa: E402
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 
+def pytest_report_header(config):
+    return f"pcr {pcr.__version__} from {os.path.dirname(pcr.__file__)}"
+
+
+
 def _find_cli():
     path = os.environ.get("PCR_CLI")
     if path:

@@ -10,6 +10,15 @@ import pytest
 import pcr
 
 
+def test_package_is_the_expected_one():
+    # PCR_EXPECT_INSTALLED=1 (ctest with PCR_PYTEST_INSTALLED, as `scripts/run.sh test` runs it):
+    # the package `pip install ./python` put into site-packages, not the build tree's copy.
+    where = os.path.realpath(pcr.__file__)
+    if os.environ.get("PCR_EXPECT_INSTALLED") == "1":
+        assert "site-packages" in where.split(os.sep), where
+    assert os.path.isfile(pcr._pcr.__file__)
+
+
 def test_default_robot_matches_readme(robot):
     # README "The default robot": A_i on a circle of 60 mm cos 20 deg, l = 30 mm, d = 125 um.
     assert robot.name == "femto-3pf"

@@ -121,3 +121,64 @@ def test_measure_rendered_robot_against_truth(robot):
 
 def wrap(a):
     return np.arctan2(np.sin(a), np.cos(a))
+
+
+def test_actuator_sweep_measures_gamma(robot):
+    # The truth's actuator 0 moves its clamp 12 mrad off the rod's direction: the sweep of its
+    # proximal tag over a 1 mm stroke must find that angle within the half-width it reports.
+    design = robot
+    truth = design.with_limb(0, gamma=0.012)
+    layout = pcr.default_mounts().without_uncertainty()
+    cam = small_camera()
+    render = dict(camera=cam, height=0.5, tilt_x=0.01, supersampling=2, blur=0.7, noise=0.01)
+    home = pcr.measure_robot(pcr.render_robot(truth, layout, seed=1, **render), layout, cam,
+                             design, source="home.png")
+    strokes = np.linspace(-0.5e-3, 0.5e-3, 6)
+    images = [pcr.render_robot(truth, layout, q=[q, 0.0, 0.0], seed=2 + k, **render)
+              for k, q in enumerate(strokes)]
+    sweep = pcr.measure_sweep(images, 0, layout, cam, home)
+    assert sweep.centres.shape == (6, 2)
+    # The tag centre moved by the stroke along the line (the plane's scale is the camera's).
+    travel = np.linalg.norm(sweep.centres[-1] - sweep.centres[0])
+    assert abs(travel - 1e-3) < 5e-6
+    assert 0 < sweep.gamma_halfwidth < 5e-3
+    assert abs(sweep.gamma - 0.012) <= sweep.gamma_halfwidth
+    assert home.limbs[0]["gamma"] == sweep.gamma
+    assert pcr.measured_description(design, home).limbs[0].gamma == sweep.gamma
+
+    with pytest.raises(ValueError, match="at least 3 images"):
+        pcr.measure_sweep(images[:2], 0, layout, cam, home)
+    with pytest.raises(ValueError, match="sources"):
+        pcr.measure_sweep(images, 0, layout, cam, home, sources=["a.png"])
+    with pytest.raises(ValueError, match="blank step"):
+        pcr.measure_sweep(images[:3] + [np.full((1700, 1700), 0.5, np.float32)], 0, layout, cam,
+                          home, sources=["s0", "s1", "s2", "blank step"])
+
+
+def test_camera_from_rendered_chessboards(tmp_path):
+    # The camera that rendered the boards, recovered by calibrate_camera (as `pcr camera`).
+    K = np.array([[900.0, 0, 402], [0, 905.0, 297], [0, 0, 1]])
+    truth = pcr.Camera(800, 600, K, [-0.2, 0.1, 0, 0, 0])
+    views = [(0.0, 0.0, 0.0), (0.3, 0.0, 0.05), (-0.3, 0.1, 0.1), (0.1, 0.35, 0.15),
+             (0.0, -0.35, 0.2), (0.25, 0.25, 0.25)]
+    paths = []
+    for k, (tilt_x, tilt_y, angle) in enumerate(views):
+        image = pcr.render_chessboard(camera=truth, cols=9, rows=6, square=0.008,
+                                      board_pose=(0, 0, angle), height=0.12, tilt_x=tilt_x,
+                                      tilt_y=tilt_y, supersampling=3, blur=0.7)
+        paths.append(str(tmp_path / f"board{k}.png"))
+        pcr.write_png(paths[-1], image)
+    noise = str(tmp_path / "noise.png")  # an image without a board: rejected, named
+    pcr.write_png(noise, np.random.default_rng(5).uniform(0.2, 0.8, (600, 800)))
+    result = pcr.calibrate_camera(paths + [noise], cols=9, rows=6, square=0.008)
+    assert result.used == paths and result.rejected == [noise]
+    assert result.rms_px < 0.5
+    cam = result.camera
+    assert (cam.width, cam.height) == (800, 600)
+    np.testing.assert_allclose(np.diag(cam.K)[:2], [900, 905], atol=9)
+    np.testing.assert_allclose(cam.K[:2, 2], [402, 297], atol=8)
+    assert abs(cam.distortion[0] + 0.2) < 0.05
+    with pytest.raises(ValueError, match="at least 3"):
+        pcr.calibrate_camera(paths[:2] + [noise], cols=9, rows=6, square=0.008)
+    with pytest.raises(ValueError, match="missing.png"):
+        pcr.calibrate_camera(paths + [str(tmp_path / "missing.png")], square=0.008)

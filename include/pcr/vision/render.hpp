@@ -48,6 +48,12 @@ struct RenderChessboard {
   int rows{6};
   double square_m{0.005};
   Pose2<double> pose;
+
+  /// The board whose centre is at `centre` (the pose `pcr render --board-pose` takes).
+  static RenderChessboard centred(int cols, int rows, double square_m, const Pose2<double>& centre) {
+    return {cols, rows, square_m,
+            centre * Pose2<double>{-0.5 * (cols - 1) * square_m, -0.5 * (rows - 1) * square_m, 0.0}};
+  }
 };
 
 struct Scene {
