@@ -12,6 +12,8 @@
 
 #include "pcr/calib/accuracy.hpp"
 
+#include "scratch_directory.hpp"
+
 namespace pcr {
 namespace {
 
@@ -19,8 +21,10 @@ double distance(const Pose2<double>& a, const Pose2<double>& b) {
   return std::hypot(a.x - b.x, a.y - b.y);
 }
 
-std::string write_temp(const std::string& name, const std::string& text) {
-  const std::string path = "/tmp/accuracy_test_" + name;
+/// Writes `text` to `name` in the test's scratch directory; returns the path.
+std::string write_file(const test::ScratchDirectory& scratch, const std::string& name,
+                       const std::string& text) {
+  const std::string path = scratch.file(name);
   std::ofstream(path) << text;
   return path;
 }
@@ -83,12 +87,15 @@ TEST(Trajectory, CircleHasTheRequestedDiameterAndClosure) {
 }
 
 TEST(Trajectory, PathFromCsv) {
-  const std::string path = write_temp("path.csv", "x,y,theta\n0,0,0\n# comment\n1e-3,2e-3,0.01\n");
+  const test::ScratchDirectory scratch("accuracy");
+  const std::string path =
+      write_file(scratch, "path.csv", "x,y,theta\n0,0,0\n# comment\n1e-3,2e-3,0.01\n");
   const std::vector<Pose2<double>> poses = load_path_csv(path);
   ASSERT_EQ(poses.size(), 2u);
   EXPECT_EQ(poses[1].y, 2e-3);
   EXPECT_EQ(poses[1].theta, 0.01);
-  const std::string bad = write_temp("bad_path.csv", "x,y,theta\n0,0,0\n1e-3,oops,0\n");
+  const std::string bad =
+      write_file(scratch, "bad_path.csv", "x,y,theta\n0,0,0\n1e-3,oops,0\n");
   try {
     load_path_csv(bad);
     FAIL() << "expected InputError";
@@ -96,8 +103,6 @@ TEST(Trajectory, PathFromCsv) {
     EXPECT_NE(std::string(e.what()).find("bad_path.csv"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("3"), std::string::npos) << e.what();
   }
-  std::remove(path.c_str());
-  std::remove(bad.c_str());
 }
 
 TEST(Iso9283, FormulasMatchAHandComputedExample) {
@@ -152,18 +157,19 @@ TEST(Iso9283, RejectsInconsistentInput) {
 }
 
 TEST(Iso9283, MeasuredCsvRoundTripAndErrors) {
+  const test::ScratchDirectory scratch("accuracy");
   const std::vector<Pose2<double>> commanded = {{0, 0, 0}, {1e-3, -1e-3, 0.01}};
   const std::vector<std::vector<Pose2<double>>> attained = {
       {{1e-8, 0, 0}, {0, 2e-8, 1e-6}}, {{1e-3, -1e-3, 0.01}, {1.1e-3, -1e-3, 0.0101}}};
-  const std::string path = write_temp("measured.csv", measured_to_csv(commanded, attained));
+  const std::string path =
+      write_file(scratch, "measured.csv", measured_to_csv(commanded, attained));
   const MeasuredPath m = load_measured_csv(path);
   ASSERT_EQ(m.commanded.size(), 2u);
   ASSERT_EQ(m.attained[1].size(), 2u);
   EXPECT_EQ(m.commanded[1].theta, 0.01);
   EXPECT_EQ(m.attained[1][1].x, 1.1e-3);
-  std::remove(path.c_str());
 
-  const std::string gap = write_temp("gap.csv",
+  const std::string gap = write_file(scratch, "gap.csv",
                                      "pose,x_c,y_c,theta_c,x,y,theta\n0,0,0,0,0,0,0\n2,0,0,0,0,0,0\n");
   try {
     load_measured_csv(gap);
@@ -171,16 +177,14 @@ TEST(Iso9283, MeasuredCsvRoundTripAndErrors) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("pose index 1"), std::string::npos) << e.what();
   }
-  const std::string clash = write_temp(
-      "clash.csv", "pose,x_c,y_c,theta_c,x,y,theta\n0,0,0,0,0,0,0\n0,1e-3,0,0,0,0,0\n");
+  const std::string clash = write_file(
+      scratch, "clash.csv", "pose,x_c,y_c,theta_c,x,y,theta\n0,0,0,0,0,0,0\n0,1e-3,0,0,0,0,0\n");
   try {
     load_measured_csv(clash);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("clash.csv:3"), std::string::npos) << e.what();
   }
-  std::remove(gap.c_str());
-  std::remove(clash.c_str());
 }
 
 TEST(CommandPath, PoseOutsideTheWorkspaceIsNamed) {
@@ -320,10 +324,11 @@ TEST(Accuracy, RepeatabilityMatchesTheCameraNoise) {
 
 
 #ifdef PCR_CLI_PATH
-/// Runs `pcr <arguments>`, stdout to `out`; returns the exit status.
-int run_cli(const std::string& arguments, const std::string& out) {
-  const std::string command = std::string(PCR_CLI_PATH) + " " + arguments + " > " + out +
-                              " 2> /tmp/accuracy_test_stderr.txt";
+/// Runs `pcr <arguments>`, stdout to `out`, stderr to the scratch directory's stderr.txt.
+int run_cli(const test::ScratchDirectory& scratch, const std::string& arguments,
+            const std::string& out) {
+  const std::string command = std::string(PCR_CLI_PATH) + " " + arguments + " > '" + out +
+                              "' 2> '" + scratch.file("stderr.txt") + "'";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -336,17 +341,18 @@ std::string read_text(const std::string& path) {
 }
 
 TEST(AccuracyCli, TableFromMeasuredPoses) {
+  const test::ScratchDirectory scratch("accuracy");
   // Pose 0: attained 3 um / 4 um off in x / y on average (AP_p = 5 um), 1 mrad in theta.
-  const std::string measured = write_temp(
-      "cli_measured.csv",
+  const std::string measured = write_file(
+      scratch, "cli_measured.csv",
       "pose,x_c,y_c,theta_c,x,y,theta\n"
       "0,0,0,0,2e-6,4e-6,0.001\n"
       "0,0,0,0,4e-6,4e-6,0.001\n"
       "1,1e-3,0,0,1e-3,1e-6,0\n"
       "1,1e-3,0,0,1e-3,1e-6,0\n");
-  const std::string out = "/tmp/accuracy_test_cli_out.csv";
-  ASSERT_EQ(run_cli("accuracy --measured " + measured + " --format csv", out), 0)
-      << read_text("/tmp/accuracy_test_stderr.txt");
+  const std::string out = scratch.file("out.csv");
+  ASSERT_EQ(run_cli(scratch, "accuracy --measured " + measured + " --format csv", out), 0)
+      << read_text(scratch.file("stderr.txt"));
   std::ifstream in(out);
   std::string header, row0, row1;
   std::getline(in, header);
@@ -364,20 +370,18 @@ TEST(AccuracyCli, TableFromMeasuredPoses) {
   EXPECT_NEAR(field(row0, 10), 5e-6, 1e-18);
   EXPECT_NEAR(field(row0, 11), 0.001, 1e-15);
   EXPECT_NEAR(field(row1, 10), 1e-6, 1e-18);
-  std::remove(measured.c_str());
-  std::remove(out.c_str());
 }
 
 TEST(AccuracyCli, PoseOutOfReachIsAnErrorNamingThePose) {
-  const std::string out = "/tmp/accuracy_test_cli_table.md";
-  EXPECT_EQ(run_cli("accuracy --path circle --size 0.04 --repeat 2", out), 2);
-  const std::string err = read_text("/tmp/accuracy_test_stderr.txt");
+  const test::ScratchDirectory scratch("accuracy");
+  const std::string out = scratch.file("table.md");
+  EXPECT_EQ(run_cli(scratch, "accuracy --path circle --size 0.04 --repeat 2", out), 2);
+  const std::string err = read_text(scratch.file("stderr.txt"));
   EXPECT_NE(err.find("pose 0 "), std::string::npos) << err;
   // The paper's square on the nominal model: a table with one row, AP_p in micrometres.
-  ASSERT_EQ(run_cli("accuracy --path square --count 8 --repeat 2", out), 0)
-      << read_text("/tmp/accuracy_test_stderr.txt");
+  ASSERT_EQ(run_cli(scratch, "accuracy --path square --count 8 --repeat 2", out), 0)
+      << read_text(scratch.file("stderr.txt"));
   EXPECT_NE(read_text(out).find("| square | "), std::string::npos);
-  std::remove(out.c_str());
 }
 #endif
 

@@ -1,6 +1,5 @@
 // The `pcr` command-line tool, run as a program on files in a temporary directory.
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -12,6 +11,7 @@
 
 #include "pcr/csv_io.hpp"
 #include "pcr/robot_io.hpp"
+#include "scratch_directory.hpp"
 
 namespace {
 
@@ -31,13 +31,6 @@ std::string slurp(const fs::path& path) {
 
 class Cli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("pcr_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
   /// Runs `pcr <args>` with stdout and stderr captured.
   Result run(const std::string& args, const std::string& stdin_text = "") {
@@ -69,7 +62,8 @@ class Cli : public ::testing::Test {
     return pcr::parse_csv(in, "output", options);
   }
 
-  fs::path dir_;
+  pcr::test::ScratchDirectory scratch_{"cli"};
+  const fs::path& dir_ = scratch_.path();
 };
 
 TEST_F(Cli, HelpWorksForEveryCommand) {

@@ -1,6 +1,5 @@
 // Numeric CSV tables: header detection, comment columns, selection by name, and error messages
 // that name the source, the line and the column.
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -14,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "pcr/csv_io.hpp"
+#include "scratch_directory.hpp"
 
 namespace {
 
@@ -108,10 +108,8 @@ TEST(CsvIo, FormatDoubleRoundTripsBitForBit) {
 }
 
 TEST(CsvIo, OutputFileIsAtomic) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("pcr_csv_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string path = (dir / "out.csv").string();
+  const pcr::test::ScratchDirectory scratch("csv_io");
+  const std::string path = scratch.file("out.csv");
   {
     pcr::OutputFile out(path);
     out.stream() << "a,b\n1,2\n";
@@ -125,12 +123,11 @@ TEST(CsvIo, OutputFileIsAtomic) {
   }  // dropped without commit: the old file stays, no temporary is left
   EXPECT_EQ(pcr::read_csv(path).rows.size(), 1u);
   int files = 0;
-  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+  for (const auto& entry : std::filesystem::directory_iterator(scratch.path())) {
     (void)entry;
     ++files;
   }
   EXPECT_EQ(files, 1);
-  std::filesystem::remove_all(dir);
 }
 
 TEST(CsvIo, MissingFileNamesIt) {

@@ -10,13 +10,15 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "scratch_directory.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-int run_demo(const std::string& args) {
-  const std::string command = std::string(PCR_CLI_PATH) + " demo --quiet " + args + " > " +
-                              (fs::temp_directory_path() / "pcr-test-demo.out").string() + " 2>&1";
+int run_demo(const pcr::test::ScratchDirectory& scratch, const std::string& args) {
+  const std::string command = std::string(PCR_CLI_PATH) + " demo --quiet " + args + " > '" +
+                              scratch.file("demo.out") + "' 2>&1";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -27,10 +29,10 @@ nlohmann::json read_json(const fs::path& path) {
 }
 
 TEST(Demo, SmallRunReachesTheNoiseFloor) {
-  const fs::path out = fs::temp_directory_path() / "pcr-test-demo";
-  fs::remove_all(out);
+  const pcr::test::ScratchDirectory scratch("demo");
+  const fs::path out = scratch.path() / "out";
   // Vision included when built: it is the nominal description's source.
-  ASSERT_EQ(run_demo("--output " + out.string() +
+  ASSERT_EQ(run_demo(scratch, "--output " + out.string() +
                      " --calibration 40 --validation 12 --repeat 6 --poses 8 --seed 3"),
             0);
   const nlohmann::json report = read_json(out / "report.json");
@@ -56,30 +58,28 @@ TEST(Demo, SmallRunReachesTheNoiseFloor) {
     EXPECT_TRUE(fs::exists(out / file)) << file;
   }
   // Running again into its own directory is allowed.
-  EXPECT_EQ(run_demo("--output " + out.string() +
-                     " --calibration 20 --validation 4 --repeat 3 --poses 4 --no-vision"),
+  EXPECT_EQ(run_demo(scratch, "--output " + out.string() +
+                                  " --calibration 20 --validation 4 --repeat 3 --poses 4 --no-vision"),
             0);
-  fs::remove_all(out);
 }
 
 TEST(Demo, RefusesSomeoneElsesDirectory) {
-  const fs::path out = fs::temp_directory_path() / "pcr-test-demo-foreign";
-  fs::remove_all(out);
+  const pcr::test::ScratchDirectory scratch("demo");
+  const fs::path out = scratch.path() / "foreign";
   fs::create_directories(out);
   { std::ofstream(out / "thesis.tex") << "precious\n"; }
-  EXPECT_NE(run_demo("--output " + out.string() + " --no-vision"), 0);
+  EXPECT_NE(run_demo(scratch, "--output " + out.string() + " --no-vision"), 0);
   std::ifstream in(out / "thesis.tex");
   std::stringstream s;
   s << in.rdbuf();
   EXPECT_EQ(s.str(), "precious\n");
   EXPECT_FALSE(fs::exists(out / "report.json"));
-  fs::remove_all(out);
 }
 
 TEST(Demo, RejectsAnUnknownEffect) {
-  EXPECT_NE(run_demo("--effects gravity --output " +
-                     (fs::temp_directory_path() / "pcr-test-demo-x").string()),
-            0);
+  const pcr::test::ScratchDirectory scratch("demo");
+  EXPECT_NE(run_demo(scratch, "--effects gravity --output " + scratch.file("x")), 0);
+  EXPECT_FALSE(fs::exists(scratch.path() / "x" / "report.json"));
 }
 
 }  // namespace

@@ -234,6 +234,41 @@ TEST(Kinematics, FourLimbRobotReportsItsLimits) {
             SolveStatus::kUnsupported);
 }
 
+TEST(Kinematics, SequenceSolveRetriesAFailedWarmStartCold) {
+  const RobotParams<double> robot = femto_3pf();
+  const JointVector q = joints({0.003, -0.002, 0.001});
+  const ForwardSolution cold = forward_kinematics(robot, q);
+  ASSERT_TRUE(cold.summary.converged());
+  // No warm start: the cold solve itself.
+  const ForwardSolution first = forward_kinematics_or_cold(robot, q, nullptr);
+  EXPECT_EQ(first.pose.x, cold.pose.x);
+  EXPECT_EQ(first.summary.residual_evaluations, cold.summary.residual_evaluations);
+  // A warm start that cannot work (non-finite wrenches): the cold retry's answer, with the
+  // failed attempt's work counted.
+  ForwardSolution broken = cold;
+  broken.wrenches[1].nx = std::nan("");
+  broken.jacobian.resize(0, 0);
+  EXPECT_EQ(forward_kinematics(robot, q, broken).summary.status, SolveStatus::kNonFinite);
+  const ForwardSolution retried = forward_kinematics_or_cold(robot, q, &broken);
+  ASSERT_TRUE(retried.summary.converged());
+  EXPECT_EQ(retried.pose.x, cold.pose.x);
+  EXPECT_EQ(retried.pose.theta, cold.pose.theta);
+  EXPECT_EQ(retried.summary.residual_evaluations, cold.summary.residual_evaluations + 1);
+  // A usable warm start is kept: fewer evaluations than from home.
+  const ForwardSolution warm = forward_kinematics_or_cold(robot, q, &cold);
+  ASSERT_TRUE(warm.summary.converged());
+  EXPECT_LT(warm.summary.residual_evaluations, cold.summary.residual_evaluations);
+  // IK: joints out of the stroke are a usable equilibrium (a warm start), not retried cold.
+  RobotParams<double> short_stroke = robot;
+  for (int i = 0; i < 3; ++i) short_stroke.limb(i).q_max = 0.002;
+  const InverseSolution ik_warm = as_inverse_warm_start(cold);
+  const InverseSolution out = inverse_kinematics_or_cold(short_stroke, cold.pose, &ik_warm);
+  EXPECT_EQ(out.summary.status, SolveStatus::kOutOfRange);
+  EXPECT_TRUE(usable_as_warm_start(out.summary));
+  EXPECT_EQ(out.summary.residual_evaluations,
+            inverse_kinematics(short_stroke, cold.pose, ik_warm).summary.residual_evaluations);
+}
+
 TEST(Kinematics, InvalidInputsAreReported) {
   const RobotParams<double> robot = femto_3pf();
   EXPECT_EQ(forward_kinematics(robot, joints({0.001, 0.002})).summary.status,

@@ -17,6 +17,7 @@
 #include "pcr/calib/virtual_robot.hpp"
 #include "pcr/kinematics.hpp"
 #include "pcr/robot_io.hpp"
+#include "scratch_directory.hpp"
 
 namespace pcr {
 namespace {
@@ -42,10 +43,6 @@ std::string slurp(const std::string& path) {
 class PcrCalibrate : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("pcr_calibrate_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
     nominal_ = default_robot();
     RobotUncertainty u;  // only l and the extrinsics are uncertain: a fast, complete problem
     u.global.length = 126e-6;
@@ -78,11 +75,10 @@ class PcrCalibrate : public ::testing::Test {
     write_dataset(calibration, path("calibration.csv"));
     write_dataset(validation, path("validation.csv"));
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string path(const std::string& name) const { return scratch_.file(name); }
 
-  fs::path dir_;
+  pcr::test::ScratchDirectory scratch_{"pcr_calibrate"};
   RobotDescription nominal_, truth_;
   std::vector<JointVector> validation_q_;
   std::vector<Pose2<double>> exact_;

@@ -1,6 +1,5 @@
 // The pcr-robot JSON format: every kind of bad file gives a message naming the file, the field
 // path and the value; writing and reading back is lossless to the bit; the shipped default file.
-#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
@@ -13,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pcr/robot_io.hpp"
+#include "scratch_directory.hpp"
 
 namespace {
 
@@ -293,9 +293,8 @@ double random_double(std::mt19937_64& rng, double lo_exp, double hi_exp, bool po
 
 TEST(RobotIo, RoundTripIsBitExact) {
   std::mt19937_64 rng(7);
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("pcr_robot_io_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const pcr::test::ScratchDirectory scratch("robot_io");
+  const std::filesystem::path& dir = scratch.path();
   for (int trial = 0; trial < 50; ++trial) {
     pcr::RobotDescription r;
     r.name = "random \"robot\" \\ " + std::to_string(trial);
@@ -346,7 +345,6 @@ TEST(RobotIo, RoundTripIsBitExact) {
     ++files;
   }
   EXPECT_EQ(files, 1);  // robot.json only, no temporaries
-  std::filesystem::remove_all(dir);
 }
 
 TEST(RobotIo, DefaultRobotIsThePapersRobot) {

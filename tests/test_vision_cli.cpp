@@ -3,13 +3,13 @@
 // message naming the mount, the file or the id and writing no output, and a camera calibrated from
 // rendered chessboards.
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <fstream>
+#include <memory>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -20,6 +20,7 @@
 #include "pcr/vision/image.hpp"
 #include "pcr/vision/mounts.hpp"
 #include "pcr/vision/render.hpp"
+#include "scratch_directory.hpp"
 
 namespace {
 
@@ -53,11 +54,11 @@ CameraModel test_camera() {
 
 class VisionCli : public ::testing::Test {
  protected:
-  static fs::path dir_;
+  static std::unique_ptr<pcr::test::ScratchDirectory> scratch_;
+  static const fs::path& dir() { return scratch_->path(); }
 
   static void SetUpTestSuite() {
-    dir_ = fs::temp_directory_path() / ("pcr_vision_cli_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
+    scratch_ = std::make_unique<pcr::test::ScratchDirectory>("vision_cli");
     save_camera(test_camera(), path("camera.yaml"));
     // The shared good scene: rods and wafer outline drawn, noise, blur, gradient, a small tilt.
     const Result r = run("render --mounts '" + kMounts + "' --camera '" + path("camera.yaml") + "' --output '" +
@@ -65,14 +66,14 @@ class VisionCli : public ::testing::Test {
                          "' --tilt-x 0.01 --tilt-y -0.008 --noise 0.01 --blur 0.8 --gradient 0.1 --supersampling 3 --seed 7");
     ASSERT_EQ(r.status, 0) << r.all();
   }
-  static void TearDownTestSuite() { fs::remove_all(dir_); }
+  static void TearDownTestSuite() { scratch_.reset(); }
 
-  static std::string path(const std::string& name) { return (dir_ / name).string(); }
+  static std::string path(const std::string& name) { return scratch_->file(name); }
 
   static Result run(const std::string& args) {
     static int count = 0;
     const std::string tag = std::to_string(count++);
-    const fs::path out = dir_ / ("stdout" + tag + ".txt"), err = dir_ / ("stderr" + tag + ".txt");
+    const fs::path out = dir() / ("stdout" + tag + ".txt"), err = dir() / ("stderr" + tag + ".txt");
     const std::string command =
         std::string("'") + PCR_CLI_PATH + "' " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
     const int raw = std::system(command.c_str());
@@ -102,12 +103,12 @@ class VisionCli : public ::testing::Test {
                          "' --output '" + output + "' --annotated '" + path("bad_out.png") + "'");
     EXPECT_NE(r.status, 0) << r.all();
     for (const std::string& n : needles) EXPECT_NE(r.err.find(n), std::string::npos) << "'" << n << "' not in: " << r.err;
-    for (const auto& e : fs::directory_iterator(dir_))
+    for (const auto& e : fs::directory_iterator(dir()))
       EXPECT_EQ(e.path().filename().string().rfind("bad_out", 0), std::string::npos) << "left " << e.path();
   }
 };
 
-fs::path VisionCli::dir_;
+std::unique_ptr<pcr::test::ScratchDirectory> VisionCli::scratch_;
 
 // The measured robot file's A, alpha, B, beta contain the rendered truth within the written
 // half-widths, and (the layout's offsets being exact here) lie close to it: the image part alone.

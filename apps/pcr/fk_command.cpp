@@ -21,58 +21,29 @@ void run_fk(const FkArguments& args) {
   csv.columns = cli::joint_names(n);
   const CsvTable table = cli::read_table(args.input, csv);
 
-  OutputFile out(args.output);
   std::vector<std::string> header = csv.columns;
-  for (const char* c : {"x", "y", "theta", "converged", "iterations", "residual", "status",
-                        "max_strain"}) {
-    header.emplace_back(c);
-  }
-  out.stream() << csv_line(header);
+  for (const char* c : {"x", "y", "theta"}) header.emplace_back(c);
+  for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
   ForwardSolution previous;
   bool have_previous = false;
-  int failures = 0;
-  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+  cli::solve_rows("pcr fk", table, args.output, header, [&](const std::vector<double>& row) {
     JointVector q(n);
-    for (int i = 0; i < n; ++i) q(i) = table.rows[r][static_cast<std::size_t>(i)];
-    // Warm start from the last converged row; a warm start that fails is retried cold.
-    ForwardSolution solution;
-    int iterations = 0;
-    if (have_previous) {
-      solution = forward_kinematics(robot.params, q, previous, options, load);
-      iterations += solution.summary.iterations;
-    }
-    if (!have_previous || !solution.summary.converged()) {
-      solution = forward_kinematics(robot.params, q, options, load);
-      iterations += solution.summary.iterations;
-    }
+    for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
+    const ForwardSolution solution = forward_kinematics_or_cold(
+        robot.params, q, have_previous ? &previous : nullptr, options, load);
     const SolverSummary& s = solution.summary;
     have_previous = s.converged();
     if (have_previous) previous = solution;
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    std::vector<std::string> fields;
-    for (int i = 0; i < n; ++i) fields.push_back(format_double(q(i)));
-    fields.push_back(format_double(s.converged() ? solution.pose.x : nan));
-    fields.push_back(format_double(s.converged() ? solution.pose.y : nan));
-    fields.push_back(format_double(s.converged() ? solution.pose.theta : nan));
-    fields.push_back(s.converged() ? "1" : "0");
-    fields.push_back(std::to_string(iterations));
-    fields.push_back(format_double(s.final_residual_norm));
-    fields.push_back(to_string(s.status));
-    fields.push_back(format_double(s.converged() ? s.max_strain : nan));
-    out.stream() << csv_line(fields);
-    if (!s.converged()) {
-      ++failures;
-      std::cerr << "pcr fk: " << table.source << ":" << table.line_numbers[r]
-                << ": not converged (" << to_string(s.status) << ")\n";
-    }
-  }
-  out.commit();
-  if (failures > 0) {
-    std::cerr << "pcr fk: " << failures << " of " << table.rows.size()
-              << " rows did not converge\n";
-    cli::exit_status() = 1;
-  }
+    cli::SolvedRow out{{}, s.status};
+    for (int i = 0; i < n; ++i) out.fields.push_back(format_double(q(i)));
+    out.fields.push_back(format_double(s.converged() ? solution.pose.x : nan));
+    out.fields.push_back(format_double(s.converged() ? solution.pose.y : nan));
+    out.fields.push_back(format_double(s.converged() ? solution.pose.theta : nan));
+    cli::append_summary_fields(s, s.converged(), out.fields);
+    return out;
+  });
 }
 
 }  // namespace

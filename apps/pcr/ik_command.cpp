@@ -11,11 +11,6 @@ struct IkArguments {
   pcr::cli::SolveArguments solve;
 };
 
-/// An IK result that is a valid equilibrium (possibly outside the stroke), usable as a warm start.
-bool is_solution(const pcr::SolverSummary& s) {
-  return s.converged() || s.status == pcr::SolveStatus::kOutOfRange;
-}
-
 void run_ik(const IkArguments& args) {
   using namespace pcr;
   const RobotDescription robot = load_robot_or_default(args.robot);
@@ -32,59 +27,30 @@ void run_ik(const IkArguments& args) {
   csv.columns = {"x", "y", "theta"};
   const CsvTable table = cli::read_table(args.input, csv);
 
-  OutputFile out(args.output);
   std::vector<std::string> header = {"x", "y", "theta"};
   for (const std::string& q : cli::joint_names(n)) header.push_back(q);
-  for (const char* c : {"converged", "iterations", "residual", "status", "max_strain"}) {
-    header.emplace_back(c);
-  }
-  out.stream() << csv_line(header);
+  for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
   InverseSolution previous;
   bool have_previous = false;
-  int failures = 0;
-  for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    const std::vector<double>& row = table.rows[r];
+  cli::solve_rows("pcr ik", table, args.output, header, [&](const std::vector<double>& row) {
     const Pose2<double> pose{row[0], row[1], row[2]};
-    InverseSolution solution;
-    int iterations = 0;
-    if (have_previous) {
-      solution = inverse_kinematics(robot.params, pose, previous, options, load);
-      iterations += solution.summary.iterations;
-    }
-    if (!have_previous || !is_solution(solution.summary)) {
-      solution = inverse_kinematics(robot.params, pose, options, load);
-      iterations += solution.summary.iterations;
-    }
+    const InverseSolution solution = inverse_kinematics_or_cold(
+        robot.params, pose, have_previous ? &previous : nullptr, options, load);
     const SolverSummary& s = solution.summary;
-    const bool valid = is_solution(s);
+    const bool valid = usable_as_warm_start(s);  // a valid equilibrium, maybe out of range
     have_previous = valid;
     if (valid) previous = solution;
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    std::vector<std::string> fields;
+    cli::SolvedRow out{{}, s.status};
     // For n = 2 theta is solved for: report the solved value.
-    fields.push_back(format_double(pose.x));
-    fields.push_back(format_double(pose.y));
-    fields.push_back(format_double(n == 2 ? (valid ? solution.pose.theta : nan) : pose.theta));
-    for (int i = 0; i < n; ++i) fields.push_back(format_double(valid ? solution.q(i) : nan));
-    fields.push_back(s.converged() ? "1" : "0");
-    fields.push_back(std::to_string(iterations));
-    fields.push_back(format_double(s.final_residual_norm));
-    fields.push_back(to_string(s.status));
-    fields.push_back(format_double(valid ? s.max_strain : nan));
-    out.stream() << csv_line(fields);
-    if (!s.converged()) {
-      ++failures;
-      std::cerr << "pcr ik: " << table.source << ":" << table.line_numbers[r]
-                << ": not converged (" << to_string(s.status) << ")\n";
-    }
-  }
-  out.commit();
-  if (failures > 0) {
-    std::cerr << "pcr ik: " << failures << " of " << table.rows.size()
-              << " rows did not converge\n";
-    cli::exit_status() = 1;
-  }
+    out.fields.push_back(format_double(pose.x));
+    out.fields.push_back(format_double(pose.y));
+    out.fields.push_back(format_double(n == 2 ? (valid ? solution.pose.theta : nan) : pose.theta));
+    for (int i = 0; i < n; ++i) out.fields.push_back(format_double(valid ? solution.q(i) : nan));
+    cli::append_summary_fields(s, valid, out.fields);
+    return out;
+  });
 }
 
 }  // namespace

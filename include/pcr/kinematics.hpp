@@ -247,7 +247,11 @@ class ShootingProblem {
   mutable ShootingMatrix partials_;
 };
 
-inline double max_norm(const ShootingVector& r) { return r.lpNorm<Eigen::Infinity>(); }
+/// Max-norm of a residual; NaN when a component is not finite (Eigen's max-norm may skip a NaN,
+/// which made a NaN warm start look converged).
+inline double max_norm(const ShootingVector& r) {
+  return r.allFinite() ? r.lpNorm<Eigen::Infinity>() : std::numeric_limits<double>::quiet_NaN();
+}
 
 struct NewtonResult {
   SolveStatus status = SolveStatus::kMaxIterations;
@@ -487,6 +491,8 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   summary.final_residual_norm = direct.final_norm;
   summary.max_strain = direct.max_strain;
   if (direct.status == SolveStatus::kConverged || !options.continuation) return direct.status;
+  // A start that is not finite (a broken warm start) has no path to continue along.
+  if (!std::isfinite(direct.initial_norm)) return SolveStatus::kNonFinite;
 
   SolverOptions sub_options = options;
   sub_options.max_iterations = options.max_continuation_iterations;
@@ -793,6 +799,59 @@ inline InverseSolution as_inverse_warm_start(const ForwardSolution& fk) {
   warm.wrenches = fk.wrenches;
   warm.summary = fk.summary;
   return warm;
+}
+
+/// Whether a solution can warm-start the next solve: a converged one, or (IK) a valid equilibrium
+/// whose joints lie outside their stroke.
+inline bool usable_as_warm_start(const SolverSummary& summary) {
+  return summary.converged() || summary.status == SolveStatus::kOutOfRange;
+}
+
+namespace internal {
+
+/// A warm solve, then a cold one when the warm one is not usable (and the input is valid); the
+/// summary counts the iterations and residual evaluations of both.
+template <class Solution, class WarmSolve, class ColdSolve>
+Solution solve_with_cold_fallback(const Solution* warm, WarmSolve&& warm_solve,
+                                  ColdSolve&& cold_solve) {
+  if (warm == nullptr) return cold_solve();
+  Solution solution = warm_solve(*warm);
+  const SolveStatus status = solution.summary.status;
+  if (usable_as_warm_start(solution.summary) || status == SolveStatus::kInvalidInput ||
+      status == SolveStatus::kUnsupported) {
+    return solution;
+  }
+  const int iterations = solution.summary.iterations;
+  const int evaluations = solution.summary.residual_evaluations;
+  solution = cold_solve();
+  solution.summary.iterations += iterations;
+  solution.summary.residual_evaluations += evaluations;
+  return solution;
+}
+
+}  // namespace internal
+
+/// FK of one row of a sequence (a CSV file, a batch): warm-started from the last usable solution
+/// when there is one (`warm`, may be null), from home when that fails (the previous row lies on
+/// another branch, or too far along a fold).
+inline ForwardSolution forward_kinematics_or_cold(
+    const RobotParams<double>& robot, const JointVector& q, const ForwardSolution* warm,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>()) {
+  return internal::solve_with_cold_fallback(
+      warm, [&](const ForwardSolution& w) { return forward_kinematics(robot, q, w, options, load); },
+      [&] { return forward_kinematics(robot, q, options, load); });
+}
+
+/// IK of one row of a sequence; as forward_kinematics_or_cold.
+inline InverseSolution inverse_kinematics_or_cold(
+    const RobotParams<double>& robot, const Pose2<double>& pose, const InverseSolution* warm,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>()) {
+  return internal::solve_with_cold_fallback(
+      warm,
+      [&](const InverseSolution& w) { return inverse_kinematics(robot, pose, w, options, load); },
+      [&] { return inverse_kinematics(robot, pose, options, load); });
 }
 
 /// Calls visit(limb, s, RodState) along every rod of a solved configuration (for plots, strain).

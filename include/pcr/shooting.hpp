@@ -99,6 +99,56 @@ T angle_difference(const T& a, const T& b) {
   return d - T(turns * 2.0 * M_PI);
 }
 
+/// Rod i's state at its proximal clamp: the clamp moved by the actuator, the wrench unknown.
+template <class T>
+RodState<T> proximal_rod_state(const LimbParams<T>& limb, const T& q, const Wrench<T>& wrench) {
+  const Vector2<T> start = limb.proximal_position(q);
+  return RodState<T>{start.x(), start.y(), limb.alpha, wrench.nx, wrench.ny, wrench.m};
+}
+
+/// The distal clamp of a limb relative to the platform origin, in W, for a platform turned by
+/// (c, s) = (cos theta, sin theta).
+template <class T>
+Vector2<T> distal_arm(const LimbParams<T>& limb, const T& c, const T& s) {
+  return Vector2<T>(c * limb.B.x() - s * limb.B.y(), s * limb.B.x() + c * limb.B.y());
+}
+
+/// The residual from the rods' tip states, however they were integrated (RK4 here, CVODE in
+/// pcr::shooting_residual_reference): each tip meets its distal clamp in position and angle
+/// (Eq. 2) and the platform is in equilibrium (Eq. 4). Returns the largest bending strain.
+template <class T>
+T shooting_residual_from_tips(const RobotParams<T>& robot, const ShootingPoint<T>& point,
+                              const PlatformLoad<T>& load, const ShootingScale& scale,
+                              const RodTip<T>* tips, ResidualVector<T>& residual) {
+  using std::cos;
+  using std::sin;
+  const int n = robot.num_limbs;
+  residual.resize(3 * n + 3);
+  const T inv_length = T(1.0 / scale.length);
+  const T c = cos(point.pose.theta), s = sin(point.pose.theta);
+  Vector2<T> force_sum = -load.force;
+  T moment_sum = -load.moment;
+  T max_strain(0);
+  for (int i = 0; i < n; ++i) {
+    const LimbParams<T>& limb = robot.limb(i);
+    const Wrench<T>& w = point.wrenches[i];
+    const Vector2<T> arm = distal_arm(limb, c, s);
+    const Vector2<T> clamp = point.pose.translation() + arm;
+    const RodState<T>& tip = tips[i].state;
+    residual(3 * i + 0) = (tip.x - clamp.x()) * inv_length;
+    residual(3 * i + 1) = (tip.y - clamp.y()) * inv_length;
+    residual(3 * i + 2) = angle_difference(tip.theta, point.pose.theta + limb.beta);
+    force_sum += Vector2<T>(w.nx, w.ny);
+    moment_sum += arm.x() * w.ny - arm.y() * w.nx + tip.m;
+    const T strain = tips[i].max_abs_moment * limb.diameter / (T(2) * limb.bending_stiffness());
+    if (strain > max_strain) max_strain = strain;
+  }
+  residual(3 * n + 0) = force_sum.x() * T(1.0 / scale.force);
+  residual(3 * n + 1) = force_sum.y() * T(1.0 / scale.force);
+  residual(3 * n + 2) = moment_sum * T(1.0 / scale.moment());
+  return max_strain;
+}
+
 /// Evaluates the scaled residual (3n + 3) at a point. With `partials`, also fills
 /// d residual / d (wrenches, pose, q) in scaled units: columns [3i, 3i+3) rod i's wrench,
 /// [3n, 3n+3) the pose (x, y, theta), [3n+3, 4n+3) the joints. Returns the largest bending strain
@@ -107,27 +157,12 @@ template <class T>
 T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
                     const PlatformLoad<T>& load, const ShootingScale& scale, int rod_steps,
                     ResidualVector<T>& residual, ShootingMatrix* partials = nullptr) {
-  using std::cos;
-  using std::sin;
   const int n = robot.num_limbs;
-  residual.resize(3 * n + 3);
-  const T inv_length = T(1.0 / scale.length);
-  const T inv_force = T(1.0 / scale.force);
-  const T inv_moment = T(1.0 / scale.moment());
-  if (partials) partials->setZero(3 * n + 3, 4 * n + 3);
-
-  const T c = cos(point.pose.theta), s = sin(point.pose.theta);
-  Vector2<T> force_sum = -load.force;
-  T moment_sum = -load.moment;
-  T max_strain(0);
   // Rod tips (and sensitivities with partials). In double the rods are integrated in lockstep:
   // each is a serial chain of dependent multiplies, interleaved they overlap.
   RodTip<T> tips[kMaxLimbs];
   const auto proximal_state = [&](int i) {
-    const LimbParams<T>& limb = robot.limb(i);
-    const Wrench<T>& w = point.wrenches[i];
-    const Vector2<T> start = limb.proximal_position(point.q[i]);
-    return RodState<T>{start.x(), start.y(), limb.alpha, w.nx, w.ny, w.m};
+    return proximal_rod_state(robot.limb(i), point.q[i], point.wrenches[i]);
   };
   const auto integrate_all = [&](auto sens) {
     constexpr bool kSens = decltype(sens)::value;
@@ -168,62 +203,47 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
       }
     }
   }
+  const T strain = shooting_residual_from_tips(robot, point, load, scale, tips, residual);
+  if (!partials) return strain;
+  partials->setZero(3 * n + 3, 4 * n + 3);
+  const double c = std::cos(scalar_value(point.pose.theta));
+  const double s = std::sin(scalar_value(point.pose.theta));
   for (int i = 0; i < n; ++i) {
     const LimbParams<T>& limb = robot.limb(i);
-    const Wrench<T>& w = point.wrenches[i];
-    const T ei = limb.bending_stiffness();
-    // Distal clamp in W, relative to the platform origin.
-    const Vector2<T> arm(c * limb.B.x() - s * limb.B.y(), s * limb.B.x() + c * limb.B.y());
-    const Vector2<T> clamp = point.pose.translation() + arm;
-
     const RodTip<T>& rod = tips[i];
-    const RodState<T>& tip = rod.state;
-    const T& max_m = rod.max_abs_moment;
-    if (partials) {
-      // d r / d (scaled wrench): physical derivative times the unknown's scale.
-      const double to_scaled[3] = {scale.force, scale.force, scale.moment()};
-      const double arm_x = scalar_value(arm.x()), arm_y = scalar_value(arm.y());
-      for (int j = 0; j < 3; ++j) {
-        const int col = 3 * i + j;
-        (*partials)(3 * i + 0, col) = scalar_value(rod.sensitivity(0, j)) * to_scaled[j] / scale.length;
-        (*partials)(3 * i + 1, col) = scalar_value(rod.sensitivity(1, j)) * to_scaled[j] / scale.length;
-        (*partials)(3 * i + 2, col) = scalar_value(rod.sensitivity(2, j)) * to_scaled[j];
-        // Moment balance: arm x n + m(l).
-        double dmoment = scalar_value(rod.sensitivity(3, j));
-        if (j == 0) dmoment += -arm_y;
-        if (j == 1) dmoment += arm_x;
-        (*partials)(3 * n + 2, col) = dmoment * to_scaled[j] / scale.moment();
-      }
-      (*partials)(3 * n + 0, 3 * i + 0) = 1.0;
-      (*partials)(3 * n + 1, 3 * i + 1) = 1.0;
-      // Pose: the clamp moves with (x, y) and turns with theta; d arm / d theta = (-arm_y, arm_x).
-      const int pose_col = 3 * n;
-      (*partials)(3 * i + 0, pose_col + 0) = -1.0;
-      (*partials)(3 * i + 1, pose_col + 1) = -1.0;
-      (*partials)(3 * i + 0, pose_col + 2) = arm_y / scale.length;
-      (*partials)(3 * i + 1, pose_col + 2) = -arm_x / scale.length;
-      (*partials)(3 * i + 2, pose_col + 2) = -1.0;
-      const double nx = scalar_value(w.nx), ny = scalar_value(w.ny);
-      // d/dtheta of (arm x n) = (-arm_y, arm_x) x n = -arm_y ny - arm_x nx.
-      (*partials)(3 * n + 2, pose_col + 2) += (-arm_y * ny - arm_x * nx) / scale.moment();
-      // Joints: the whole rod translates along the actuator direction.
-      const Vector2<T> dir = limb.actuator_direction();
-      (*partials)(3 * i + 0, 3 * n + 3 + i) = scalar_value(dir.x());
-      (*partials)(3 * i + 1, 3 * n + 3 + i) = scalar_value(dir.y());
+    const double bx = scalar_value(limb.B.x()), by = scalar_value(limb.B.y());
+    const double arm_x = c * bx - s * by, arm_y = s * bx + c * by;  // distal_arm
+    // d r / d (scaled wrench): physical derivative times the unknown's scale.
+    const double to_scaled[3] = {scale.force, scale.force, scale.moment()};
+    for (int j = 0; j < 3; ++j) {
+      const int col = 3 * i + j;
+      (*partials)(3 * i + 0, col) = scalar_value(rod.sensitivity(0, j)) * to_scaled[j] / scale.length;
+      (*partials)(3 * i + 1, col) = scalar_value(rod.sensitivity(1, j)) * to_scaled[j] / scale.length;
+      (*partials)(3 * i + 2, col) = scalar_value(rod.sensitivity(2, j)) * to_scaled[j];
+      // Moment balance: arm x n + m(l).
+      double dmoment = scalar_value(rod.sensitivity(3, j));
+      if (j == 0) dmoment += -arm_y;
+      if (j == 1) dmoment += arm_x;
+      (*partials)(3 * n + 2, col) = dmoment * to_scaled[j] / scale.moment();
     }
-
-    residual(3 * i + 0) = (tip.x - clamp.x()) * inv_length;
-    residual(3 * i + 1) = (tip.y - clamp.y()) * inv_length;
-    residual(3 * i + 2) = angle_difference(tip.theta, point.pose.theta + limb.beta);
-    force_sum += Vector2<T>(w.nx, w.ny);
-    moment_sum += arm.x() * w.ny - arm.y() * w.nx + tip.m;
-    const T strain = max_m * limb.diameter / (T(2) * ei);
-    if (strain > max_strain) max_strain = strain;
+    (*partials)(3 * n + 0, 3 * i + 0) = 1.0;
+    (*partials)(3 * n + 1, 3 * i + 1) = 1.0;
+    // Pose: the clamp moves with (x, y) and turns with theta; d arm / d theta = (-arm_y, arm_x).
+    const int pose_col = 3 * n;
+    (*partials)(3 * i + 0, pose_col + 0) = -1.0;
+    (*partials)(3 * i + 1, pose_col + 1) = -1.0;
+    (*partials)(3 * i + 0, pose_col + 2) = arm_y / scale.length;
+    (*partials)(3 * i + 1, pose_col + 2) = -arm_x / scale.length;
+    (*partials)(3 * i + 2, pose_col + 2) = -1.0;
+    const double nx = scalar_value(point.wrenches[i].nx), ny = scalar_value(point.wrenches[i].ny);
+    // d/dtheta of (arm x n) = (-arm_y, arm_x) x n = -arm_y ny - arm_x nx.
+    (*partials)(3 * n + 2, pose_col + 2) += (-arm_y * ny - arm_x * nx) / scale.moment();
+    // Joints: the whole rod translates along the actuator direction.
+    const Vector2<T> dir = limb.actuator_direction();
+    (*partials)(3 * i + 0, 3 * n + 3 + i) = scalar_value(dir.x());
+    (*partials)(3 * i + 1, 3 * n + 3 + i) = scalar_value(dir.y());
   }
-  residual(3 * n + 0) = force_sum.x() * inv_force;
-  residual(3 * n + 1) = force_sum.y() * inv_force;
-  residual(3 * n + 2) = moment_sum * inv_moment;
-  return max_strain;
+  return strain;
 }
 
 }  // namespace pcr

@@ -1,54 +1,13 @@
 #pragma once
-// The solve loops behind Robot.forward / Robot.inverse, kept out of the wrappers: one
-// configuration (warm start, then a cold retry, as `pcr fk` / `pcr ik` do) and the batch, warm-
-// started along the rows. Plain C++, called with the GIL released.
+// The batch loops behind Robot.forward / Robot.inverse, kept out of the wrappers: rows warm-
+// started along the batch, with a cold retry (forward/inverse_kinematics_or_cold, as `pcr fk` and
+// `pcr ik` do). Plain C++, called with the GIL released.
 
 #include <limits>
 
 #include "pcr/kinematics.hpp"
 
 namespace pcr::python {
-
-/// A result usable as the next warm start: converged, or (IK) a valid equilibrium out of range.
-inline bool usable_forward(const SolverSummary& s) { return s.converged(); }
-inline bool usable_inverse(const SolverSummary& s) {
-  return s.converged() || s.status == SolveStatus::kOutOfRange;
-}
-
-/// FK at q from `warm` when given (retried cold on failure); iterations of both attempts summed.
-inline ForwardSolution solve_forward(const RobotParams<double>& robot, const JointVector& q,
-                                     const ForwardSolution* warm, const SolverOptions& options,
-                                     const PlatformLoad<double>& load) {
-  ForwardSolution solution;
-  int iterations = 0;
-  if (warm != nullptr) {
-    solution = forward_kinematics(robot, q, *warm, options, load);
-    iterations += solution.summary.iterations;
-  }
-  if (warm == nullptr || !usable_forward(solution.summary)) {
-    solution = forward_kinematics(robot, q, options, load);
-    iterations += solution.summary.iterations;
-  }
-  solution.summary.iterations = iterations;
-  return solution;
-}
-
-inline InverseSolution solve_inverse(const RobotParams<double>& robot, const Pose2<double>& pose,
-                                     const InverseSolution* warm, const SolverOptions& options,
-                                     const PlatformLoad<double>& load) {
-  InverseSolution solution;
-  int iterations = 0;
-  if (warm != nullptr) {
-    solution = inverse_kinematics(robot, pose, *warm, options, load);
-    iterations += solution.summary.iterations;
-  }
-  if (warm == nullptr || !usable_inverse(solution.summary)) {
-    solution = inverse_kinematics(robot, pose, options, load);
-    iterations += solution.summary.iterations;
-  }
-  solution.summary.iterations = iterations;
-  return solution;
-}
 
 /// Row-major output buffers of a batch of N rows for a robot with n limbs.
 struct BatchBuffers {
@@ -95,9 +54,9 @@ inline void forward_batch(const RobotParams<double>& robot, const double* q, std
   JointVector joints(n);
   for (std::ptrdiff_t r = 0; r < rows; ++r) {
     for (int i = 0; i < n; ++i) joints(i) = q[r * n + i];
-    ForwardSolution s =
-        solve_forward(robot, joints, have_previous ? &previous : nullptr, options, load);
-    have_previous = usable_forward(s.summary);
+    ForwardSolution s = forward_kinematics_or_cold(robot, joints,
+                                                   have_previous ? &previous : nullptr, options, load);
+    have_previous = usable_as_warm_start(s.summary);
     if (have_previous) previous = s;
     // FK's joints are the input, echoed even when the solve failed.
     store_row(s, have_previous, n, r, out);
@@ -116,9 +75,9 @@ inline void inverse_batch(const RobotParams<double>& robot, const double* poses,
   bool have_previous = false;
   for (std::ptrdiff_t r = 0; r < rows; ++r) {
     const Pose2<double> pose{poses[r * 3], poses[r * 3 + 1], poses[r * 3 + 2]};
-    InverseSolution s =
-        solve_inverse(robot, pose, have_previous ? &previous : nullptr, options, load);
-    have_previous = usable_inverse(s.summary);
+    InverseSolution s = inverse_kinematics_or_cold(robot, pose,
+                                                   have_previous ? &previous : nullptr, options, load);
+    have_previous = usable_as_warm_start(s.summary);
     if (have_previous) previous = s;
     store_row(s, have_previous, n, r, out);
     // The requested pose is echoed; with 2 limbs theta is the solved one (NaN on failure).

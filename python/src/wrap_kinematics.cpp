@@ -164,9 +164,9 @@ py::object forward(const RobotDescription& robot, const py::object& q_in,
     ForwardSolution s;
     {
       py::gil_scoped_release release;
-      s = solve_forward(params, joints, warm.get(), options, load);
+      s = forward_kinematics_or_cold(params, joints, warm.get(), options, load);
     }
-    return py::cast(to_python(params, s, usable_forward(s.summary), shapes, &joints));
+    return py::cast(to_python(params, s, usable_as_warm_start(s.summary), shapes, &joints));
   }
   if (warm_start) throw std::invalid_argument("warm_start: only for a single configuration");
   const py::ssize_t rows = q.shape(0);
@@ -182,7 +182,7 @@ py::object forward(const RobotDescription& robot, const py::object& q_in,
   if (shapes) {
     py::list all;
     for (const ForwardSolution& s : solutions) {
-      all.append(usable_forward(s.summary)
+      all.append(usable_as_warm_start(s.summary)
                      ? py::object(rod_shapes(params, s.q, s.wrenches, s.summary.rod_steps))
                      : py::object(py::none()));
     }
@@ -216,9 +216,9 @@ py::object inverse(const RobotDescription& robot, const py::object& pose_in,
     InverseSolution s;
     {
       py::gil_scoped_release release;
-      s = solve_inverse(params, pose, warm.get(), options, load);
+      s = inverse_kinematics_or_cold(params, pose, warm.get(), options, load);
     }
-    return py::cast(to_python(params, s, usable_inverse(s.summary), shapes));
+    return py::cast(to_python(params, s, usable_as_warm_start(s.summary), shapes));
   }
   if (warm_start) throw std::invalid_argument("warm_start: only for a single pose");
   const py::ssize_t rows = poses.shape(0);
@@ -234,7 +234,7 @@ py::object inverse(const RobotDescription& robot, const py::object& pose_in,
   if (shapes) {
     py::list all;
     for (const InverseSolution& s : solutions) {
-      all.append(usable_inverse(s.summary)
+      all.append(usable_as_warm_start(s.summary)
                      ? py::object(rod_shapes(params, s.q, s.wrenches, s.summary.rod_steps))
                      : py::object(py::none()));
     }

@@ -44,12 +44,22 @@ CalibrationTable calibration_table(const CalibrationResult& result,
                                    const std::vector<CalibrationSample>& validation,
                                    const SolverOptions& fk) {
   CalibrationTable table;
-  table.nominal_calibration = pose_errors(result.extrinsics_only, calibration, fk);
-  table.identified_calibration = pose_errors(result.identified, calibration, fk);
+  const auto evaluate = [&](const RobotParams<double>& model,
+                            const std::vector<CalibrationSample>& data, ConfigurationErrors& errors,
+                            PoseErrorStats& stats) {
+    errors = configuration_errors(model, data, fk);
+    stats = error_statistics(errors);
+  };
+  evaluate(result.extrinsics_only, calibration, table.nominal_calibration_errors,
+           table.nominal_calibration);
+  evaluate(result.identified, calibration, table.identified_calibration_errors,
+           table.identified_calibration);
   table.has_validation = !validation.empty();
   if (table.has_validation) {
-    table.nominal_validation = pose_errors(result.extrinsics_only, validation, fk);
-    table.identified_validation = pose_errors(result.identified, validation, fk);
+    evaluate(result.extrinsics_only, validation, table.nominal_validation_errors,
+             table.nominal_validation);
+    evaluate(result.identified, validation, table.identified_validation_errors,
+             table.identified_validation);
   }
   return table;
 }

@@ -571,9 +571,8 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
   ForwardSolution last;
   bool has_last = false;
   for (const CalibrationSample& sample : data) {
-    ForwardSolution s;
-    if (has_last) s = forward_kinematics(robot, sample.q, last, fk);
-    if (!has_last || !s.summary.converged()) s = forward_kinematics(robot, sample.q, fk);
+    const ForwardSolution s =
+        forward_kinematics_or_cold(robot, sample.q, has_last ? &last : nullptr, fk);
     if (!s.summary.converged()) {
       errors.e_p.push_back(kNaN);
       errors.e_theta.push_back(kNaN);
@@ -590,7 +589,10 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
 
 PoseErrorStats pose_errors(const RobotParams<double>& robot,
                            const std::vector<CalibrationSample>& data, const SolverOptions& fk) {
-  const ConfigurationErrors errors = configuration_errors(robot, data, fk);
+  return error_statistics(configuration_errors(robot, data, fk));
+}
+
+PoseErrorStats error_statistics(const ConfigurationErrors& errors) {
   PoseErrorStats stats;
   stats.min_p = stats.min_theta = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < errors.e_p.size(); ++j) {

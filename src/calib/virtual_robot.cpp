@@ -112,12 +112,9 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
 VirtualMeasurement VirtualRobot::measure(const JointVector& q) {
   VirtualMeasurement m;
   const RobotParams<double>& robot = truth_.params;
-  ForwardSolution fk;
-  if (has_last_) fk = forward_kinematics(robot, q, last_, options_.solver, load_);
-  if (!has_last_ || !fk.summary.converged()) {
-    // Cold start from home: the reference branch.
-    fk = forward_kinematics(robot, q, options_.solver, load_);
-  }
+  // A failed warm start is retried from home: the reference branch.
+  const ForwardSolution fk =
+      forward_kinematics_or_cold(robot, q, has_last_ ? &last_ : nullptr, options_.solver, load_);
   m.summary = fk.summary;
   if (!fk.summary.converged()) return m;
   last_ = fk;

@@ -260,39 +260,20 @@ double shooting_residual_reference(const RobotParams<double>& robot,
                                    const PlatformLoad<double>& load, const ShootingScale& scale,
                                    ResidualVector<double>& residual,
                                    const ReferenceOptions& options) {
-  // Mirrors pcr::shooting_residual (pcr/shooting.hpp) equation by equation.
+  // The rods by CVODE, the equations from their tips as pcr::shooting_residual forms them.
   const int n = robot.num_limbs;
   if (n < 2 || n > kMaxLimbs) {
     throw std::invalid_argument("pcr::shooting_residual_reference: " +
                                 describe("robot.num_limbs", n));
   }
-  residual.resize(3 * n + 3);
-  const double c = std::cos(point.pose.theta), s = std::sin(point.pose.theta);
-  Vector2<double> force_sum = -load.force;
-  double moment_sum = -load.moment;
-  double max_strain = 0.0;
+  RodTip<double> tips[kMaxLimbs];
   for (int i = 0; i < n; ++i) {
     const LimbParams<double>& limb = robot.limb(i);
-    const Wrench<double>& w = point.wrenches[i];
-    const double ei = limb.bending_stiffness();
-    const Vector2<double> start = limb.proximal_position(point.q[i]);
-    const RodState<double> proximal{start.x(), start.y(), limb.alpha, w.nx, w.ny, w.m};
-    const Vector2<double> arm(c * limb.B.x() - s * limb.B.y(), s * limb.B.x() + c * limb.B.y());
-    const Vector2<double> clamp = point.pose.translation() + arm;
-
-    double max_m = 0.0;
-    const RodState<double> tip = integrate_rod_reference(proximal, ei, limb.length, options, &max_m);
-    residual(3 * i + 0) = (tip.x - clamp.x()) / scale.length;
-    residual(3 * i + 1) = (tip.y - clamp.y()) / scale.length;
-    residual(3 * i + 2) = angle_difference(tip.theta, point.pose.theta + limb.beta);
-    force_sum += Vector2<double>(w.nx, w.ny);
-    moment_sum += arm.x() * w.ny - arm.y() * w.nx + tip.m;
-    max_strain = std::max(max_strain, max_m * limb.diameter / (2.0 * ei));
+    tips[i].state = integrate_rod_reference(proximal_rod_state(limb, point.q[i], point.wrenches[i]),
+                                            limb.bending_stiffness(), limb.length, options,
+                                            &tips[i].max_abs_moment);
   }
-  residual(3 * n + 0) = force_sum.x() / scale.force;
-  residual(3 * n + 1) = force_sum.y() / scale.force;
-  residual(3 * n + 2) = moment_sum / scale.moment();
-  return max_strain;
+  return shooting_residual_from_tips(robot, point, load, scale, tips, residual);
 }
 
 ForwardSolution forward_kinematics_reference(const RobotParams<double>& robot,
@@ -337,7 +318,9 @@ ForwardSolution forward_kinematics_reference(const RobotParams<double>& robot,
     ShootingPoint<double> p = unpack_forward(z, q, n, scale);
     const double strain = shooting_residual_reference(robot, p, load, scale, r, options);
     ++summary.residual_evaluations;
-    const double norm = r.lpNorm<Eigen::Infinity>();
+    // (Eigen's max-norm may skip a NaN component.)
+    const double norm =
+        r.allFinite() ? r.lpNorm<Eigen::Infinity>() : std::numeric_limits<double>::quiet_NaN();
     if (iter == 0) summary.initial_residual_norm = norm;
     if (!std::isfinite(norm)) {
       summary.status = SolveStatus::kNonFinite;

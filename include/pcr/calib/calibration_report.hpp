@@ -20,6 +20,9 @@ std::vector<CalibrationSample> calibration_samples(const Dataset& data);
 struct CalibrationTable {
   PoseErrorStats nominal_calibration, identified_calibration;
   PoseErrorStats nominal_validation, identified_validation;
+  /// The per-configuration errors behind each statistic (the paper's Figures 8 and 9).
+  ConfigurationErrors nominal_calibration_errors, identified_calibration_errors;
+  ConfigurationErrors nominal_validation_errors, identified_validation_errors;
   bool has_validation = false;
 };
 

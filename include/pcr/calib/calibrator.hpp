@@ -169,6 +169,9 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
                                          const std::vector<CalibrationSample>& data,
                                          const SolverOptions& fk = SolverOptions());
 
+/// Table 3 statistics (max, mean, min) of per-configuration errors; failures are counted apart.
+PoseErrorStats error_statistics(const ConfigurationErrors& errors);
+
 /// Table 3 statistics of `robot` (with its extrinsics) on `data`.
 PoseErrorStats pose_errors(const RobotParams<double>& robot,
                            const std::vector<CalibrationSample>& data,
