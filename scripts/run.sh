@@ -114,11 +114,12 @@ build_main() {
 
 # `pip install ./python` into .venv, as the README tells users, with the build tools .venv
 # already has (no download) and a kept build directory (build/pip) so that a re-run only
-# recompiles what changed.
+# recompiles what changed. (--config-settings, not -C: Debian 12's venv pip is 23.0, -C is 23.1.)
 install_python_package() {
   log "pip install ./python into $VENV"
   CMAKE_BUILD_PARALLEL_LEVEL=$JOBS "$VENV/bin/python" -m pip install --disable-pip-version-check \
-    --quiet --no-build-isolation --no-deps -C "build-dir=$ROOT/build/pip" "$ROOT/python"
+    --quiet --no-build-isolation --no-deps --config-settings="build-dir=$ROOT/build/pip" \
+    "$ROOT/python"
 }
 
 # ---- commands --------------------------------------------------------------------------------
