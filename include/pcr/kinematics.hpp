@@ -861,10 +861,8 @@ void visit_rod_shapes(const RobotParams<double>& robot, const JointVector& q,
                       Visitor&& visit) {
   for (int i = 0; i < robot.num_limbs; ++i) {
     const LimbParams<double>& limb = robot.limb(i);
-    const Vector2<double> start = limb.proximal_position(q(i));
-    const RodState<double> proximal{start.x(), start.y(), limb.alpha, wrenches[i].nx,
-                                    wrenches[i].ny, wrenches[i].m};
-    sample_rod(proximal, limb.bending_stiffness(), limb.length, rod_steps,
+    sample_rod(proximal_rod_state(limb, q(i), wrenches[i]), limb.bending_stiffness(), limb.length,
+               rod_steps,
                [&](double s, const RodState<double>& state) { visit(i, s, state); });
   }
 }

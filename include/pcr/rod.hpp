@@ -127,7 +127,8 @@ struct RodStepper {
         gdm[st][1] -= cc;  // d/dn_y of -n_y c
       }
     }
-    const auto rk4 = [this](T& v, const T(&k)[4]) {
+    // One RK4 update, of a state (T) or of its tangent columns (Cols).
+    const auto rk4 = [this](auto& v, const auto& k) {
       v += sixth_h * (k[0] + T(2) * (k[1] + k[2]) + k[3]);
     };
     rk4(x, sc);
@@ -137,15 +138,12 @@ struct RodStepper {
     rk4(th, sk);
     rk4(m, dm);
     if constexpr (Sens) {
-      const auto rk4c = [this](Cols& v, const Cols(&k)[4]) {
-        v += sixth_h * (k[0] + T(2) * (k[1] + k[2]) + k[3]);
-      };
-      rk4c(tx, gc);
-      rk4c(ty, gs);
-      rk4c(tc, gdc);
-      rk4c(ts, gds);
-      rk4c(tth, gk);
-      rk4c(tm, gdm);
+      rk4(tx, gc);
+      rk4(ty, gs);
+      rk4(tc, gdc);
+      rk4(ts, gds);
+      rk4(tth, gk);
+      rk4(tm, gdm);
     }
     const T abs_m = abs(m);
     if (abs_m > max_abs_moment) max_abs_moment = abs_m;

@@ -211,8 +211,8 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
   for (int i = 0; i < n; ++i) {
     const LimbParams<T>& limb = robot.limb(i);
     const RodTip<T>& rod = tips[i];
-    const double bx = scalar_value(limb.B.x()), by = scalar_value(limb.B.y());
-    const double arm_x = c * bx - s * by, arm_y = s * bx + c * by;  // distal_arm
+    const Vector2<T> arm = distal_arm(limb, T(c), T(s));
+    const double arm_x = scalar_value(arm.x()), arm_y = scalar_value(arm.y());
     // d r / d (scaled wrench): physical derivative times the unknown's scale.
     const double to_scaled[3] = {scale.force, scale.force, scale.moment()};
     for (int j = 0; j < 3; ++j) {
