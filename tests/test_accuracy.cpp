@@ -221,8 +221,9 @@ TEST(CommandPath, CommandedJointsReproduceThePosesByForwardKinematics) {
   for (std::size_t k = 0; k < square.size(); ++k) {
     fk = forward_kinematics(robot, command.q[k], fk);
     ASSERT_TRUE(fk.summary.converged()) << k;
-    EXPECT_LT(distance(fk.pose, square[k]), 1e-12) << k;
-    EXPECT_NEAR(fk.pose.theta, 0.0, 1e-10) << k;
+    // IK and FK each pick their RK4 step count for the default accuracy (1 nm, 1 urad).
+    EXPECT_LT(distance(fk.pose, square[k]), 1e-9) << k;
+    EXPECT_NEAR(fk.pose.theta, 0.0, 1e-6) << k;
     EXPECT_LE(command.max_strain[k], kDefaultStrainLimit);
   }
 }
@@ -242,7 +243,7 @@ TEST(Accuracy, TrueModelOnANoiselessVirtualRobotIsExact) {
   ASSERT_EQ(truth.attained.size(), 12u);
   ASSERT_EQ(truth.attained[0].size(), 3u);
   EXPECT_LT(truth.iso.ap_p.max, 1e-9);
-  EXPECT_LT(truth.iso.ap_theta_abs.max, 1e-9);
+  EXPECT_LT(truth.iso.ap_theta_abs.max, 1e-6);  // the default accuracy of IK and FK
   EXPECT_LT(truth.iso.rp_l.max, 1e-12);
 
   // Mapped with the true extrinsics (here the model's too): the same.
@@ -292,7 +293,7 @@ TEST(Accuracy, ModelFramesMakeTheEvaluationGaugeInvariant) {
   const AccuracyEvaluation in_model = evaluate_on_virtual_robot(model, robot, circle_path(spec),
                                                                 options);
   EXPECT_LT(in_model.iso.ap_p.max, 1e-9);
-  EXPECT_LT(in_model.iso.ap_theta_abs.max, 1e-9);
+  EXPECT_LT(in_model.iso.ap_theta_abs.max, 1e-6);
   // Compared in the truth's frames, the same model looks hundreds of micrometres off.
   options.frame = AttainedFrame::kTrueExtrinsics;
   const AccuracyEvaluation in_truth = evaluate_on_virtual_robot(model, robot, circle_path(spec),

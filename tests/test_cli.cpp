@@ -118,7 +118,11 @@ TEST_F(Cli, ForwardThenInverseThenForwardReturnsThePose) {
   std::string joints_back = "q1,q2,q3\n";
   for (std::size_t i = 0; i < ik.rows.size(); ++i) {
     EXPECT_EQ(ik.rows[i][6], 1.0);
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(ik.rows[i][3 + k], fk.rows[i][k], 1e-9) << i;
+    // FK's pose is within 1 nm / 1 urad of the exact model, IK's joints within 1 nm: an angle
+    // error moves the joints by up to the platform's radius (30 mm) times it.
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(ik.rows[i][3 + k], fk.rows[i][k], 1e-9 + 0.03 * 1e-6) << i;
+    }
     joints_back += pcr::format_double(ik.rows[i][3]) + "," + pcr::format_double(ik.rows[i][4]) +
                    "," + pcr::format_double(ik.rows[i][5]) + "\n";
   }
@@ -129,9 +133,10 @@ TEST_F(Cli, ForwardThenInverseThenForwardReturnsThePose) {
                                            "iterations", "residual", "max_strain"});
   ASSERT_EQ(back.rows.size(), fk.rows.size());
   for (std::size_t i = 0; i < back.rows.size(); ++i) {
-    EXPECT_NEAR(back.rows[i][3], fk.rows[i][3], 1e-12) << i;
-    EXPECT_NEAR(back.rows[i][4], fk.rows[i][4], 1e-12) << i;
-    EXPECT_NEAR(back.rows[i][5], fk.rows[i][5], 1e-12 / 0.03) << i;
+    // FK and IK each pick their RK4 step count for the default accuracy (1 nm, 1 urad).
+    EXPECT_NEAR(back.rows[i][3], fk.rows[i][3], 1e-9) << i;
+    EXPECT_NEAR(back.rows[i][4], fk.rows[i][4], 1e-9) << i;
+    EXPECT_NEAR(back.rows[i][5], fk.rows[i][5], 1e-6) << i;
   }
 }
 

@@ -68,7 +68,7 @@ struct SolveArguments {
     command.add_option("--force", force, "external force on the platform, fx,fy (N, in W)");
     command.add_option("--moment", moment, "external moment on the platform, mz (N m)");
     command.add_option("--steps", steps,
-                       "RK4 steps per rod (0: chosen from the curvature for the default accuracy)")
+                       "RK4 steps per rod (0: chosen from the solution's error estimate, 1 nm / 1 urad)")
         ->check(CLI::Range(0, 100000))
         ->capture_default_str();
   }

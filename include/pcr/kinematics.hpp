@@ -24,6 +24,7 @@ enum class SolveStatus {
   kConverged,      ///< the scaled residual is below the tolerance
   kMaxIterations,  ///< the iteration or continuation budget ran out
   kSingular,       ///< no solution on this branch: the Jacobian became singular along the path
+  kBifurcation,    ///< the path starts on a bifurcation (solutions exist on other branches)
   kNonFinite,      ///< the residual became NaN or infinite
   kOutOfRange,     ///< IK converged, but a joint value lies outside its stroke
   kUnsupported,    ///< the request is not a square problem (IK with n > 3 limbs)
@@ -35,6 +36,7 @@ inline const char* to_string(SolveStatus status) {
     case SolveStatus::kConverged: return "converged";
     case SolveStatus::kMaxIterations: return "max_iterations";
     case SolveStatus::kSingular: return "singular";
+    case SolveStatus::kBifurcation: return "bifurcation";
     case SolveStatus::kNonFinite: return "non_finite";
     case SolveStatus::kOutOfRange: return "out_of_range";
     case SolveStatus::kUnsupported: return "unsupported";
@@ -44,12 +46,16 @@ inline const char* to_string(SolveStatus status) {
 }
 
 struct SolverOptions {
-  /// RK4 steps per rod; 0 chooses them from the largest curvature of the solution so that the
-  /// RK4 error stays near rod_error_tolerance (tests/test_reference.cpp checks it against CVODE).
+  /// RK4 steps per rod; 0 chooses them from an estimate of the solution's own discretisation
+  /// error (RK4 is fourth order: the residual of the N/2-step model at the N-step solution gives
+  /// it, through the Jacobian, for the solved outputs themselves), so that the outputs stay within
+  /// position_accuracy and angle_accuracy of the exact model's (tests/test_reference.cpp checks
+  /// it against CVODE on random robots).
   int rod_steps = 0;
-  /// Target RK4 error on the rods' tips (m) when rod_steps = 0. The error of RK4 on a rod of
-  /// length l and largest curvature kappa, in N steps, is about 2e-3 l (kappa l / N)^4.
-  double rod_error_tolerance = 1e-10;
+  /// Target of that estimate on the solved lengths (m): FK's platform x, y; IK's joints.
+  double position_accuracy = 2.5e-10;
+  /// Target of that estimate on the solved angles (rad): FK's theta; IK's theta for n = 2.
+  double angle_accuracy = 2.5e-7;
   int min_rod_steps = 16;
   int max_rod_steps = 512;
   /// Newton iterations per solve (each sub-solve of a continuation has its own budget).
@@ -78,6 +84,10 @@ struct SolverSummary {
   double final_residual_norm = std::numeric_limits<double>::quiet_NaN();    ///< scaled max-norm
   double max_strain = std::numeric_limits<double>::quiet_NaN();  ///< max |kappa| d / 2 over the rods
   int rod_steps = 0;  ///< RK4 steps per rod of the returned solution
+  /// Estimated discretisation error of the returned outputs against the exact model (NaN when
+  /// not estimated: a fixed rod_steps, or no converged solution): lengths (m) and angles (rad).
+  double position_error_estimate = std::numeric_limits<double>::quiet_NaN();
+  double angle_error_estimate = std::numeric_limits<double>::quiet_NaN();
   bool converged() const { return status == SolveStatus::kConverged; }
 };
 
@@ -114,30 +124,42 @@ class ShootingProblem {
       : kind_(kind), robot_(robot), load_(load), options_(options),
         scale_(shooting_scale(robot)), n_(robot.num_limbs) {
     steps_ = options.rod_steps > 0 ? options.rod_steps : options.min_rod_steps;
-    double length = 0, diameter = 1e300;
-    for (int i = 0; i < n_; ++i) {
-      length = std::max(length, robot.limb(i).length);
-      diameter = std::min(diameter, robot.limb(i).diameter);
-    }
-    max_length_ = length;
-    min_diameter_ = diameter;
   }
 
   int rod_steps() const { return steps_; }
   void set_rod_steps(int steps) { steps_ = steps; }
+  const RobotParams<double>& robot() const { return robot_; }
+  const PlatformLoad<double>& load() const { return load_; }
 
-  /// Steps needed for the error target at a solution whose largest bending strain is `strain`.
-  int required_rod_steps(double strain) const {
+  /// The physical size of a step dz of the scaled unknowns on the solved outputs: the largest
+  /// length (m: FK's x, y; IK's joints) and the largest angle (rad: FK's theta; IK's theta, n = 2).
+  void output_change(const ShootingVector& dz, double& position, double& angle) const {
+    position = 0.0;
+    angle = 0.0;
+    const auto take = [](double& to, double v) { to = std::isfinite(v) ? std::max(to, v) : v; };
+    if (kind_ == Kind::kForward) {
+      take(position, std::abs(dz(3 * n_)) * scale_.length);
+      take(position, std::abs(dz(3 * n_ + 1)) * scale_.length);
+      take(angle, std::abs(dz(3 * n_ + 2)));
+    } else {
+      for (int i = 0; i < n_; ++i) take(position, std::abs(dz(3 * n_ + i)) * scale_.length);
+      if (n_ == 2) take(angle, std::abs(dz(4 * n_)));
+    }
+  }
+
+  /// The step count for a solution whose estimated error at the current count is `ratio` times
+  /// its target: the smallest on the ladder that meets the target (error ~ N^-4), but a lower
+  /// count only when it meets half the target, so that a sequence does not flip between two.
+  int rod_steps_for_error(double ratio) const {
     if (options_.rod_steps > 0) return options_.rod_steps;
-    const double kappa_l = 2.0 * strain / min_diameter_ * max_length_;
-    const double k = std::pow(2e-3 * max_length_ / options_.rod_error_tolerance, 0.25);
-    const double steps = k * kappa_l;
-    if (!(steps < options_.max_rod_steps)) return options_.max_rod_steps;  // NaN too
-    // Round up on a ladder of x1.5 / x1.33 steps, so that FK and IK of one configuration, solved
-    // along different paths, settle on the same discrete model.
-    int ladder = options_.min_rod_steps;
-    while (ladder < steps && ladder < options_.max_rod_steps) ladder = next_rung(ladder);
-    return std::min(ladder, options_.max_rod_steps);
+    if (!std::isfinite(ratio)) return options_.max_rod_steps;
+    const auto rung_at_least = [&](double steps) {
+      int ladder = options_.min_rod_steps;
+      while (ladder < steps && ladder < options_.max_rod_steps) ladder = next_rung(ladder);
+      return std::min(ladder, options_.max_rod_steps);
+    };
+    if (ratio > 1.0) return std::max(steps_, rung_at_least(steps_ * std::pow(ratio, 0.25)));
+    return std::min(steps_, rung_at_least(steps_ * std::pow(2.0 * ratio, 0.25)));
   }
 
   /// The step count after `steps` on the ladder towards `target` (which is on the ladder).
@@ -240,8 +262,6 @@ class ShootingProblem {
   ShootingScale scale_;
   int n_;
   int steps_;
-  double max_length_;
-  double min_diameter_;
   ShootingVector input_;
   ShootingVector offset_;
   mutable ShootingMatrix partials_;
@@ -279,6 +299,8 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
   // expected to contract by kChordContraction, so the old factorisation will do.
   constexpr double kWarmNorm = 1e-2;
   constexpr double kChordContraction = 0.1;
+  // A residual and a Newton step this small (scaled: 3e-11 m on a 30 mm rod) are rounding noise.
+  constexpr double kRoundingFloor = 1e-9;
   NewtonResult result;
   ShootingVector r, r_trial, z_trial, step, r_corrected, z_corrected;
   JacobianMatrix J, J_trial;
@@ -430,6 +452,13 @@ inline NewtonResult newton_solve(const ShootingProblem& problem, ShootingVector&
       accept_corrector();
       continue;
     }
+    if (!accepted && norm <= kRoundingFloor && step.lpNorm<Eigen::Infinity>() <= kRoundingFloor) {
+      // A Newton step within rounding of a solution that cannot decrease its residual any
+      // further: an ill-conditioned Jacobian (pre-stressed rods, some pulled nearly straight)
+      // puts the rounding floor above the tolerance. The solution is as exact as it can be.
+      result.status = SolveStatus::kConverged;
+      return result;
+    }
     if (!accepted) {
       // No descent along the Newton direction: a minimum of |r| with r != 0 has J^T r = 0.
       const ShootingVector gradient = J.transpose() * r;
@@ -480,6 +509,9 @@ inline double jacobian_rcond(const ShootingProblem& problem, const ShootingVecto
 /// solution on this branch: rcond^2, linear in t near a fold, extrapolates to zero before the
 /// end of the path) from a plain failure to converge.
 
+/// Reciprocal condition number below which a solved start counts as a bifurcation point.
+inline constexpr double kBifurcationRcond = 1e-13;
+
 inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const ShootingVector& u0,
                                              const ShootingVector& u1, ShootingVector& z,
                                              const SolverOptions& options,
@@ -501,6 +533,12 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   // (t, rcond) at the last two solved points of the path.
   problem.set_input(u0);
   double rc_last = jacobian_rcond(problem, z0, summary), rc_prev = rc_last;
+  if (rc_last <= kBifurcationRcond) {
+    // A solution with a singular Jacobian that Newton could not leave: the straight rods of a
+    // robot with n >= 4 limbs (a self-stress), where the branches of bowed rods meet.
+    z = z0;
+    return SolveStatus::kBifurcation;
+  }
   double t_rc_last = 0.0, t_rc_prev = 0.0;
   const auto singular_ahead = [&]() {
     if (rc_last <= 1e-12) return true;
@@ -549,15 +587,44 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   return SolveStatus::kConverged;
 }
 
-/// A converged solution whose curvature calls for another RK4 step count than it was solved with
-/// is solved again (from itself: one or two Newton iterations) at the step count it calls for.
+/// Estimates the discretisation error of a converged solution z of the N-step model and stores it
+/// in the summary; returns its ratio to the accuracy targets. RK4 is fourth order: the residual
+/// error of the M = N/2-step model is f = (N/M)^4 times that of the N-step one, e_N, so at z
+/// r_M(z) - r_N(z) = (f - 1) e_N, and the exact model's solution lies at z + J^-1 e_N. J is the
+/// last Jacobian the solve evaluated (`chord`; one at z when there is none): the estimate needs
+/// its direction, not its last digits.
+inline double estimate_discretisation_error(ShootingProblem& problem, const ShootingVector& z,
+                                            const SolverOptions& options, SolverSummary& summary,
+                                            const JacobianMatrix* chord) {
+  const int steps = problem.rod_steps();
+  const int half = std::max(1, steps / 2);
+  ShootingVector r_full, r_half;
+  JacobianMatrix J;
+  const bool have_chord =
+      chord && chord->rows() == problem.size() && chord->cols() == problem.size();
+  problem.evaluate(z, r_full, have_chord ? nullptr : &J);
+  problem.set_rod_steps(half);
+  problem.evaluate(z, r_half, nullptr);
+  problem.set_rod_steps(steps);
+  summary.residual_evaluations += 2;
+  const double f = std::pow(double(steps) / half, 4.0);
+  const Eigen::PartialPivLU<JacobianMatrix> lu(have_chord ? *chord : J);
+  const ShootingVector dz = lu.solve((r_half - r_full) / (f - 1.0));
+  problem.output_change(dz, summary.position_error_estimate, summary.angle_error_estimate);
+  return std::max(summary.position_error_estimate / options.position_accuracy,
+                  summary.angle_error_estimate / options.angle_accuracy);
+}
+
+/// Solves a converged solution again (from itself: one or two Newton iterations) at the RK4 step
+/// count its estimated discretisation error calls for, until the estimate meets the targets.
 inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
                                     const SolverOptions& options, SolverSummary& summary,
                                     SolveStatus status, JacobianMatrix* chord) {
-  for (int pass = 0; pass < 2 && status == SolveStatus::kConverged; ++pass) {
-    const int needed = problem.required_rod_steps(summary.max_strain);
+  for (int pass = 0; status == SolveStatus::kConverged && options.rod_steps <= 0; ++pass) {
+    const double ratio = estimate_discretisation_error(problem, z, options, summary, chord);
+    const int needed = problem.rod_steps_for_error(ratio);
     const int start = problem.rod_steps();
-    if (needed == start) break;
+    if (needed == start || pass == 4) break;
     const ShootingVector z_start = z;
     problem.set_rod_steps(needed);
     NewtonResult refined = newton_solve(problem, z, options, summary, chord);
@@ -580,13 +647,16 @@ inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
   return status;
 }
 
-/// Solves along the input path with the step count of the start's curvature, then refines it for
-/// the solution's curvature.
+/// Solves along the input path with the start's step count, then refines the count for the
+/// solution's estimated discretisation error.
 inline SolveStatus solve_along_path(ShootingProblem& problem, const ShootingVector& u0,
                                     const ShootingVector& u1, ShootingVector& z,
                                     const SolverOptions& options, SolverSummary& summary,
-                                    double start_strain, JacobianMatrix* chord) {
-  problem.set_rod_steps(problem.required_rod_steps(start_strain));
+                                    int start_steps, JacobianMatrix* chord) {
+  if (options.rod_steps <= 0) {
+    problem.set_rod_steps(
+        std::min(std::max(start_steps, options.min_rod_steps), options.max_rod_steps));
+  }
   const SolveStatus status =
       solve_path_at_fixed_steps(problem, u0, u1, z, options, summary, chord);
   return refine_rod_steps(problem, z, options, summary, status, chord);
@@ -601,7 +671,194 @@ void copy_wrenches(const ShootingPoint<double>& p, int n, Solution& solution) {
   for (int i = 0; i < n; ++i) solution.wrenches[i] = p.wrenches[i];
 }
 
-/// The solution at q = 0 from the unloaded straight guess (exact for a stress-free robot).
+/// Curvature times length of the rods of the bowed variant (bowed_variant_homotopy): a bow of
+/// about 2.5% of the length, far from the straight rods' bifurcation yet mildly bent.
+inline constexpr double kVariantBow = 0.2;
+
+/// Forward kinematics at the joints u by a homotopy in the geometry, for robots whose straight
+/// guess sits on a bifurcation. With n >= 4 limbs straight rods admit a self-stress (axial forces
+/// that balance on the platform and deform nothing), so the Jacobian there is singular and the
+/// robot's configurations branch off: each rod bows to one side or the other. The branch taken is
+/// the one connected to a variant of the robot whose solution is known: every rod a circular arc
+/// of curvature bow / l (bow > 0: to its left, counterclockwise, seen from its proximal clamp),
+/// the platform at the rigid fit of the straight rods' tips onto the distal clamps, the variant's
+/// distal clamps where the arcs end, and a platform moment balancing the rods' moments. From that
+/// exact solution (n = 0, m = EI kappa) the distal clamps, their angles and the load move to the
+/// robot's by natural continuation with a secant predictor. Returns the status and, in z, the
+/// unknowns of the robot's FK problem (same scaling: it depends on l and EI only).
+inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
+                                          const PlatformLoad<double>& load,
+                                          const ShootingVector& u, double bow,
+                                          const SolverOptions& options, SolverSummary& summary,
+                                          ShootingVector& z) {
+  const int n = robot.num_limbs;
+  // Straight rods' tips from the moved proximal clamps, and their rigid fit (2D Procrustes).
+  Vector2<double> tips[kMaxLimbs], b_mean(0, 0), t_mean(0, 0);
+  for (int i = 0; i < n; ++i) {
+    const LimbParams<double>& limb = robot.limb(i);
+    tips[i] = limb.proximal_position(u(i)) +
+              limb.length * Vector2<double>(std::cos(limb.alpha), std::sin(limb.alpha));
+    b_mean += limb.B / n;
+    t_mean += tips[i] / n;
+  }
+  double dot = 0, cross = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vector2<double> b = robot.limb(i).B - b_mean, t = tips[i] - t_mean;
+    dot += b.dot(t);
+    cross += b.x() * t.y() - b.y() * t.x();
+  }
+  const double theta = std::atan2(cross, dot), c = std::cos(theta), s = std::sin(theta);
+  const Vector2<double> origin =
+      t_mean - Vector2<double>(c * b_mean.x() - s * b_mean.y(), s * b_mean.x() + c * b_mean.y());
+  // The variant and its solution.
+  RobotParams<double> variant = robot;
+  PlatformLoad<double> variant_load;
+  ShootingPoint<double> start;
+  start.pose = Pose2<double>{origin.x(), origin.y(), theta};
+  for (int i = 0; i < n; ++i) {
+    LimbParams<double>& limb = variant.limb(i);
+    const double kappa = bow / limb.length, turn = bow;
+    const Vector2<double> a = limb.proximal_position(u(i));
+    const Vector2<double> end =
+        a + Vector2<double>(std::sin(limb.alpha + turn) - std::sin(limb.alpha),
+                            std::cos(limb.alpha) - std::cos(limb.alpha + turn)) /
+                kappa;
+    const Vector2<double> d = end - origin;
+    limb.B = Vector2<double>(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
+    limb.beta = limb.alpha + turn - theta;
+    start.q[i] = u(i);
+    start.wrenches[i] = Wrench<double>{0.0, 0.0, limb.bending_stiffness() * kappa};
+    variant_load.moment += start.wrenches[i].m;
+  }
+  const RobotParams<double> from = variant;
+  const PlatformLoad<double> from_load = variant_load;
+  const auto blend = [&](double t) {
+    for (int i = 0; i < n; ++i) {
+      variant.limb(i).B = from.limb(i).B + t * (robot.limb(i).B - from.limb(i).B);
+      variant.limb(i).beta = from.limb(i).beta + t * (robot.limb(i).beta - from.limb(i).beta);
+    }
+    variant_load.force = from_load.force + t * (load.force - from_load.force);
+    variant_load.moment = from_load.moment + t * (load.moment - from_load.moment);
+  };
+  ShootingProblem problem(ShootingProblem::Kind::kForward, variant, variant_load, options);
+  problem.set_input(u);
+  z = problem.pack(start);
+  NewtonResult sub = newton_solve(problem, z, options, summary);
+  if (sub.status != SolveStatus::kConverged) return sub.status;
+  // Pseudo-arclength continuation of (z, t): the path may turn back in t (a fold of the blended
+  // geometry) before it reaches t = 1. Each corrector is Newton on r(z, t) = 0 and the arclength
+  // condition, solved by bordering; r is affine in t (clamps, angles and load blend linearly), so
+  // one residual difference gives dr/dt exactly.
+  constexpr double kPathTolerance = 1e-8;
+  ShootingVector r, r_shift, a, b;
+  JacobianMatrix J;
+  Eigen::PartialPivLU<JacobianMatrix> lu;
+  const auto linearise = [&](const ShootingVector& zz, double t) {
+    blend(t + 1.0);
+    problem.evaluate(zz, r_shift, nullptr);
+    blend(t);
+    sub.max_strain = problem.evaluate(zz, r, &J);
+    summary.residual_evaluations += 2;
+    lu.compute(J);
+    return lu.rcond() > 1e-14 && r.allFinite() && r_shift.allFinite();
+  };
+  ShootingVector z_last = z, tangent_z;
+  double t_last = 0.0, tangent_t = 1.0;
+  if (!linearise(z_last, 0.0)) return SolveStatus::kSingular;
+  tangent_z = -lu.solve(ShootingVector(r_shift - r));  // dz/dt along the path at t = 0
+  double norm = std::sqrt(tangent_z.squaredNorm() + 1.0);
+  tangent_z /= norm;
+  tangent_t /= norm;
+  double ds = 0.125;
+  for (int steps = 0; steps < 4 * options.max_continuation_steps && ds >= options.min_continuation_step;
+       ++steps) {
+    ++summary.continuation_steps;
+    // Predictor; a step that would pass t = 1 is shortened to land on it.
+    double step = ds;
+    if (tangent_t > 0 && t_last + step * tangent_t > 1.0) step = (1.0 - t_last) / tangent_t;
+    ShootingVector zz = z_last + step * tangent_z;
+    double t = t_last + step * tangent_t;
+    const bool last = std::abs(t - 1.0) < 1e-12;
+    bool converged = false;
+    for (int it = 0; it < options.max_continuation_iterations; ++it) {
+      if (!linearise(zz, t)) break;
+      ++summary.iterations;
+      // Points along the way need not be exact (a pre-stressed path can be ill-conditioned
+      // enough to put a rounding floor near the tolerance); the end point is polished below.
+      if (max_norm(r) <= kPathTolerance) {
+        converged = true;
+        break;
+      }
+      // [J r_t; tangent^T] (dz, dt) = -(r, g), g = tangent . (y - y_pred) = 0 on the predictor
+      // plane (the end step keeps t = 1 instead).
+      a = lu.solve(r);
+      b = lu.solve(ShootingVector(r_shift - r));
+      const double g = last ? 0.0 : tangent_z.dot(zz - z_last - step * tangent_z) +
+                                        tangent_t * (t - t_last - step * tangent_t);
+      const double dt = last ? 0.0 : (-g + tangent_z.dot(a)) / (tangent_t - tangent_z.dot(b));
+      zz -= a + b * dt;
+      t += dt;
+    }
+    if (!converged) {
+      ds *= 0.5;
+      continue;
+    }
+    if (!last && t > 1.0) {
+      // The corrector went past t = 1: solve there from the chord between the two points.
+      blend(1.0);
+      ShootingVector z_end = z_last + (zz - z_last) * ((1.0 - t_last) / (t - t_last));
+      const NewtonResult end = newton_solve(problem, z_end, options, summary);
+      if (end.status != SolveStatus::kConverged) {
+        ds *= 0.5;
+        continue;
+      }
+      z = z_end;
+      summary.final_residual_norm = end.final_norm;
+      summary.max_strain = end.max_strain;
+      return SolveStatus::kConverged;
+    }
+    if (last) {
+      const NewtonResult end = newton_solve(problem, zz, options, summary);
+      if (end.status != SolveStatus::kConverged) {
+        ds *= 0.5;
+        continue;
+      }
+      z = zz;
+      summary.final_residual_norm = end.final_norm;
+      summary.max_strain = end.max_strain;
+      return SolveStatus::kConverged;
+    }
+    // Secant tangent, oriented along the path.
+    ShootingVector dz = zz - z_last;
+    double dt = t - t_last;
+    norm = std::sqrt(dz.squaredNorm() + dt * dt);
+    tangent_z = dz / norm;
+    tangent_t = dt / norm;
+    z_last = zz;
+    t_last = t;
+    ds = std::min(2.0 * ds, 16.0);
+  }
+  z = z_last;
+  return SolveStatus::kMaxIterations;
+}
+
+/// bowed_variant_homotopy with the rods bowed to their left, then, if that path fails, to their
+/// right (the documented order of the branches tried).
+inline SolveStatus solve_from_bowed_variant(const RobotParams<double>& robot,
+                                            const PlatformLoad<double>& load,
+                                            const ShootingVector& u, const SolverOptions& options,
+                                            SolverSummary& summary, ShootingVector& z) {
+  SolveStatus status = SolveStatus::kMaxIterations;
+  for (const double bow : {kVariantBow, -kVariantBow}) {
+    status = bowed_variant_homotopy(robot, load, u, bow, options, summary, z);
+    if (status == SolveStatus::kConverged) break;
+  }
+  return status;
+}
+
+/// The solution at q = 0: from the unloaded straight guess (exact for a stress-free robot); when
+/// Newton fails from there, by a Newton homotopy from it (n <= 3) and from a bowed variant of the
+/// robot (n >= 4, where the straight guess is on a bifurcation, or when that homotopy fails).
 inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& options,
                                     SolverSummary& summary, SolveStatus& status,
                                     JacobianMatrix* chord) {
@@ -610,7 +867,8 @@ inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& op
   ShootingVector z = ShootingVector::Zero(fk.size());
   NewtonResult home = newton_solve(fk, z, options, summary);
   summary.initial_residual_norm = home.initial_norm;
-  if (home.status != SolveStatus::kConverged && options.continuation) {
+  if (home.status != SolveStatus::kConverged && options.continuation &&
+      fk.robot().num_limbs <= 3) {
     // Newton homotopy from the straight guess z0: r(z) = (1 - t) r(z0), t from 0 to 1.
     ShootingVector r0, z_last = ShootingVector::Zero(fk.size());
     fk.evaluate(z_last, r0, nullptr);
@@ -636,6 +894,9 @@ inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& op
   }
   summary.final_residual_norm = home.final_norm;
   summary.max_strain = home.max_strain;
+  if (home.status != SolveStatus::kConverged && options.continuation) {
+    home.status = solve_from_bowed_variant(fk.robot(), fk.load(), u, options, summary, z);
+  }
   status = refine_rod_steps(fk, z, options, summary, home.status, chord);
   return z;
 }
@@ -669,7 +930,7 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
   solution.jacobian = warm_start.jacobian;
   solution.summary.status =
       internal::solve_along_path(problem, u0, u1, z, options, solution.summary,
-                                 warm_start.summary.max_strain, &solution.jacobian);
+                                 warm_start.summary.rod_steps, &solution.jacobian);
   // On failure this is the last solved point of the path, with its joints.
   const ShootingPoint<double> p = problem.unpack(z);
   for (int i = 0; i < n; ++i) solution.q(i) = p.q[i];
@@ -700,7 +961,10 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot,
   return home;
 }
 
-/// Forward kinematics from a cold start: the home solution, then a (continued) path to q.
+/// Forward kinematics from a cold start: the home solution, then a (continued) path to q. When
+/// home is a bifurcation (the straight rods of a stress-free robot with n >= 4 limbs), q is solved
+/// directly from a bowed variant of the robot instead (internal::bowed_variant_homotopy: the
+/// branch whose rods bow to their left, else the one where they bow to their right).
 inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
                                           const SolverOptions& options = SolverOptions(),
                                           const PlatformLoad<double>& load = PlatformLoad<double>()) {
@@ -712,6 +976,25 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
   ForwardSolution solution = forward_kinematics(robot, q, home, options, load);
   solution.summary.iterations += home.summary.iterations;
   solution.summary.residual_evaluations += home.summary.residual_evaluations;
+  if (solution.summary.status == SolveStatus::kBifurcation && options.continuation) {
+    internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load,
+                                      options);
+    ShootingVector u = q, z;
+    problem.set_input(u);
+    SolveStatus status =
+        internal::solve_from_bowed_variant(robot, load, u, options, solution.summary, z);
+    if (status == SolveStatus::kConverged) {
+      problem.set_rod_steps(options.rod_steps > 0 ? options.rod_steps : options.min_rod_steps);
+      solution.jacobian.resize(0, 0);
+      status = internal::refine_rod_steps(problem, z, options, solution.summary, status,
+                                          &solution.jacobian);
+      const ShootingPoint<double> p = problem.unpack(z);
+      solution.q = q;
+      solution.pose = p.pose;
+      internal::copy_wrenches(p, robot.num_limbs, solution);
+    }
+    solution.summary.status = status;
+  }
   return solution;
 }
 
@@ -749,7 +1032,7 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
   ShootingVector z = problem.pack(start);
   solution.jacobian = warm_start.jacobian;
   SolveStatus status = internal::solve_along_path(problem, u0, u1, z, options, solution.summary,
-                                                  warm_start.summary.max_strain,
+                                                  warm_start.summary.rod_steps,
                                                   &solution.jacobian);
   const ShootingPoint<double> p = problem.unpack(z);
   solution.pose = p.pose;

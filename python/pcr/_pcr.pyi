@@ -70,6 +70,7 @@ class SolveStatus:
     converged: SolveStatus
     max_iterations: SolveStatus
     singular: SolveStatus
+    bifurcation: SolveStatus
     non_finite: SolveStatus
     out_of_range: SolveStatus
     unsupported: SolveStatus
@@ -81,7 +82,8 @@ class SolveStatus:
 
 class SolverOptions:
     rod_steps: int
-    rod_error_tolerance: float
+    position_accuracy: float
+    angle_accuracy: float
     min_rod_steps: int
     max_rod_steps: int
     max_iterations: int
@@ -115,6 +117,10 @@ class Solution:
     def max_strain(self) -> float: ...
     @property
     def rod_steps(self) -> int: ...
+    @property
+    def position_error_estimate(self) -> float: ...
+    @property
+    def angle_error_estimate(self) -> float: ...
     @property
     def continuation_steps(self) -> int: ...
     @property

@@ -250,6 +250,7 @@ void wrap_kinematics(py::module_& m) {
       .value("converged", SolveStatus::kConverged)
       .value("max_iterations", SolveStatus::kMaxIterations)
       .value("singular", SolveStatus::kSingular)
+      .value("bifurcation", SolveStatus::kBifurcation)
       .value("non_finite", SolveStatus::kNonFinite)
       .value("out_of_range", SolveStatus::kOutOfRange)
       .value("unsupported", SolveStatus::kUnsupported)
@@ -258,9 +259,11 @@ void wrap_kinematics(py::module_& m) {
   py::class_<SolverOptions>(m, "SolverOptions", "Newton shooting settings (pcr/kinematics.hpp).")
       .def(py::init<>())
       .def_readwrite("rod_steps", &SolverOptions::rod_steps,
-                     "RK4 steps per rod; 0 chooses them from the curvature")
-      .def_readwrite("rod_error_tolerance", &SolverOptions::rod_error_tolerance,
-                     "target RK4 tip error when rod_steps = 0 (m)")
+                     "RK4 steps per rod; 0 chooses them from the solution's estimated error")
+      .def_readwrite("position_accuracy", &SolverOptions::position_accuracy,
+                     "target of the estimated error of solved lengths when rod_steps = 0 (m)")
+      .def_readwrite("angle_accuracy", &SolverOptions::angle_accuracy,
+                     "target of the estimated error of solved angles when rod_steps = 0 (rad)")
       .def_readwrite("min_rod_steps", &SolverOptions::min_rod_steps)
       .def_readwrite("max_rod_steps", &SolverOptions::max_rod_steps)
       .def_readwrite("max_iterations", &SolverOptions::max_iterations, "Newton iterations per solve")
@@ -287,7 +290,7 @@ void wrap_kinematics(py::module_& m) {
       }, "(n, 3) proximal wrench of each rod: nx, ny (N), m (N m)")
       .def_property_readonly("converged", [](const Solution& s) { return s.summary.converged(); })
       .def_property_readonly("status", [](const Solution& s) { return std::string(to_string(s.summary.status)); },
-                             "converged, singular, max_iterations, non_finite, out_of_range, "
+                             "converged, singular, bifurcation, max_iterations, non_finite, out_of_range, "
                              "unsupported, invalid_input")
       .def_property_readonly("status_code", [](const Solution& s) { return s.summary.status; })
       .def_property_readonly("iterations", [](const Solution& s) { return s.summary.iterations; },
@@ -298,6 +301,12 @@ void wrap_kinematics(py::module_& m) {
                              "largest bending strain |kappa| d / 2 over the rods")
       .def_property_readonly("rod_steps", [](const Solution& s) { return s.summary.rod_steps; },
                              "RK4 steps per rod of this solution")
+      .def_property_readonly("position_error_estimate",
+                             [](const Solution& s) { return s.summary.position_error_estimate; },
+                             "estimated discretisation error of the solved lengths (m)")
+      .def_property_readonly("angle_error_estimate",
+                             [](const Solution& s) { return s.summary.angle_error_estimate; },
+                             "estimated discretisation error of the solved angles (rad)")
       .def_property_readonly("continuation_steps", [](const Solution& s) { return s.summary.continuation_steps; })
       .def_readonly("shapes", &Solution::shapes,
                     "None, or (with shapes=True) one (steps + 1, 4) array per rod: s, x, y (m), "

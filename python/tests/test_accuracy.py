@@ -56,7 +56,9 @@ def test_command_path_reaches_the_poses(robot):
     assert c["q"].shape == (8, 3) and c["max_strain"].shape == (8,)
     fk = robot.forward(c["q"])  # independent check: FK of the commanded joints
     assert fk.converged.all()
-    np.testing.assert_allclose(fk.pose, path, atol=1e-10)
+    # IK and FK each within the default accuracy of the exact model (1 nm, 1 urad).
+    np.testing.assert_allclose(fk.pose[:, :2], path[:, :2], atol=1e-9)
+    np.testing.assert_allclose(fk.pose[:, 2], path[:, 2], atol=1e-6)
     far = np.vstack([path[:2], [[0.5, 0.0, 0.0]]])  # 0.5 m away: out of reach
     with pytest.raises(ValueError, match="pose 2"):
         pcr.command_path(robot, far)
@@ -132,15 +134,17 @@ def test_evaluate_on_virtual_robot_matches_fk_of_the_truth(robot, tmp_path):
     fk = v.truth.forward(ev.q)
     assert fk.converged.all()
     for cycle in range(2):
-        np.testing.assert_allclose(ev.attained[:, cycle], fk.pose, atol=1e-11)
+        # Solved along other warm-start histories: each within 1 nm / 1 urad of the exact model.
+        np.testing.assert_allclose(ev.attained[:, cycle, :2], fk.pose[:, :2], atol=1e-9)
+        np.testing.assert_allclose(ev.attained[:, cycle, 2], fk.pose[:, 2], atol=1e-6)
     np.testing.assert_allclose(ev.iso.ap_p, np.hypot(*(fk.pose[:, :2] - path[:, :2]).T),
-                               rtol=1e-6, atol=1e-12)
+                               rtol=1e-6, atol=1e-9)
     assert ev.iso.summary["ap_p"]["mean"] > 1e-6  # the nominal model is visibly off the truth
     # Commanded with the truth itself, the robot reaches the path (frame model = its own).
     v2 = pcr.VirtualRobot(robot, seed=2, noise_position=0.0, noise_angle=0.0)
     exact = pcr.evaluate_on_virtual_robot(v2.truth, v2, path, repeat=2)
     assert exact.iso.summary["ap_p"]["max"] < 1e-9
-    assert exact.iso.summary["ap_theta_abs"]["max"] < 1e-9
+    assert exact.iso.summary["ap_theta_abs"]["max"] < 1e-6
     pcr.plot.plot_trajectory_accuracy(ev, path=tmp_path / "ev.png")
     pcr.plot.plot_trajectory_accuracy(ev.iso, path=tmp_path / "iso.png")
     assert (tmp_path / "ev.png").stat().st_size > 2000
