@@ -287,7 +287,7 @@ TEST(Kinematics, SequenceSolveRetriesAFailedWarmStartCold) {
   // failed attempt's work counted.
   ForwardSolution broken = cold;
   broken.wrenches[1].nx = std::nan("");
-  broken.jacobian.resize(0, 0);
+  broken.jacobian = internal::Factorisation();
   EXPECT_EQ(forward_kinematics(robot, q, broken).summary.status, SolveStatus::kNonFinite);
   const ForwardSolution retried = forward_kinematics_or_cold(robot, q, &broken);
   ASSERT_TRUE(retried.summary.converged());

@@ -44,6 +44,8 @@ PoseError pose_error(const pcr::Pose2<double>& a, const pcr::Pose2<double>& b) {
 
 /// The robots: 24 drawn inside the intervals around regular n-limb designs (16 with three limbs,
 /// three with two, three with four, two with five); robot 1 carries a platform load.
+int unjudged_ = 0;  // configurations redrawn because the reference did not converge
+
 std::vector<Case> make_cases() {
   constexpr int kLimbs[] = {3, 3, 2, 3, 4, 3, 5, 3, 3, 2, 3, 4, 3, 3, 5, 3, 3, 2, 3, 4, 3, 3, 3, 3};
   constexpr int kConfigurationsPerRobot = 6;
@@ -68,7 +70,15 @@ std::vector<Case> make_cases() {
       for (int i = 0; i < n; ++i) q(i) = s * unit(rng) * robot.limb(i).q_max;
       Case c{r, robot, load, q, pcr::forward_kinematics(robot, q, pcr::SolverOptions(), load), {}};
       if (!c.rk4.summary.converged() || c.rk4.summary.max_strain > kStrainLimit) continue;
-      c.reference = pcr::forward_kinematics_reference(robot, q, c.rk4, {}, load);
+      pcr::ReferenceOptions reference;
+      reference.jacobian_rod_steps = 1024;  // a closer Newton matrix for ill-conditioned robots
+      c.reference = pcr::forward_kinematics_reference(robot, q, c.rk4, reference, load);
+      // A reference that cannot reach its own tolerance (CVODE's floor on a strongly
+      // pre-stressed, ill-conditioned robot) cannot judge the RK4 answer: draw another.
+      if (!c.reference.summary.converged()) {
+        ++unjudged_;
+        continue;
+      }
       cases.push_back(c);
       ++found;
     }
@@ -97,8 +107,10 @@ TEST_F(ReferenceTest, EveryRobotIsSampledAcrossItsWorkspace) {
   for (int r = 0; r < 24; ++r) EXPECT_GE(robots_seen[r], 3) << "robot " << r;
   EXPECT_GT(max_strain, 0.005);
   EXPECT_GE(mild, 20);
+  EXPECT_LE(unjudged_, 6);
   std::printf("[ reference ] %zu configurations of 24 robots, %d mildly bent (0.05%%-0.3%%), "
-              "max strain %.3f%%\n", cases_->size(), mild, 100 * max_strain);
+              "max strain %.3f%%; %d redrawn (CVODE reference not converged)\n",
+              cases_->size(), mild, 100 * max_strain, unjudged_);
 }
 
 TEST_F(ReferenceTest, CvodeSolutionsConvergeAndAreTolerancesIndependent) {
@@ -139,7 +151,11 @@ TEST_F(ReferenceTest, DefaultForwardKinematicsIsWithinOneNanometreAndOneMicrorad
   const Case* worst_case = nullptr;
   int max_steps = 0;
   for (const Case& c : *cases_) {
-    ASSERT_TRUE(c.reference.summary.converged());
+    ASSERT_TRUE(c.reference.summary.converged())
+        << "robot " << c.robot_index << " q " << c.q.transpose() << " "
+        << pcr::to_string(c.reference.summary.status) << " strain " << c.rk4.summary.max_strain
+        << " residual " << c.reference.summary.final_residual_norm << " from "
+        << c.reference.summary.initial_residual_norm;
     const PoseError e = pose_error(c.rk4.pose, c.reference.pose);
     EXPECT_LE(e.position, kPositionPromise)
         << "robot " << c.robot_index << " q " << c.q.transpose() << " strain "
@@ -160,14 +176,21 @@ TEST_F(ReferenceTest, DefaultForwardKinematicsIsWithinOneNanometreAndOneMicrorad
 
 TEST_F(ReferenceTest, DefaultInverseKinematicsIsWithinOneNanometre) {
   // The exact joints of the CVODE pose are the q it was solved at. IK is square for n <= 3
-  // (n = 2: x and y imposed, theta solved).
+  // (n = 2: x and y imposed, theta solved). Cold IK may land on another branch (with two limbs
+  // more than one theta meets x and y): those poses are solved again from the FK solution, as a
+  // user with a nearby solution would, and counted.
   double worst = 0.0;
   const Case* worst_case = nullptr;
-  int solved = 0;
+  int solved = 0, other_branch = 0;
   for (const Case& c : *cases_) {
     if (c.robot.num_limbs > 3) continue;
-    const pcr::InverseSolution ik =
+    pcr::InverseSolution ik =
         pcr::inverse_kinematics(c.robot, c.reference.pose, pcr::SolverOptions(), c.load);
+    if (pcr::usable_as_warm_start(ik.summary) && (ik.q - c.q).cwiseAbs().maxCoeff() > 1e-6) {
+      ++other_branch;
+      ik = pcr::inverse_kinematics(c.robot, c.reference.pose, pcr::as_inverse_warm_start(c.rk4),
+                                   pcr::SolverOptions(), c.load);
+    }
     ASSERT_TRUE(pcr::usable_as_warm_start(ik.summary))
         << "robot " << c.robot_index << " q " << c.q.transpose() << " "
         << pcr::to_string(ik.summary.status);
@@ -179,9 +202,11 @@ TEST_F(ReferenceTest, DefaultInverseKinematicsIsWithinOneNanometre) {
     worst = std::max(worst, e);
   }
   EXPECT_GE(solved, 100);
+  EXPECT_LE(other_branch, 5);
   ASSERT_NE(worst_case, nullptr);
-  std::printf("[ reference ] default IK (%d poses): worst joint error %.3e m, on robot %d (n = "
-              "%d)\n", solved, worst, worst_case->robot_index, worst_case->robot.num_limbs);
+  std::printf("[ reference ] default IK (%d poses, %d of them cold on another branch): worst "
+              "joint error %.3e m, on robot %d (n = %d)\n", solved, other_branch, worst,
+              worst_case->robot_index, worst_case->robot.num_limbs);
 }
 
 TEST_F(ReferenceTest, ErrorFallsSixteenfoldPerDoubling) {

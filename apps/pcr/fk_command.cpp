@@ -25,16 +25,12 @@ void run_fk(const FkArguments& args) {
   for (const char* c : {"x", "y", "theta"}) header.emplace_back(c);
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
-  ForwardSolution previous;
-  bool have_previous = false;
+  ForwardSequence sequence(robot.params, options, load);
   cli::solve_rows("pcr fk", table, args.output, header, [&](const std::vector<double>& row) {
     JointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
-    const ForwardSolution solution = forward_kinematics_or_cold(
-        robot.params, q, have_previous ? &previous : nullptr, options, load);
+    const ForwardSolution& solution = sequence.solve(q);
     const SolverSummary& s = solution.summary;
-    have_previous = s.converged();
-    if (have_previous) previous = solution;
     const double nan = std::numeric_limits<double>::quiet_NaN();
     cli::SolvedRow out{{}, s.status};
     for (int i = 0; i < n; ++i) out.fields.push_back(format_double(q(i)));

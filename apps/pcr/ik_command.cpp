@@ -31,16 +31,12 @@ void run_ik(const IkArguments& args) {
   for (const std::string& q : cli::joint_names(n)) header.push_back(q);
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
-  InverseSolution previous;
-  bool have_previous = false;
+  InverseSequence sequence(robot.params, options, load);
   cli::solve_rows("pcr ik", table, args.output, header, [&](const std::vector<double>& row) {
     const Pose2<double> pose{row[0], row[1], row[2]};
-    const InverseSolution solution = inverse_kinematics_or_cold(
-        robot.params, pose, have_previous ? &previous : nullptr, options, load);
+    const InverseSolution& solution = sequence.solve(pose);
     const SolverSummary& s = solution.summary;
     const bool valid = usable_as_warm_start(s);  // a valid equilibrium, maybe out of range
-    have_previous = valid;
-    if (valid) previous = solution;
     const double nan = std::numeric_limits<double>::quiet_NaN();
     cli::SolvedRow out{{}, s.status};
     // For n = 2 theta is solved for: report the solved value.

@@ -149,6 +149,37 @@ T shooting_residual_from_tips(const RobotParams<T>& robot, const ShootingPoint<T
   return max_strain;
 }
 
+/// The columns of the scaled partials (see shooting_residual) w.r.t. the pose (3n, 3n + 3) and the
+/// joints (3n + 3, 4n + 3): the problems' inputs. Neither needs the rods integrated: the clamps
+/// move rigidly with the pose and the rods translate with their joints.
+template <class T>
+void input_partials(const RobotParams<T>& robot, const ShootingPoint<T>& point,
+                    const ShootingScale& scale, ShootingMatrix& partials) {
+  const int n = robot.num_limbs;
+  const double c = std::cos(scalar_value(point.pose.theta));
+  const double s = std::sin(scalar_value(point.pose.theta));
+  const int pose_col = 3 * n;
+  partials(3 * n + 2, pose_col + 2) = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const LimbParams<T>& limb = robot.limb(i);
+    const Vector2<T> arm = distal_arm(limb, T(c), T(s));
+    const double arm_x = scalar_value(arm.x()), arm_y = scalar_value(arm.y());
+    // Pose: the clamp moves with (x, y) and turns with theta; d arm / d theta = (-arm_y, arm_x).
+    partials(3 * i + 0, pose_col + 0) = -1.0;
+    partials(3 * i + 1, pose_col + 1) = -1.0;
+    partials(3 * i + 0, pose_col + 2) = arm_y / scale.length;
+    partials(3 * i + 1, pose_col + 2) = -arm_x / scale.length;
+    partials(3 * i + 2, pose_col + 2) = -1.0;
+    const double nx = scalar_value(point.wrenches[i].nx), ny = scalar_value(point.wrenches[i].ny);
+    // d/dtheta of (arm x n) = (-arm_y, arm_x) x n = -arm_y ny - arm_x nx.
+    partials(3 * n + 2, pose_col + 2) += (-arm_y * ny - arm_x * nx) / scale.moment();
+    // Joints: the whole rod translates along the actuator direction.
+    const Vector2<T> dir = limb.actuator_direction();
+    partials(3 * i + 0, 3 * n + 3 + i) = scalar_value(dir.x());
+    partials(3 * i + 1, 3 * n + 3 + i) = scalar_value(dir.y());
+  }
+}
+
 /// Evaluates the scaled residual (3n + 3) at a point. With `partials`, also fills
 /// d residual / d (wrenches, pose, q) in scaled units: columns [3i, 3i+3) rod i's wrench,
 /// [3n, 3n+3) the pose (x, y, theta), [3n+3, 4n+3) the joints. Returns the largest bending strain
@@ -228,21 +259,8 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
     }
     (*partials)(3 * n + 0, 3 * i + 0) = 1.0;
     (*partials)(3 * n + 1, 3 * i + 1) = 1.0;
-    // Pose: the clamp moves with (x, y) and turns with theta; d arm / d theta = (-arm_y, arm_x).
-    const int pose_col = 3 * n;
-    (*partials)(3 * i + 0, pose_col + 0) = -1.0;
-    (*partials)(3 * i + 1, pose_col + 1) = -1.0;
-    (*partials)(3 * i + 0, pose_col + 2) = arm_y / scale.length;
-    (*partials)(3 * i + 1, pose_col + 2) = -arm_x / scale.length;
-    (*partials)(3 * i + 2, pose_col + 2) = -1.0;
-    const double nx = scalar_value(point.wrenches[i].nx), ny = scalar_value(point.wrenches[i].ny);
-    // d/dtheta of (arm x n) = (-arm_y, arm_x) x n = -arm_y ny - arm_x nx.
-    (*partials)(3 * n + 2, pose_col + 2) += (-arm_y * ny - arm_x * nx) / scale.moment();
-    // Joints: the whole rod translates along the actuator direction.
-    const Vector2<T> dir = limb.actuator_direction();
-    (*partials)(3 * i + 0, 3 * n + 3 + i) = scalar_value(dir.x());
-    (*partials)(3 * i + 1, 3 * n + 3 + i) = scalar_value(dir.y());
   }
+  input_partials(robot, point, scale, *partials);
   return strain;
 }
 

@@ -123,15 +123,11 @@ inline PathStep path_ik_step(const RobotParams<double>& robot, const Pose2<doubl
                              const InverseSolution& previous,
                              const PathStepOptions& options = PathStepOptions()) noexcept {
   PathStep step;
-  step.solution = inverse_kinematics(robot, pose, previous, options.solver, options.load);
+  step.solution =
+      options.cold_start_fallback
+          ? inverse_kinematics_or_cold(robot, pose, &previous, options.solver, options.load)
+          : inverse_kinematics(robot, pose, previous, options.solver, options.load);
   step.iterations = step.solution.summary.iterations;
-  const SolveStatus s = step.solution.summary.status;
-  if (options.cold_start_fallback && s != SolveStatus::kConverged &&
-      s != SolveStatus::kOutOfRange && s != SolveStatus::kInvalidInput &&
-      s != SolveStatus::kUnsupported) {
-    step.solution = inverse_kinematics(robot, pose, options.solver, options.load);
-    step.iterations += step.solution.summary.iterations;
-  }
   step.status = classify_pose(step.solution, options.strain_limit);
   return step;
 }

@@ -33,6 +33,10 @@ struct Solution {
   std::array<Wrench<double>, kMaxLimbs> wrenches{};
   SolverSummary summary;
   py::object shapes = py::none();
+  /// The solver's factorised last Jacobian, so that a warm start from Python costs what it costs
+  /// in C++; only for a warm start of the same problem (FK or IK) it was solved by.
+  internal::Factorisation jacobian;
+  bool inverse = false;
 };
 
 /// The platform load from Python arguments: force (fx, fy) in N, moment in N m.

@@ -49,17 +49,13 @@ inline void forward_batch(const RobotParams<double>& robot, const double* q, std
                           const SolverOptions& options, const PlatformLoad<double>& load,
                           const BatchBuffers& out, ForwardSolution* solutions = nullptr) {
   const int n = robot.num_limbs;
-  ForwardSolution previous;
-  bool have_previous = false;
+  ForwardSequence sequence(robot, options, load);
   JointVector joints(n);
   for (std::ptrdiff_t r = 0; r < rows; ++r) {
     for (int i = 0; i < n; ++i) joints(i) = q[r * n + i];
-    ForwardSolution s = forward_kinematics_or_cold(robot, joints,
-                                                   have_previous ? &previous : nullptr, options, load);
-    have_previous = usable_as_warm_start(s.summary);
-    if (have_previous) previous = s;
+    const ForwardSolution& s = sequence.solve(joints);
     // FK's joints are the input, echoed even when the solve failed.
-    store_row(s, have_previous, n, r, out);
+    store_row(s, usable_as_warm_start(s.summary), n, r, out);
     for (int i = 0; i < n; ++i) out.q[r * n + i] = joints(i);
     if (solutions != nullptr) solutions[r] = s;
   }
@@ -71,15 +67,11 @@ inline void inverse_batch(const RobotParams<double>& robot, const double* poses,
                           const PlatformLoad<double>& load, const BatchBuffers& out,
                           InverseSolution* solutions = nullptr) {
   const int n = robot.num_limbs;
-  InverseSolution previous;
-  bool have_previous = false;
+  InverseSequence sequence(robot, options, load);
   for (std::ptrdiff_t r = 0; r < rows; ++r) {
     const Pose2<double> pose{poses[r * 3], poses[r * 3 + 1], poses[r * 3 + 2]};
-    InverseSolution s = inverse_kinematics_or_cold(robot, pose,
-                                                   have_previous ? &previous : nullptr, options, load);
-    have_previous = usable_as_warm_start(s.summary);
-    if (have_previous) previous = s;
-    store_row(s, have_previous, n, r, out);
+    const InverseSolution& s = sequence.solve(pose);
+    store_row(s, usable_as_warm_start(s.summary), n, r, out);
     // The requested pose is echoed; with 2 limbs theta is the solved one (NaN on failure).
     out.pose[r * 3 + 0] = pose.x;
     out.pose[r * 3 + 1] = pose.y;

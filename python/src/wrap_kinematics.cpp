@@ -1,4 +1,5 @@
 // Robot.forward / Robot.inverse / Robot.home, pcr.SolverOptions, pcr.Solution, pcr.BatchResult.
+#include <type_traits>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -59,6 +60,8 @@ Solution to_python(const RobotParams<double>& robot, const S& s, bool usable, bo
   for (int i = 0; i < robot.num_limbs && !usable; ++i) out.wrenches[i] = Wrench<double>{nan, nan, nan};
   if (!usable) out.summary.max_strain = nan;
   if (usable && shapes) out.shapes = rod_shapes(robot, s.q, s.wrenches, s.summary.rod_steps);
+  out.jacobian = s.jacobian;
+  out.inverse = std::is_same_v<S, InverseSolution>;
   return out;
 }
 
@@ -68,6 +71,7 @@ ForwardSolution as_forward(const Solution& s) {
   out.pose = s.pose;
   out.wrenches = s.wrenches;
   out.summary = s.summary;
+  if (!s.inverse) out.jacobian = s.jacobian;
   return out;
 }
 
@@ -77,6 +81,7 @@ InverseSolution as_inverse(const Solution& s) {
   out.pose = s.pose;
   out.wrenches = s.wrenches;
   out.summary = s.summary;
+  if (s.inverse) out.jacobian = s.jacobian;
   return out;
 }
 

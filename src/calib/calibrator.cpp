@@ -568,18 +568,14 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
                                          const std::vector<CalibrationSample>& data,
                                          const SolverOptions& fk) {
   ConfigurationErrors errors;
-  ForwardSolution last;
-  bool has_last = false;
+  ForwardSequence sequence(robot, fk);
   for (const CalibrationSample& sample : data) {
-    const ForwardSolution s =
-        forward_kinematics_or_cold(robot, sample.q, has_last ? &last : nullptr, fk);
+    const ForwardSolution& s = sequence.solve(sample.q);
     if (!s.summary.converged()) {
       errors.e_p.push_back(kNaN);
       errors.e_theta.push_back(kNaN);
       continue;
     }
-    last = s;
-    has_last = true;
     const Pose2<double> measured = robot.extrinsics.platform_from_measurement(sample.measured);
     errors.e_p.push_back(std::hypot(s.pose.x - measured.x, s.pose.y - measured.y));
     errors.e_theta.push_back(std::abs(wrap_angle(s.pose.theta - measured.theta)));

@@ -107,18 +107,15 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
     }
   }
   if (fx.external_load) load_ = fx.load;
+  sequence_ = ForwardSequence(truth_.params, options_.solver, load_);
 }
 
 VirtualMeasurement VirtualRobot::measure(const JointVector& q) {
   VirtualMeasurement m;
   const RobotParams<double>& robot = truth_.params;
-  // A failed warm start is retried from home: the reference branch.
-  const ForwardSolution fk =
-      forward_kinematics_or_cold(robot, q, has_last_ ? &last_ : nullptr, options_.solver, load_);
+  const ForwardSolution& fk = sequence_.solve(q);
   m.summary = fk.summary;
   if (!fk.summary.converged()) return m;
-  last_ = fk;
-  has_last_ = true;
   m.ok = true;
   m.platform = fk.pose;
   m.exact = robot.extrinsics.measurement_from_platform(fk.pose);

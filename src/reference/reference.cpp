@@ -199,32 +199,6 @@ RodState<double> integrate(const RodState<double>& start, double ei, double leng
   return state_of(Y);
 }
 
-// Scaled unknowns (wrenches, pose) of the forward problem, as in pcr::kinematics.hpp.
-ShootingVector pack_forward(const ShootingPoint<double>& p, int n, const ShootingScale& scale) {
-  ShootingVector z(3 * n + 3);
-  for (int i = 0; i < n; ++i) {
-    z(3 * i + 0) = p.wrenches[i].nx / scale.force;
-    z(3 * i + 1) = p.wrenches[i].ny / scale.force;
-    z(3 * i + 2) = p.wrenches[i].m / scale.moment();
-  }
-  z(3 * n + 0) = p.pose.x / scale.length;
-  z(3 * n + 1) = p.pose.y / scale.length;
-  z(3 * n + 2) = p.pose.theta;
-  return z;
-}
-
-ShootingPoint<double> unpack_forward(const ShootingVector& z, const JointVector& q, int n,
-                                     const ShootingScale& scale) {
-  ShootingPoint<double> p;
-  for (int i = 0; i < n; ++i) {
-    p.q[i] = q(i);
-    p.wrenches[i] = Wrench<double>{z(3 * i) * scale.force, z(3 * i + 1) * scale.force,
-                                   z(3 * i + 2) * scale.moment()};
-  }
-  p.pose = Pose2<double>{z(3 * n) * scale.length, z(3 * n + 1) * scale.length, z(3 * n + 2)};
-  return p;
-}
-
 }  // namespace
 
 RodState<double> integrate_rod_reference(const RodState<double>& start, double ei, double length,
@@ -294,19 +268,25 @@ ForwardSolution forward_kinematics_reference(const RobotParams<double>& robot,
     throw std::invalid_argument("pcr::forward_kinematics_reference: q is not finite");
   }
   const ShootingScale scale = shooting_scale(robot);
-  const int m = 3 * n + 3;
+  // The RK4 FK problem at the reference's Jacobian step count: the scaling of the unknowns and
+  // the Newton matrix.
+  SolverOptions rk4;
+  rk4.rod_steps = options.jacobian_rod_steps;
+  internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load, rk4);
+  problem.set_input(q);
 
   ShootingPoint<double> start_point;
   start_point.pose = start.pose;
   for (int i = 0; i < n; ++i) start_point.wrenches[i] = start.wrenches[i];
-  ShootingVector z = pack_forward(start_point, n, scale);
+  ShootingVector z = problem.pack(start_point);
 
   ForwardSolution solution;
   solution.q = q;
   SolverSummary& summary = solution.summary;
-  ResidualVector<double> r, r_rk4;
-  ShootingMatrix partials;
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  ResidualVector<double> r;
+  ShootingVector r_rk4;
+  JacobianMatrix J;
+  internal::Factorisation lu;
 
   // Quasi-Newton: the residual is CVODE's, the matrix the RK4 Jacobian. The fixed point is the
   // CVODE solution; the iteration contracts by about the RK4 discretisation error of J.
@@ -315,12 +295,10 @@ ForwardSolution forward_kinematics_reference(const RobotParams<double>& robot,
   int stalls = 0;
   summary.status = SolveStatus::kMaxIterations;
   for (int iter = 0;; ++iter) {
-    ShootingPoint<double> p = unpack_forward(z, q, n, scale);
+    const ShootingPoint<double> p = problem.unpack(z);
     const double strain = shooting_residual_reference(robot, p, load, scale, r, options);
     ++summary.residual_evaluations;
-    // (Eigen's max-norm may skip a NaN component.)
-    const double norm =
-        r.allFinite() ? r.lpNorm<Eigen::Infinity>() : std::numeric_limits<double>::quiet_NaN();
+    const double norm = internal::max_norm(r);
     if (iter == 0) summary.initial_residual_norm = norm;
     if (!std::isfinite(norm)) {
       summary.status = SolveStatus::kNonFinite;
@@ -340,16 +318,16 @@ ForwardSolution forward_kinematics_reference(const RobotParams<double>& robot,
     }
     if (iter >= options.max_iterations) break;
     ++summary.iterations;
-    shooting_residual(robot, p, load, scale, options.jacobian_rod_steps, r_rk4, &partials);
-    lu.compute(Eigen::MatrixXd(partials.leftCols(m)));
+    problem.evaluate(z, r_rk4, &J);
+    lu.compute(J);
     if (!(std::abs(lu.determinant()) > 0.0) || !(lu.rcond() > 1e-14)) {
       summary.status = SolveStatus::kSingular;
       break;
     }
-    z -= lu.solve(Eigen::VectorXd(r));
+    z -= lu.solve(ShootingVector(r));
   }
   summary.final_residual_norm = best_norm;
-  const ShootingPoint<double> p = unpack_forward(best_z, q, n, scale);
+  const ShootingPoint<double> p = problem.unpack(best_z);
   solution.pose = p.pose;
   for (int i = 0; i < n; ++i) solution.wrenches[i] = p.wrenches[i];
   return solution;

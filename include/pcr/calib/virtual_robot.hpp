@@ -70,8 +70,9 @@ class VirtualRobot {
   const PlatformLoad<double>& load() const { return load_; }
   const VirtualRobotOptions& options() const { return options_; }
 
-  /// Moves to q and measures. FK is warm-started from the previous successful call and falls back
-  /// to a cold start from home; the noise stream advances only on success.
+  /// Moves to q and measures: FK of the truth as a sequence (pcr::ForwardSequence: warm-started
+  /// from the last successful call, a cold retry from home); the noise stream advances only on
+  /// success.
   VirtualMeasurement measure(const JointVector& q);
 
   /// measure(q), throwing std::runtime_error (naming q and the solver status) on failure.
@@ -83,8 +84,7 @@ class VirtualRobot {
   PlatformLoad<double> load_;
   VirtualRobotOptions options_;
   std::mt19937_64 noise_rng_;
-  ForwardSolution last_;
-  bool has_last_ = false;
+  ForwardSequence sequence_{RobotParams<double>()};  ///< on the truth, set by the constructor
 };
 
 }  // namespace pcr

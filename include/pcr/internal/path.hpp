@@ -1,0 +1,427 @@
+#pragma once
+// Paths of FK and IK solutions: continuation along an input path, the RK4 step count chosen from
+// an error estimate of the solution, and the homotopies that reach a robot's home configuration.
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include "pcr/internal/newton.hpp"
+#include "pcr/internal/shooting_problem.hpp"
+#include "pcr/robot.hpp"
+#include "pcr/solver.hpp"
+
+namespace pcr::internal {
+
+/// Solves at the end of the input path from a solution z0 at its start: directly, then by
+/// continuation with a secant predictor and step halving. When the continuation stalls, the
+/// Jacobian's conditioning along the solved part of the path tells a singularity ahead (no
+/// solution on this branch: rcond^2, linear in t near a fold, extrapolates to zero before the
+/// end of the path) from a plain failure to converge.
+
+/// Reciprocal condition number below which a solved start counts as a bifurcation point.
+inline constexpr double kBifurcationRcond = 1e-13;
+
+inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const ShootingVector& u0,
+                                             const ShootingVector& u1, ShootingVector& z,
+                                             const SolverOptions& options,
+                                             SolverSummary& summary, Factorisation* carried) {
+  const ShootingVector z0 = z;
+  // Tangent predictor from the carried factorisation (a warm start's): z moves by
+  // -J^-1 (dr/du) du, which leaves an error of second order in du for the chord steps.
+  if (carried && carried->rows() == problem.size()) {
+    const ShootingVector predicted = z0 - carried->solve(problem.input_derivative(z0, u1 - u0));
+    if (predicted.allFinite()) z = predicted;
+  }
+  problem.set_input(u1);
+  NewtonResult direct = newton_solve(problem, z, options, summary, carried);
+  summary.initial_residual_norm = direct.initial_norm;
+  summary.final_residual_norm = direct.final_norm;
+  summary.max_strain = direct.max_strain;
+  summary.path_fraction = 1.0;
+  if (direct.status == SolveStatus::kConverged) return direct.status;
+  // What a failure returns is the last solved point: the start.
+  z = z0;
+  problem.set_input(u0);
+  summary.path_fraction = 0.0;
+  if (!options.continuation) return direct.status;
+  // A start that is not finite (a broken warm start) has no path to continue along.
+  if (!std::isfinite(direct.initial_norm)) return SolveStatus::kNonFinite;
+
+  SolverOptions sub_options = options;
+  sub_options.max_iterations = options.max_continuation_iterations;
+  ShootingVector z_last = z0, z_prev = z0;
+  double t = 0.0, t_prev = 0.0, dt = 0.5;
+  // (t, rcond) at the last two solved points of the path.
+  problem.set_input(u0);
+  double rc_last = jacobian_rcond(problem, z0, summary), rc_prev = rc_last;
+  if (rc_last <= kBifurcationRcond) {
+    // A solution with a singular Jacobian that Newton could not leave: the straight rods of a
+    // robot with n >= 4 limbs (a self-stress), where the branches of bowed rods meet.
+    z = z0;
+    return SolveStatus::kBifurcation;
+  }
+  double t_rc_last = 0.0, t_rc_prev = 0.0;
+  const auto singular_ahead = [&]() {
+    if (rc_last <= 1e-12) return true;
+    if (t_rc_last <= t_rc_prev) return false;
+    const double slope = (rc_last * rc_last - rc_prev * rc_prev) / (t_rc_last - t_rc_prev);
+    return slope < 0.0 && t_rc_last - rc_last * rc_last / slope <= 1.0;
+  };
+  while (t < 1.0) {
+    if (summary.continuation_steps >= options.max_continuation_steps) {
+      z = z_last;  // the last solved point of the path
+      problem.set_input(u0 + t * (u1 - u0));
+      summary.path_fraction = t;
+      return singular_ahead() ? SolveStatus::kSingular : SolveStatus::kMaxIterations;
+    }
+    ++summary.continuation_steps;
+    const double t_next = std::min(1.0, t + dt);
+    problem.set_input(u0 + t_next * (u1 - u0));
+    // Secant predictor from the last two solutions on the path.
+    z = z_last;
+    if (t > t_prev) z += (z_last - z_prev) * ((t_next - t) / (t - t_prev));
+    NewtonResult sub = newton_solve(problem, z, sub_options, summary, carried);
+    if (sub.status == SolveStatus::kConverged) {
+      z_prev = z_last;
+      t_prev = t;
+      z_last = z;
+      t = t_next;
+      dt = std::min(2.0 * dt, 0.5);
+      summary.final_residual_norm = sub.final_norm;
+      summary.max_strain = sub.max_strain;
+      if (t < 1.0) {
+        rc_prev = rc_last;
+        t_rc_prev = t_rc_last;
+        rc_last = jacobian_rcond(problem, z_last, summary);
+        t_rc_last = t;
+      }
+      continue;
+    }
+    dt *= 0.5;
+    if (dt < options.min_continuation_step) {
+      z = z_last;
+      problem.set_input(u0 + t * (u1 - u0));
+      summary.path_fraction = t;
+      summary.final_residual_norm = sub.final_norm;
+      return singular_ahead() || sub.status == SolveStatus::kSingular ? SolveStatus::kSingular
+                                                                      : sub.status;
+    }
+  }
+  return SolveStatus::kConverged;
+}
+
+/// Estimates the discretisation error of a converged solution z of the N-step model and stores it
+/// in the summary; returns its ratio to the accuracy targets. RK4 is fourth order: the residual
+/// error of the M = N/2-step model is f = (N/M)^4 times that of the N-step one, e_N, so at z
+/// r_M(z) - r_N(z) = (f - 1) e_N, and the exact model's solution lies at z + J^-1 e_N. J is the
+/// last Jacobian the solve factorised (`carried`; one at z when there is none): the estimate needs
+/// its direction, not its last digits.
+inline double estimate_discretisation_error(ShootingProblem& problem, const ShootingVector& z,
+                                            const SolverOptions& options, SolverSummary& summary,
+                                            const Factorisation* carried) {
+  const int steps = problem.rod_steps();
+  const int half = std::max(1, steps / 2);
+  Factorisation at_z;
+  const Factorisation* lu = carried;
+  if (lu == nullptr || lu->rows() != problem.size()) {
+    ShootingVector r;
+    JacobianMatrix J;
+    problem.evaluate(z, r, &J);
+    ++summary.residual_evaluations;
+    at_z.compute(J);
+    lu = &at_z;
+  }
+  ShootingVector r_half;
+  problem.set_rod_steps(half);
+  problem.evaluate(z, r_half, nullptr);
+  problem.set_rod_steps(steps);
+  ++summary.residual_evaluations;  // at half the steps: half the cost of the others
+  // r_N(z) is within the solve's tolerance of zero, so r_M(z) alone is (f - 1) e_N.
+  const double f = std::pow(double(steps) / half, 4.0);
+  const ShootingVector dz = lu->solve(r_half / (f - 1.0));
+  problem.output_change(dz, summary.position_error_estimate, summary.angle_error_estimate);
+  return std::max(summary.position_error_estimate / options.position_accuracy,
+                  summary.angle_error_estimate / options.angle_accuracy);
+}
+
+/// Solves a converged solution again (from itself: one or two Newton iterations) at the RK4 step
+/// count its estimated discretisation error calls for, until the estimate meets the targets.
+inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
+                                    const SolverOptions& options, SolverSummary& summary,
+                                    SolveStatus status, Factorisation* carried) {
+  for (int pass = 0; status == SolveStatus::kConverged && options.rod_steps <= 0; ++pass) {
+    const double ratio = estimate_discretisation_error(problem, z, options, summary, carried);
+    const int needed = problem.rod_steps_for_error(ratio);
+    const int start = problem.rod_steps();
+    if (needed == start || pass == 4) break;
+    const ShootingVector z_start = z;
+    problem.set_rod_steps(needed);
+    NewtonResult refined = newton_solve(problem, z, options, summary, carried);
+    if (refined.status != SolveStatus::kConverged) {
+      // Near a fold the models of two step counts can be too far apart for Newton: ramp the
+      // count up (or down) the ladder one rung at a time instead.
+      z = z_start;
+      for (int steps = start; steps != needed;) {
+        steps = problem.rung_towards(steps, needed);
+        problem.set_rod_steps(steps);
+        refined = newton_solve(problem, z, options, summary, carried);
+        if (refined.status != SolveStatus::kConverged) break;
+      }
+    }
+    status = refined.status;
+    summary.final_residual_norm = refined.final_norm;
+    summary.max_strain = refined.max_strain;
+  }
+  summary.rod_steps = problem.rod_steps();
+  return status;
+}
+
+/// Solves along the input path with the start's step count, then refines the count for the
+/// solution's estimated discretisation error.
+inline SolveStatus solve_along_path(ShootingProblem& problem, const ShootingVector& u0,
+                                    const ShootingVector& u1, ShootingVector& z,
+                                    const SolverOptions& options, SolverSummary& summary,
+                                    int start_steps, Factorisation* carried) {
+  if (options.rod_steps <= 0) {
+    problem.set_rod_steps(
+        std::min(std::max(start_steps, options.min_rod_steps), options.max_rod_steps));
+  }
+  const SolveStatus status =
+      solve_path_at_fixed_steps(problem, u0, u1, z, options, summary, carried);
+  return refine_rod_steps(problem, z, options, summary, status, carried);
+}
+
+/// Curvature times length of the rods of the bowed variant (bowed_variant_homotopy): a bow of
+/// about 2.5% of the length, far from the straight rods' bifurcation yet mildly bent.
+inline constexpr double kVariantBow = 0.2;
+
+/// Forward kinematics at the joints u by a homotopy in the geometry, for robots whose straight
+/// guess sits on a bifurcation. With n >= 4 limbs straight rods admit a self-stress (axial forces
+/// that balance on the platform and deform nothing), so the Jacobian there is singular and the
+/// robot's configurations branch off: each rod bows to one side or the other. The branch taken is
+/// the one connected to a variant of the robot whose solution is known: every rod a circular arc
+/// of curvature bow / l (bow > 0: to its left, counterclockwise, seen from its proximal clamp),
+/// the platform at the rigid fit of the straight rods' tips onto the distal clamps, the variant's
+/// distal clamps where the arcs end, and a platform moment balancing the rods' moments. From that
+/// exact solution (n = 0, m = EI kappa) the distal clamps, their angles and the load move to the
+/// robot's by natural continuation with a secant predictor. Returns the status and, in z, the
+/// unknowns of the robot's FK problem (same scaling: it depends on l and EI only).
+inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
+                                          const PlatformLoad<double>& load,
+                                          const ShootingVector& u, double bow,
+                                          const SolverOptions& options, SolverSummary& summary,
+                                          ShootingVector& z) {
+  const int n = robot.num_limbs;
+  // Straight rods' tips from the moved proximal clamps, and their rigid fit (2D Procrustes).
+  Vector2<double> tips[kMaxLimbs], b_mean(0, 0), t_mean(0, 0);
+  for (int i = 0; i < n; ++i) {
+    const LimbParams<double>& limb = robot.limb(i);
+    tips[i] = limb.proximal_position(u(i)) +
+              limb.length * Vector2<double>(std::cos(limb.alpha), std::sin(limb.alpha));
+    b_mean += limb.B / n;
+    t_mean += tips[i] / n;
+  }
+  double dot = 0, cross = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vector2<double> b = robot.limb(i).B - b_mean, t = tips[i] - t_mean;
+    dot += b.dot(t);
+    cross += b.x() * t.y() - b.y() * t.x();
+  }
+  const double theta = std::atan2(cross, dot), c = std::cos(theta), s = std::sin(theta);
+  const Vector2<double> origin =
+      t_mean - Vector2<double>(c * b_mean.x() - s * b_mean.y(), s * b_mean.x() + c * b_mean.y());
+  // The variant and its solution.
+  RobotParams<double> variant = robot;
+  PlatformLoad<double> variant_load;
+  ShootingPoint<double> start;
+  start.pose = Pose2<double>{origin.x(), origin.y(), theta};
+  for (int i = 0; i < n; ++i) {
+    LimbParams<double>& limb = variant.limb(i);
+    const double kappa = bow / limb.length, turn = bow;
+    const Vector2<double> a = limb.proximal_position(u(i));
+    const Vector2<double> end =
+        a + Vector2<double>(std::sin(limb.alpha + turn) - std::sin(limb.alpha),
+                            std::cos(limb.alpha) - std::cos(limb.alpha + turn)) /
+                kappa;
+    const Vector2<double> d = end - origin;
+    limb.B = Vector2<double>(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
+    limb.beta = limb.alpha + turn - theta;
+    start.q[i] = u(i);
+    start.wrenches[i] = Wrench<double>{0.0, 0.0, limb.bending_stiffness() * kappa};
+    variant_load.moment += start.wrenches[i].m;
+  }
+  const RobotParams<double> from = variant;
+  const PlatformLoad<double> from_load = variant_load;
+  const auto blend = [&](double t) {
+    for (int i = 0; i < n; ++i) {
+      variant.limb(i).B = from.limb(i).B + t * (robot.limb(i).B - from.limb(i).B);
+      variant.limb(i).beta = from.limb(i).beta + t * (robot.limb(i).beta - from.limb(i).beta);
+    }
+    variant_load.force = from_load.force + t * (load.force - from_load.force);
+    variant_load.moment = from_load.moment + t * (load.moment - from_load.moment);
+  };
+  ShootingProblem problem(ShootingProblem::Kind::kForward, variant, variant_load, options);
+  problem.set_input(u);
+  z = problem.pack(start);
+  NewtonResult sub = newton_solve(problem, z, options, summary);
+  if (sub.status != SolveStatus::kConverged) return sub.status;
+  // Pseudo-arclength continuation of (z, t): the path may turn back in t (a fold of the blended
+  // geometry) before it reaches t = 1. Each corrector is Newton on r(z, t) = 0 and the arclength
+  // condition, solved by bordering; r is affine in t (clamps, angles and load blend linearly), so
+  // one residual difference gives dr/dt exactly.
+  constexpr double kPathTolerance = 1e-8;
+  ShootingVector r, r_shift, a, b;
+  JacobianMatrix J;
+  Factorisation lu;
+  const auto linearise = [&](const ShootingVector& zz, double t) {
+    blend(t + 1.0);
+    problem.evaluate(zz, r_shift, nullptr);
+    blend(t);
+    sub.max_strain = problem.evaluate(zz, r, &J);
+    summary.residual_evaluations += 2;
+    lu.compute(J);
+    return lu.rcond() > 1e-14 && r.allFinite() && r_shift.allFinite();
+  };
+  ShootingVector z_last = z, tangent_z;
+  double t_last = 0.0, tangent_t = 1.0;
+  if (!linearise(z_last, 0.0)) return SolveStatus::kSingular;
+  tangent_z = -lu.solve(ShootingVector(r_shift - r));  // dz/dt along the path at t = 0
+  double norm = std::sqrt(tangent_z.squaredNorm() + 1.0);
+  tangent_z /= norm;
+  tangent_t /= norm;
+  double ds = 0.125;
+  for (int steps = 0; steps < 4 * options.max_continuation_steps && ds >= options.min_continuation_step;
+       ++steps) {
+    ++summary.continuation_steps;
+    // Predictor; a step that would pass t = 1 is shortened to land on it.
+    double step = ds;
+    if (tangent_t > 0 && t_last + step * tangent_t > 1.0) step = (1.0 - t_last) / tangent_t;
+    ShootingVector zz = z_last + step * tangent_z;
+    double t = t_last + step * tangent_t;
+    const bool last = std::abs(t - 1.0) < 1e-12;
+    bool converged = false;
+    for (int it = 0; it < options.max_continuation_iterations; ++it) {
+      if (!linearise(zz, t)) break;
+      ++summary.iterations;
+      // Points along the way need not be exact (a pre-stressed path can be ill-conditioned
+      // enough to put a rounding floor near the tolerance); the end point is polished below.
+      if (max_norm(r) <= kPathTolerance) {
+        converged = true;
+        break;
+      }
+      // [J r_t; tangent^T] (dz, dt) = -(r, g), g = tangent . (y - y_pred) = 0 on the predictor
+      // plane (the end step keeps t = 1 instead).
+      a = lu.solve(r);
+      b = lu.solve(ShootingVector(r_shift - r));
+      const double g = last ? 0.0 : tangent_z.dot(zz - z_last - step * tangent_z) +
+                                        tangent_t * (t - t_last - step * tangent_t);
+      const double dt = last ? 0.0 : (-g + tangent_z.dot(a)) / (tangent_t - tangent_z.dot(b));
+      zz -= a + b * dt;
+      t += dt;
+    }
+    if (!converged) {
+      ds *= 0.5;
+      continue;
+    }
+    if (!last && t > 1.0) {
+      // The corrector went past t = 1: solve there from the chord between the two points.
+      blend(1.0);
+      ShootingVector z_end = z_last + (zz - z_last) * ((1.0 - t_last) / (t - t_last));
+      const NewtonResult end = newton_solve(problem, z_end, options, summary);
+      if (end.status != SolveStatus::kConverged) {
+        ds *= 0.5;
+        continue;
+      }
+      z = z_end;
+      summary.final_residual_norm = end.final_norm;
+      summary.max_strain = end.max_strain;
+      return SolveStatus::kConverged;
+    }
+    if (last) {
+      const NewtonResult end = newton_solve(problem, zz, options, summary);
+      if (end.status != SolveStatus::kConverged) {
+        ds *= 0.5;
+        continue;
+      }
+      z = zz;
+      summary.final_residual_norm = end.final_norm;
+      summary.max_strain = end.max_strain;
+      return SolveStatus::kConverged;
+    }
+    // Secant tangent, oriented along the path.
+    ShootingVector dz = zz - z_last;
+    double dt = t - t_last;
+    norm = std::sqrt(dz.squaredNorm() + dt * dt);
+    tangent_z = dz / norm;
+    tangent_t = dt / norm;
+    z_last = zz;
+    t_last = t;
+    ds = std::min(2.0 * ds, 16.0);
+  }
+  z = z_last;
+  return SolveStatus::kMaxIterations;
+}
+
+/// bowed_variant_homotopy with the rods bowed to their left, then, if that path fails, to their
+/// right (the documented order of the branches tried).
+inline SolveStatus solve_from_bowed_variant(const RobotParams<double>& robot,
+                                            const PlatformLoad<double>& load,
+                                            const ShootingVector& u, const SolverOptions& options,
+                                            SolverSummary& summary, ShootingVector& z) {
+  SolveStatus status = SolveStatus::kMaxIterations;
+  for (const double bow : {kVariantBow, -kVariantBow}) {
+    status = bowed_variant_homotopy(robot, load, u, bow, options, summary, z);
+    if (status == SolveStatus::kConverged) break;
+  }
+  return status;
+}
+
+/// The solution at q = 0: from the unloaded straight guess (exact for a stress-free robot); when
+/// Newton fails from there, by a Newton homotopy from it (n <= 3) and from a bowed variant of the
+/// robot (n >= 4, where the straight guess is on a bifurcation, or when that homotopy fails).
+inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& options,
+                                    SolverSummary& summary, SolveStatus& status,
+                                    Factorisation* carried) {
+  ShootingVector u = ShootingVector::Zero(fk.num_inputs());
+  fk.set_input(u);
+  ShootingVector z = ShootingVector::Zero(fk.size());
+  NewtonResult home = newton_solve(fk, z, options, summary);
+  summary.initial_residual_norm = home.initial_norm;
+  if (home.status != SolveStatus::kConverged && options.continuation &&
+      fk.robot().num_limbs <= 3) {
+    // Newton homotopy from the straight guess z0: r(z) = (1 - t) r(z0), t from 0 to 1.
+    ShootingVector r0, z_last = ShootingVector::Zero(fk.size());
+    fk.evaluate(z_last, r0, nullptr);
+    double t = 0.0, dt = 0.25;
+    while (t < 1.0 && summary.continuation_steps < options.max_continuation_steps &&
+           dt >= options.min_continuation_step) {
+      ++summary.continuation_steps;
+      const double t_next = std::min(1.0, t + dt);
+      fk.set_residual_offset((1.0 - t_next) * r0);
+      z = z_last;
+      home = newton_solve(fk, z, options, summary);
+      if (home.status == SolveStatus::kConverged) {
+        z_last = z;
+        t = t_next;
+        dt = std::min(2.0 * dt, 0.5);
+      } else {
+        dt *= 0.5;
+      }
+    }
+    fk.set_residual_offset(ShootingVector());
+    z = z_last;
+    if (t < 1.0 && home.status == SolveStatus::kConverged) home.status = SolveStatus::kMaxIterations;
+  }
+  summary.final_residual_norm = home.final_norm;
+  summary.max_strain = home.max_strain;
+  if (home.status != SolveStatus::kConverged && options.continuation) {
+    home.status = solve_from_bowed_variant(fk.robot(), fk.load(), u, options, summary, z);
+  }
+  status = refine_rod_steps(fk, z, options, summary, home.status, carried);
+  return z;
+}
+
+}  // namespace pcr::internal

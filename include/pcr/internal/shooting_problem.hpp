@@ -1,0 +1,170 @@
+#pragma once
+// The shooting problem of FK or IK (pcr/shooting.hpp's residual with some of the unknowns as
+// inputs), in the form the Newton solver takes: size(), evaluate(z, r, J*).
+
+#include <algorithm>
+#include <cmath>
+
+#include "pcr/robot.hpp"
+#include "pcr/shooting.hpp"
+#include "pcr/solver.hpp"
+
+namespace pcr::internal {
+
+/// One shooting problem (FK or IK) along a straight input path u(t) = u0 + t (u1 - u0).
+class ShootingProblem {
+ public:
+  enum class Kind { kForward, kInverse };
+
+  ShootingProblem(Kind kind, const RobotParams<double>& robot, const PlatformLoad<double>& load,
+                  const SolverOptions& options)
+      : kind_(kind), robot_(robot), load_(load), options_(options),
+        scale_(shooting_scale(robot)), n_(robot.num_limbs) {
+    steps_ = options.rod_steps > 0 ? options.rod_steps : options.min_rod_steps;
+  }
+
+  int rod_steps() const { return steps_; }
+  void set_rod_steps(int steps) { steps_ = steps; }
+  const RobotParams<double>& robot() const { return robot_; }
+  const PlatformLoad<double>& load() const { return load_; }
+
+  /// The physical size of a step dz of the scaled unknowns on the solved outputs: the largest
+  /// length (m: FK's x, y; IK's joints) and the largest angle (rad: FK's theta; IK's theta, n = 2).
+  void output_change(const ShootingVector& dz, double& position, double& angle) const {
+    position = 0.0;
+    angle = 0.0;
+    const auto take = [](double& to, double v) { to = std::isfinite(v) ? std::max(to, v) : v; };
+    if (kind_ == Kind::kForward) {
+      take(position, std::abs(dz(3 * n_)) * scale_.length);
+      take(position, std::abs(dz(3 * n_ + 1)) * scale_.length);
+      take(angle, std::abs(dz(3 * n_ + 2)));
+    } else {
+      for (int i = 0; i < n_; ++i) take(position, std::abs(dz(3 * n_ + i)) * scale_.length);
+      if (n_ == 2) take(angle, std::abs(dz(4 * n_)));
+    }
+  }
+
+  /// The step count for a solution whose estimated error at the current count is `ratio` times
+  /// its target: the smallest on the ladder that meets the target (error ~ N^-4), but a lower
+  /// count only when it meets half the target, so that a sequence does not flip between two.
+  int rod_steps_for_error(double ratio) const {
+    if (options_.rod_steps > 0) return options_.rod_steps;
+    if (!std::isfinite(ratio)) return options_.max_rod_steps;
+    const auto rung_at_least = [&](double steps) {
+      int ladder = options_.min_rod_steps;
+      while (ladder < steps && ladder < options_.max_rod_steps) ladder = next_rung(ladder);
+      return std::min(ladder, options_.max_rod_steps);
+    };
+    if (ratio > 1.0) return std::max(steps_, rung_at_least(steps_ * std::pow(ratio, 0.25)));
+    return std::min(steps_, rung_at_least(steps_ * std::pow(2.0 * ratio, 0.25)));
+  }
+
+  /// The step count after `steps` on the ladder towards `target` (which is on the ladder).
+  int rung_towards(int steps, int target) const {
+    if (options_.rod_steps > 0 || steps == target) return target;
+    int ladder = options_.min_rod_steps, below = ladder;
+    while (ladder < std::max(steps, target) && ladder < options_.max_rod_steps) {
+      if (ladder < steps) below = ladder;
+      ladder = next_rung(ladder);
+      if (target > steps && ladder > steps) return std::min(ladder, target);
+    }
+    return std::max(below, target);
+  }
+
+  static int next_rung(int steps) { return steps % 3 == 0 ? steps / 3 * 4 : steps / 2 * 3; }
+
+  int size() const { return kind_ == Kind::kForward ? 3 * n_ + 3 : 4 * n_ + (n_ == 2 ? 1 : 0); }
+  int num_inputs() const { return kind_ == Kind::kForward ? n_ : 3; }
+  const ShootingScale& scale() const { return scale_; }
+
+  void set_input(const ShootingVector& u) { input_ = u; }
+
+  /// Newton homotopy: solve r(z) = offset instead of r(z) = 0 (empty offset: none).
+  void set_residual_offset(const ShootingVector& offset) { offset_ = offset; }
+
+  /// Unknowns in scaled units from physical values.
+  ShootingVector pack(const ShootingPoint<double>& p) const {
+    ShootingVector z(size());
+    for (int i = 0; i < n_; ++i) {
+      z(3 * i + 0) = p.wrenches[i].nx / scale_.force;
+      z(3 * i + 1) = p.wrenches[i].ny / scale_.force;
+      z(3 * i + 2) = p.wrenches[i].m / scale_.moment();
+    }
+    if (kind_ == Kind::kForward) {
+      z(3 * n_ + 0) = p.pose.x / scale_.length;
+      z(3 * n_ + 1) = p.pose.y / scale_.length;
+      z(3 * n_ + 2) = p.pose.theta;
+    } else {
+      for (int i = 0; i < n_; ++i) z(3 * n_ + i) = p.q[i] / scale_.length;
+      if (n_ == 2) z(4 * n_) = p.pose.theta;
+    }
+    return z;
+  }
+
+  ShootingPoint<double> unpack(const ShootingVector& z) const {
+    ShootingPoint<double> p;
+    for (int i = 0; i < n_; ++i) {
+      p.wrenches[i] = Wrench<double>{z(3 * i) * scale_.force, z(3 * i + 1) * scale_.force,
+                                     z(3 * i + 2) * scale_.moment()};
+    }
+    if (kind_ == Kind::kForward) {
+      for (int i = 0; i < n_; ++i) p.q[i] = input_(i);
+      p.pose = Pose2<double>{z(3 * n_) * scale_.length, z(3 * n_ + 1) * scale_.length,
+                             z(3 * n_ + 2)};
+    } else {
+      for (int i = 0; i < n_; ++i) p.q[i] = z(3 * n_ + i) * scale_.length;
+      p.pose = Pose2<double>{input_(0), input_(1), n_ == 2 ? z(4 * n_) : input_(2)};
+    }
+    return p;
+  }
+
+  /// Residual and, on request, the Jacobian w.r.t. the scaled unknowns. Returns max strain.
+  double evaluate(const ShootingVector& z, ShootingVector& r, JacobianMatrix* jacobian) const {
+    const ShootingPoint<double> p = unpack(z);
+
+    ResidualVector<double> res;
+    const double strain = shooting_residual(robot_, p, load_, scale_, steps_, res,
+                                            jacobian ? &partials_ : nullptr);
+    r = res;
+    if (offset_.size() == r.size()) r -= offset_;
+    if (jacobian) {
+      const int m = 3 * n_ + 3;
+      if (kind_ == Kind::kForward) {
+        *jacobian = partials_.leftCols(m);
+      } else {
+        jacobian->resize(m, size());
+        jacobian->leftCols(3 * n_) = partials_.leftCols(3 * n_);
+        jacobian->middleCols(3 * n_, n_) = partials_.middleCols(3 * n_ + 3, n_);
+        if (n_ == 2) jacobian->col(4 * n_) = partials_.col(3 * n_ + 2);
+      }
+    }
+    return strain;
+  }
+
+  /// d residual / d input times du at z: the first-order change of the residual when the input
+  /// moves by du (for the tangent predictor of a warm start).
+  ShootingVector input_derivative(const ShootingVector& z, const ShootingVector& du) const {
+    const ShootingPoint<double> p = unpack(z);
+    ShootingMatrix partials = ShootingMatrix::Zero(3 * n_ + 3, 4 * n_ + 3);
+    input_partials(robot_, p, scale_, partials);
+    if (kind_ == Kind::kForward) return partials.middleCols(3 * n_ + 3, n_) * (du / scale_.length);
+    ShootingVector d = partials.col(3 * n_) * (du(0) / scale_.length) +
+                       partials.col(3 * n_ + 1) * (du(1) / scale_.length);
+    if (n_ != 2) d += partials.col(3 * n_ + 2) * du(2);
+    return d;
+  }
+
+ private:
+  Kind kind_;
+  const RobotParams<double>& robot_;
+  const PlatformLoad<double>& load_;
+  const SolverOptions& options_;
+  ShootingScale scale_;
+  int n_;
+  int steps_;
+  ShootingVector input_;
+  ShootingVector offset_;
+  mutable ShootingMatrix partials_;
+};
+
+}  // namespace pcr::internal

@@ -1,0 +1,83 @@
+#pragma once
+// What a kinematics solve reports and the settings it takes (pcr/kinematics.hpp).
+
+#include <limits>
+
+namespace pcr {
+
+enum class SolveStatus {
+  kConverged,      ///< the scaled residual is below the tolerance
+  kMaxIterations,  ///< the iteration or continuation budget ran out
+  kSingular,       ///< no solution on this branch: the Jacobian became singular along the path
+  kBifurcation,    ///< the path starts on a bifurcation (solutions exist on other branches)
+  kNonFinite,      ///< the residual became NaN or infinite
+  kOutOfRange,     ///< IK converged, but a joint value lies outside its stroke
+  kUnsupported,    ///< the request is not a square problem (IK with n > 3 limbs)
+  kInvalidInput,   ///< wrong sizes, NaN inputs, or a robot with fewer than 2 / more than kMaxLimbs limbs
+};
+
+inline const char* to_string(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::kConverged: return "converged";
+    case SolveStatus::kMaxIterations: return "max_iterations";
+    case SolveStatus::kSingular: return "singular";
+    case SolveStatus::kBifurcation: return "bifurcation";
+    case SolveStatus::kNonFinite: return "non_finite";
+    case SolveStatus::kOutOfRange: return "out_of_range";
+    case SolveStatus::kUnsupported: return "unsupported";
+    case SolveStatus::kInvalidInput: return "invalid_input";
+  }
+  return "unknown";
+}
+
+struct SolverOptions {
+  /// RK4 steps per rod; 0 chooses them from an estimate of the solution's own discretisation
+  /// error (RK4 is fourth order: the residual of the N/2-step model at the N-step solution gives
+  /// it, through the Jacobian, for the solved outputs themselves), so that the outputs stay within
+  /// position_accuracy and angle_accuracy of the exact model's (tests/test_reference.cpp checks
+  /// it against CVODE on random robots).
+  int rod_steps = 0;
+  /// Target of that estimate on the solved lengths (m): FK's platform x, y; IK's joints.
+  double position_accuracy = 2.5e-10;
+  /// Target of that estimate on the solved angles (rad): FK's theta; IK's theta for n = 2.
+  double angle_accuracy = 2.5e-7;
+  int min_rod_steps = 16;
+  int max_rod_steps = 512;
+  /// Newton iterations per solve (each sub-solve of a continuation has its own budget).
+  int max_iterations = 20;
+  /// Convergence: max-norm of the scaled residual (lengths / L, forces / (EI / L^2)).
+  double tolerance = 1e-12;
+  /// Step halvings of the backtracking line search.
+  int max_line_search = 12;
+  /// When a direct solve fails, step the input from the last solution in smaller increments.
+  bool continuation = true;
+  /// Sub-solves a continuation may use in total.
+  int max_continuation_steps = 64;
+  /// Newton iterations per sub-solve of a continuation. From its predictor a sub-solve converges
+  /// in a few iterations or crawls along its line search: a shorter step is cheaper than more.
+  int max_continuation_iterations = 8;
+  /// Smallest continuation increment, as a fraction of the whole path.
+  double min_continuation_step = 1.0 / 1024.0;
+};
+
+struct SolverSummary {
+  SolveStatus status = SolveStatus::kMaxIterations;
+  int iterations = 0;             ///< Newton iterations, all sub-solves included
+  int residual_evaluations = 0;   ///< residual (+ Jacobian) evaluations
+  int continuation_steps = 0;     ///< sub-solves of the continuation; 0 for a direct solve
+  double initial_residual_norm = std::numeric_limits<double>::quiet_NaN();  ///< scaled max-norm
+  double final_residual_norm = std::numeric_limits<double>::quiet_NaN();    ///< scaled max-norm
+  double max_strain = std::numeric_limits<double>::quiet_NaN();  ///< max |kappa| d / 2 over the rods
+  int rod_steps = 0;  ///< RK4 steps per rod of the returned solution
+  /// Estimated discretisation error of the returned outputs against the exact model (NaN when
+  /// not estimated: a fixed rod_steps, or no converged solution): lengths (m) and angles (rad).
+  double position_error_estimate = std::numeric_limits<double>::quiet_NaN();
+  double angle_error_estimate = std::numeric_limits<double>::quiet_NaN();
+  /// Where the returned configuration lies on the input path from the warm start (0) to the
+  /// requested input (1): 1 when converged; on a failure, the last point solved along the way,
+  /// which the solution's q and pose describe.
+  double path_fraction = 0.0;
+  bool converged() const { return status == SolveStatus::kConverged; }
+};
+
+}  // namespace pcr
