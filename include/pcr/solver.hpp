@@ -66,7 +66,9 @@ struct SolverSummary {
   int residual_evaluations = 0;   ///< residual (+ Jacobian) evaluations
   int continuation_steps = 0;     ///< sub-solves of the continuation; 0 for a direct solve
   double initial_residual_norm = std::numeric_limits<double>::quiet_NaN();  ///< scaled max-norm
-  double final_residual_norm = std::numeric_limits<double>::quiet_NaN();    ///< scaled max-norm
+  /// Scaled max-norm; after a last chord step taken without evaluating the residual (its
+  /// contraction is steady), the value that contraction predicts.
+  double final_residual_norm = std::numeric_limits<double>::quiet_NaN();
   double max_strain = std::numeric_limits<double>::quiet_NaN();  ///< max |kappa| d / 2 over the rods
   int rod_steps = 0;  ///< RK4 steps per rod of the returned solution
   /// Estimated discretisation error of the returned outputs against the exact model (NaN when
