@@ -61,9 +61,9 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot,
                                      const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Forward kinematics from a cold start: the home solution, then a (continued) path to q. When
-/// home is a bifurcation (the straight rods of a stress-free robot with n >= 4 limbs), q is solved
-/// directly from a bowed variant of the robot instead: the branch whose rods bow to their left,
-/// else the one where they bow to their right.
+/// home is a bifurcation (straight rods of a robot with n >= 4 limbs), or with n >= 4 the path
+/// from home fails, q is solved directly from a bowed variant of the robot instead: the branch
+/// whose rods bow to their left, else the one where they bow to their right.
 inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
                                           const SolverOptions& options = SolverOptions(),
                                           const PlatformLoad<double>& load = PlatformLoad<double>());

@@ -96,7 +96,14 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
   ForwardSolution solution = forward_kinematics(robot, q, home, options, load);
   solution.summary.iterations += home.summary.iterations;
   solution.summary.residual_evaluations += home.summary.residual_evaluations;
-  if (solution.summary.status == SolveStatus::kBifurcation && options.continuation) {
+  // With n >= 4 limbs, straight rods at home carry a self-stress: a path from a home where some
+  // rods are straight starts on, or next to, a bifurcation.
+  const SolveStatus path_status = solution.summary.status;
+  const bool near_bifurcation =
+      path_status == SolveStatus::kBifurcation ||
+      (robot.num_limbs >= 4 && (path_status == SolveStatus::kSingular ||
+                                path_status == SolveStatus::kMaxIterations));
+  if (near_bifurcation && options.continuation) {
     internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load,
                                       options);
     const ShootingVector u = q;
@@ -111,7 +118,8 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
       internal::store_configuration(problem, z, solution);
       solution.summary.path_fraction = 1.0;
     }
-    solution.summary.status = status;
+    // Not found from the variant either: the path's own verdict stands.
+    solution.summary.status = status == SolveStatus::kConverged ? status : path_status;
   }
   return solution;
 }

@@ -202,8 +202,10 @@ inline constexpr double kVariantBow = 0.2;
 /// guess sits on a bifurcation. With n >= 4 limbs straight rods admit a self-stress (axial forces
 /// that balance on the platform and deform nothing), so the Jacobian there is singular and the
 /// robot's configurations branch off: each rod bows to one side or the other. The branch taken is
-/// the one connected to a variant of the robot whose solution is known: every rod a circular arc
-/// of curvature bow / l (bow > 0: to its left, counterclockwise, seen from its proximal clamp),
+/// the one connected to a variant of the robot whose solution is known: every rod i a circular arc
+/// turning by bow (1 + i / 10) (bow > 0: to its left, counterclockwise, seen from its proximal
+/// clamp; unequal, so that the variant has none of the robot's symmetry, whose symmetric
+/// bifurcations the path would otherwise meet),
 /// the platform at the rigid fit of the straight rods' tips onto the distal clamps, the variant's
 /// distal clamps where the arcs end, and a platform moment balancing the rods' moments. From that
 /// exact solution (n = 0, m = EI kappa) the distal clamps, their angles and the load move to the
@@ -240,7 +242,7 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
   start.pose = Pose2<double>{origin.x(), origin.y(), theta};
   for (int i = 0; i < n; ++i) {
     LimbParams<double>& limb = variant.limb(i);
-    const double kappa = bow / limb.length, turn = bow;
+    const double turn = bow * (1.0 + 0.1 * i), kappa = turn / limb.length;
     const Vector2<double> a = limb.proximal_position(u(i));
     const Vector2<double> end =
         a + Vector2<double>(std::sin(limb.alpha + turn) - std::sin(limb.alpha),
