@@ -32,13 +32,13 @@ std::string slurp(const fs::path& path) {
 class Cli : public ::testing::Test {
  protected:
 
-  /// Runs `pcr <args>` with stdout and stderr captured.
-  Result run(const std::string& args, const std::string& stdin_text = "") {
+  /// Runs `pcr <args>` (or another program) with stdout and stderr captured.
+  Result run(const std::string& args, const std::string& stdin_text = "",
+             const std::string& program = PCR_CLI_PATH) {
     const fs::path in = dir_ / "stdin.txt", out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
     std::ofstream(in) << stdin_text;
-    const std::string command = std::string("'") + PCR_CLI_PATH + "' " + args + " < '" +
-                                in.string() + "' > '" + out.string() + "' 2> '" + err.string() +
-                                "'";
+    const std::string command = "'" + program + "' " + args + " < '" + in.string() + "' > '" +
+                                out.string() + "' 2> '" + err.string() + "'";
     const int raw = std::system(command.c_str());
     Result r;
     r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
@@ -77,6 +77,59 @@ TEST_F(Cli, HelpWorksForEveryCommand) {
   EXPECT_NE(run("fk --bogus").status, 0);     // bad usage
   EXPECT_NE(run("fk --bogus").err.find("bogus"), std::string::npos);
 }
+
+TEST_F(Cli, HelpListsEverySubcommand) {
+  std::vector<std::string> commands = {"fk", "ik", "robot", "workspace"};
+#ifdef PCR_HAS_CALIB
+  commands.insert(commands.end(), {"simulate", "sample", "sensitivity", "accuracy", "demo"});
+#endif
+#ifdef PCR_HAS_VISION
+  commands.insert(commands.end(), {"measure", "render", "camera"});
+#endif
+  const Result help = run("--help");
+  EXPECT_EQ(help.status, 0);
+  for (const std::string& command : commands) {
+    EXPECT_NE(help.out.find("\n  " + command + " "), std::string::npos) << command << help.out;
+    // Also those pcr hands to pcr-full: their usage names the program as it was called.
+    const Result r = run(command + " --help");
+    EXPECT_EQ(r.status, 0) << command;
+    EXPECT_NE(r.out.find("Usage: " + std::string(PCR_CLI_PATH) + " " + command),
+              std::string::npos)
+        << r.out;
+  }
+}
+
+TEST_F(Cli, KinematicsLoadNeitherCalibrationNorVision) {
+  // pcr links only pcr::io; what needs Ceres or OpenCV runs in pcr-full.
+  const fs::path libraries = dir_ / "ldd.txt";
+  const std::string command =
+      "ldd '" + std::string(PCR_CLI_PATH) + "' > '" + libraries.string() + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const std::string text = slurp(libraries);
+  for (const char* heavy : {"libceres", "libopencv", "libapriltag", "libglog", "libsundials"}) {
+    EXPECT_EQ(text.find(heavy), std::string::npos) << heavy << " in\n" << text;
+  }
+}
+
+#if defined(PCR_HAS_CALIB) || defined(PCR_HAS_VISION)
+TEST_F(Cli, WithoutPcrFullTheKinematicsStillRun) {
+  const fs::path alone = dir_ / "alone" / "pcr";
+  fs::create_directory(alone.parent_path());
+  fs::copy_file(PCR_CLI_PATH, alone);
+  Result r = run("fk", "0,0,0\n", alone.string());
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find(",converged,"), std::string::npos) << r.out;
+  r = run("--help", "", alone.string());
+  EXPECT_NE(r.err.find("pcr-full"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("\n  workspace "), std::string::npos) << r.out;
+#ifdef PCR_HAS_CALIB
+  r = run("demo", "", alone.string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("only the kinematics subcommands are available"), std::string::npos)
+      << r.err;
+#endif
+}
+#endif
 
 TEST_F(Cli, ForwardThenInverseThenForwardReturnsThePose) {
   // A short joint path (warm starts row to row), a header, a comment, and a symmetric row.

@@ -9,9 +9,11 @@
 #include <limits>
 #include <random>
 #include <sstream>
+#include <streambuf>
 
 #include <gtest/gtest.h>
 
+#include "allocation_counter.hpp"
 #include "pcr/csv_io.hpp"
 #include "scratch_directory.hpp"
 
@@ -105,6 +107,100 @@ TEST(CsvIo, FormatDoubleRoundTripsBitForBit) {
   }
   EXPECT_EQ(pcr::format_double(0.1), "0.1");  // shortest form, not %.17g's 0.10000000000000001
   EXPECT_EQ(pcr::format_double(std::numeric_limits<double>::quiet_NaN()), "nan");
+}
+
+TEST(CsvIo, FormatDoubleKeepsThePrintfLayout) {
+  // The text of the first of %.15g, %.16g, %.17g that reads back exactly (subnormals aside,
+  // where the shortest digits are fewer than %.15g's).
+  const auto printf_text = [](double x) {
+    char text[32];
+    for (int precision = 15; precision <= 17; ++precision) {
+      std::snprintf(text, sizeof text, "%.*g", precision, x);
+      if (std::strtod(text, nullptr) == x) break;
+    }
+    return std::string(text);
+  };
+  std::mt19937_64 rng(7);
+  for (int i = 0; i < 20000; ++i) {
+    const std::uint64_t bits = rng();
+    double x;
+    std::memcpy(&x, &bits, sizeof x);
+    if (!std::isfinite(x) || std::fpclassify(x) == FP_SUBNORMAL) continue;
+    ASSERT_EQ(pcr::format_double(x), printf_text(x));
+  }
+  for (double x : {0.0, -0.0, 1.0, 69e9, 1e15, 0.0001, 1e-05, -2.5e-3, 123456789012345680.0,
+                   -2.2250738585072014e-308, 1.7976931348623157e308}) {
+    EXPECT_EQ(pcr::format_double(x), printf_text(x));
+  }
+  EXPECT_EQ(pcr::format_double(69e9), "69000000000");
+  EXPECT_EQ(pcr::format_double(1e-05), "1e-05");
+  EXPECT_EQ(pcr::format_double(-std::numeric_limits<double>::infinity()), "-inf");
+  EXPECT_EQ(pcr::format_double(5e-324), "5e-324");  // %.15g: 4.94065645841247e-324
+  char text[pcr::kMaxFormattedDoubleChars];
+  const double longest = -2.2250738585072014e-308;
+  EXPECT_EQ(pcr::format_double(longest, text) - text, 24);
+}
+
+TEST(CsvIo, NumbersReadAsStrtodReadsThem) {
+  // What from_chars alone would refuse: a leading '+', hexadecimal, an underflow.
+  const pcr::CsvTable t = parse("a,b,c,d\n+1.5,0x1p-3,1e-400,-.5e-3\n");
+  EXPECT_EQ(t.rows[0], (std::vector<double>{1.5, 0.125, 0.0, -0.5e-3}));
+  EXPECT_NE(error_of("a\n+-1\n").find("data.csv:2:1: column 1 (a): expected a number, got '+-1'"),
+            std::string::npos);
+  EXPECT_NE(error_of("a\nNaN(1)\n").find("data.csv:2:1: column 1 (a): non-finite value 'NaN(1)'"),
+            std::string::npos);
+}
+
+TEST(CsvIo, ReadsInputLongerThanOneReadBlock) {
+  std::string text = "q1,q2\r\n";
+  const int rows = 20000;  // about 400 kB, so lines straddle the 64 kB blocks
+  for (int i = 0; i < rows; ++i) {
+    text += pcr::format_double(i * 1e-7) + ", " + pcr::format_double(-i * 3e-7) + "\r\n";
+  }
+  const pcr::CsvTable t = parse(text + "1,2");  // the last line without its newline
+  ASSERT_EQ(t.rows.size(), static_cast<std::size_t>(rows) + 1);
+  for (int i = 0; i < rows; ++i) {
+    ASSERT_EQ(t.rows[i], (std::vector<double>{i * 1e-7, -i * 3e-7})) << i;
+  }
+  EXPECT_EQ(t.line_numbers.back(), rows + 2);
+}
+
+TEST(CsvIo, WriterWritesRowsAsCsvLine) {
+  std::ostringstream text;
+  {
+    pcr::CsvWriter out(text);
+    for (int r = 0; r < 5000; ++r) {  // more than one 64 kB chunk
+      out.add(r);
+      out.add(r * 0.1);
+      out.add("converged");
+      out.add(std::nan(""));
+      out.end_row();
+    }
+  }  // the destructor flushes
+  std::string expected;
+  for (int r = 0; r < 5000; ++r) {
+    expected += pcr::csv_line({std::to_string(r), pcr::format_double(r * 0.1), "converged", "nan"});
+  }
+  EXPECT_EQ(text.str(), expected);
+}
+
+TEST(CsvIo, WriterAllocatesNothingPerRow) {
+  struct Discard : std::streambuf {
+    std::streamsize xsputn(const char*, std::streamsize n) override { return n; }
+    int overflow(int c) override { return c; }
+  } discard;
+  std::ostream stream(&discard);
+  pcr::CsvWriter out(stream);
+  g_allocations = 0;
+  g_counting = true;
+  for (int r = 0; r < 100000; ++r) {
+    out.add(-1.2345678901234567e-300 * r);
+    out.add(r);
+    out.add("max_iterations");
+    out.end_row();
+  }
+  g_counting = false;
+  EXPECT_EQ(g_allocations, 0);
 }
 
 TEST(CsvIo, OutputFileIsAtomic) {

@@ -100,31 +100,29 @@ struct SolveArguments {
   }
 };
 
-/// One solved row of `pcr fk` / `pcr ik`: its output fields and status.
-struct SolvedRow {
-  std::vector<std::string> fields;
-  SolveStatus status = SolveStatus::kMaxIterations;
-};
-
-/// The row loop of `pcr fk` and `pcr ik`: `solve_row` turns each input row into an output row
-/// (warm-starting from the rows before it); the output is written atomically, each failed row is
-/// named on stderr by its input line, and the exit status is 1 if any failed.
+/// The row loop of `pcr fk` and `pcr ik`: `solve_row(row, out)` solves each input row
+/// (warm-starting from the rows before it), adds its output fields to `out` and returns its status;
+/// the output is written atomically, each failed row is named on stderr by its input line, and the
+/// exit status is 1 if any failed.
 template <class SolveRow>
 void solve_rows(const char* command, const CsvTable& table, const std::string& output,
                 const std::vector<std::string>& header, SolveRow&& solve_row) {
-  OutputFile out(output);
-  out.stream() << csv_line(header);
+  OutputFile file(output);
+  CsvWriter out(file.stream());
+  for (const std::string& name : header) out.add(name);
+  out.end_row();
   int failures = 0;
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    const SolvedRow row = solve_row(table.rows[r]);
-    out.stream() << csv_line(row.fields);
-    if (row.status != SolveStatus::kConverged) {
+    const SolveStatus status = solve_row(table.rows[r], out);
+    out.end_row();
+    if (status != SolveStatus::kConverged) {
       ++failures;
       std::cerr << command << ": " << table.source << ":" << table.line_numbers[r]
-                << ": not converged (" << to_string(row.status) << ")\n";
+                << ": not converged (" << to_string(status) << ")\n";
     }
   }
-  out.commit();
+  out.flush();
+  file.commit();
   if (failures > 0) {
     std::cerr << command << ": " << failures << " of " << table.rows.size()
               << " rows did not converge\n";
@@ -139,14 +137,13 @@ inline const std::vector<std::string>& summary_columns() {
   return columns;
 }
 
-/// The fields of summary_columns(); max_strain only for a valid equilibrium.
-inline void append_summary_fields(const SolverSummary& s, bool valid,
-                                  std::vector<std::string>& fields) {
-  fields.push_back(s.converged() ? "1" : "0");
-  fields.push_back(std::to_string(s.iterations));
-  fields.push_back(format_double(s.final_residual_norm));
-  fields.push_back(to_string(s.status));
-  fields.push_back(format_double(valid ? s.max_strain : std::nan("")));
+/// Adds the fields of summary_columns(); max_strain only for a valid equilibrium.
+inline void add_summary_fields(const SolverSummary& s, bool valid, CsvWriter& out) {
+  out.add(s.converged() ? 1 : 0);
+  out.add(s.iterations);
+  out.add(s.final_residual_norm);
+  out.add(to_string(s.status));
+  out.add(valid ? s.max_strain : std::nan(""));
 }
 
 }  // namespace pcr::cli

@@ -26,20 +26,20 @@ void run_fk(const FkArguments& args) {
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
   ForwardSequence sequence(robot.params, options, load);
-  cli::solve_rows("pcr fk", table, args.output, header, [&](const std::vector<double>& row) {
+  const auto solve_row = [&](const std::vector<double>& row, CsvWriter& out) {
     JointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
     const ForwardSolution& solution = sequence.solve(q);
     const SolverSummary& s = solution.summary;
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    cli::SolvedRow out{{}, s.status};
-    for (int i = 0; i < n; ++i) out.fields.push_back(format_double(q(i)));
-    out.fields.push_back(format_double(s.converged() ? solution.pose.x : nan));
-    out.fields.push_back(format_double(s.converged() ? solution.pose.y : nan));
-    out.fields.push_back(format_double(s.converged() ? solution.pose.theta : nan));
-    cli::append_summary_fields(s, s.converged(), out.fields);
-    return out;
-  });
+    for (int i = 0; i < n; ++i) out.add(q(i));
+    out.add(s.converged() ? solution.pose.x : nan);
+    out.add(s.converged() ? solution.pose.y : nan);
+    out.add(s.converged() ? solution.pose.theta : nan);
+    cli::add_summary_fields(s, s.converged(), out);
+    return s.status;
+  };
+  cli::solve_rows("pcr fk", table, args.output, header, solve_row);
 }
 
 }  // namespace

@@ -32,21 +32,21 @@ void run_ik(const IkArguments& args) {
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
   InverseSequence sequence(robot.params, options, load);
-  cli::solve_rows("pcr ik", table, args.output, header, [&](const std::vector<double>& row) {
+  const auto solve_row = [&](const std::vector<double>& row, CsvWriter& out) {
     const Pose2<double> pose{row[0], row[1], row[2]};
     const InverseSolution& solution = sequence.solve(pose);
     const SolverSummary& s = solution.summary;
     const bool valid = usable_as_warm_start(s);  // a valid equilibrium, maybe out of range
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    cli::SolvedRow out{{}, s.status};
     // For n = 2 theta is solved for: report the solved value.
-    out.fields.push_back(format_double(pose.x));
-    out.fields.push_back(format_double(pose.y));
-    out.fields.push_back(format_double(n == 2 ? (valid ? solution.pose.theta : nan) : pose.theta));
-    for (int i = 0; i < n; ++i) out.fields.push_back(format_double(valid ? solution.q(i) : nan));
-    cli::append_summary_fields(s, valid, out.fields);
-    return out;
-  });
+    out.add(pose.x);
+    out.add(pose.y);
+    out.add(n == 2 ? (valid ? solution.pose.theta : nan) : pose.theta);
+    for (int i = 0; i < n; ++i) out.add(valid ? solution.q(i) : nan);
+    cli::add_summary_fields(s, valid, out);
+    return s.status;
+  };
+  cli::solve_rows("pcr ik", table, args.output, header, solve_row);
 }
 
 }  // namespace

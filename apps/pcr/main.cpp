@@ -1,11 +1,36 @@
 // pcr: command-line tool for planar parallel continuum robots.
 // Thin: parse the arguments, call the library, print.
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
+
+namespace {
+
+#ifdef PCR_FULL_TOOL
+/// Replaces this process by PCR_FULL_TOOL, found next to it, with the same arguments (argv[0]
+/// included, so its usage names what the user typed). Returns only when it cannot.
+void exec_full_tool(char** argv) {
+  std::error_code error;
+  std::filesystem::path path = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    path.replace_filename(PCR_FULL_TOOL);
+    ::execv(path.c_str(), argv);
+  }
+  std::cerr << "pcr: warning: cannot run " << (error ? PCR_FULL_TOOL : path.string()) << ": "
+            << (error ? error.message() : std::strerror(errno))
+            << "; only the kinematics subcommands are available\n";
+}
+#endif
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"pcr: planar parallel continuum robots (kinematics, description files)"};
@@ -25,6 +50,15 @@ int main(int argc, char** argv) {
   register_measure_command(app);
   register_render_command(app);
   register_camera_command(app);
+#endif
+#ifdef PCR_FULL_TOOL
+  // This binary links only pcr::io, so its subcommands start in milliseconds; the others, and the
+  // help that lists them all, are the full tool's, which loads Ceres, OpenCV and what they need.
+  const bool own_command =
+      argc > 1 && !app.get_subcommands([&](const CLI::App* command) {
+                        return command->check_name(argv[1]);
+                      }).empty();
+  if (!own_command) exec_full_tool(argv);
 #endif
   try {
     app.parse(argc, argv);  // the chosen subcommand runs inside parse()

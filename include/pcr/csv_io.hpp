@@ -9,9 +9,11 @@
 // - every other field must be a finite decimal number; fields are not quoted.
 // Any violation throws InputError naming the source, the line and the column (both 1-based).
 
+#include <cstddef>
 #include <fstream>
 #include <iosfwd>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "pcr/robot_io.hpp"
@@ -43,12 +45,44 @@ CsvTable parse_csv(std::istream& in, const std::string& source,
 /// Reads a CSV file (InputError naming the file when it cannot be opened).
 CsvTable read_csv(const std::string& path, const CsvReadOptions& options = CsvReadOptions());
 
-/// Shortest decimal form that reads back to the same double (at most 17 significant digits);
+/// Shortest decimal form that reads back to the same double (at most 17 significant digits),
+/// laid out as printf's %.15g would ("0.0001", "69000000000", "1e-05", "1.2345678901234568e+17");
 /// "nan", "inf", "-inf" for non-finite values.
 std::string format_double(double value);
 
+/// The longest text of format_double: "-2.2250738585072014e-308".
+inline constexpr std::size_t kMaxFormattedDoubleChars = 24;
+/// format_double into `out` (room for kMaxFormattedDoubleChars); returns the end of the text.
+char* format_double(double value, char* out);
+
 /// Joins fields with commas and a trailing newline.
 std::string csv_line(const std::vector<std::string>& fields);
+
+/// Writes CSV rows to a stream through one buffer, handed over in 64 kB chunks, so that writing a
+/// row allocates nothing. Numbers are written as format_double.
+class CsvWriter {
+ public:
+  explicit CsvWriter(std::ostream& out);
+  /// Flushes.
+  ~CsvWriter();
+  CsvWriter(const CsvWriter&) = delete;
+  CsvWriter& operator=(const CsvWriter&) = delete;
+
+  void add(double value);
+  void add(int value);
+  void add(std::string_view text);
+  /// Ends the row (a newline); the next add starts a new one.
+  void end_row();
+  /// Writes the buffered rows to the stream.
+  void flush();
+
+ private:
+  void separate();
+
+  std::ostream& out_;
+  std::string buffer_;
+  bool row_started_{false};
+};
 
 /// An output stream that is stdout when `path` is empty or "-", otherwise a temporary file in the
 /// same directory renamed over `path` by commit(). Dropped uncommitted, the temporary is removed,

@@ -3,7 +3,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -16,35 +18,38 @@
 namespace pcr {
 namespace {
 
-std::string trim(const std::string& s) {
+std::string_view trim(std::string_view s) {
   const char* ws = " \t\r\n";
   const std::size_t begin = s.find_first_not_of(ws);
-  if (begin == std::string::npos) return "";
+  if (begin == std::string_view::npos) return {};
   return s.substr(begin, s.find_last_not_of(ws) - begin + 1);
 }
 
-std::vector<std::string> split_fields(const std::string& line) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
+/// The trimmed comma-separated fields of `line`, into `fields` (reused from line to line).
+void split_fields(std::string_view line, std::vector<std::string_view>& fields) {
+  fields.clear();
   while (true) {
-    const std::size_t comma = line.find(',', start);
-    fields.push_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos
-                                                                         : comma - start)));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
+    const std::size_t comma = line.find(',');
+    fields.push_back(trim(line.substr(0, comma)));
+    if (comma == std::string_view::npos) return;
+    line.remove_prefix(comma + 1);
   }
-  return fields;
 }
 
 /// A decimal number consuming the whole field, or nothing. Non-finite values are returned too,
 /// so the caller can tell "not a number" from "not finite".
-std::optional<double> parse_number(const std::string& field) {
+std::optional<double> parse_number(std::string_view field) {
   if (field.empty()) return std::nullopt;
-  const char* begin = field.c_str();
-  char* end = nullptr;
-  errno = 0;
-  const double value = std::strtod(begin, &end);
-  if (end != begin + field.size()) return std::nullopt;
+  const char* const end = field.data() + field.size();
+  double value = 0.0;
+  const std::from_chars_result fast = std::from_chars(field.data(), end, value);
+  if (fast.ec == std::errc() && fast.ptr == end) return value;
+  // strtod also takes what from_chars refuses: a leading '+', hexadecimal, and values beyond the
+  // double range (as inf, or 0 and subnormals), so the accepted syntax is strtod's.
+  const std::string copy(field);
+  char* copy_end = nullptr;
+  value = std::strtod(copy.c_str(), &copy_end);
+  if (copy_end != copy.c_str() + copy.size()) return std::nullopt;
   return value;
 }
 
@@ -56,7 +61,18 @@ std::optional<double> parse_number(const std::string& field) {
   throw InputError(msg.str());
 }
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+std::string quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
+
+/// The whole stream, read in large blocks (std::cin reads a character at a time otherwise).
+std::string read_all(std::istream& in) {
+  std::string text;
+  char block[1 << 16];
+  do {
+    in.read(block, sizeof block);
+    text.append(block, static_cast<std::size_t>(in.gcount()));
+  } while (in);
+  return text;
+}
 
 }  // namespace
 
@@ -64,34 +80,42 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
   CsvTable table;
   table.source = source;
   table.columns = options.columns;
+  const std::string text = read_all(in);
+  if (in.bad()) {
+    fail(source, static_cast<int>(std::count(text.begin(), text.end(), '\n')), 0, "read error");
+  }
   // Field index in the source line -> position in the numeric row (-1: comment column).
   std::vector<int> mapping;
   std::vector<std::string> header_names;
+  std::vector<std::string_view> fields;
   bool first = true;
-  std::string line;
   int line_number = 0;
-  while (std::getline(in, line)) {
+  for (std::size_t begin = 0; begin < text.size();) {
+    const std::size_t newline = text.find('\n', begin);
+    const std::size_t end = newline == std::string::npos ? text.size() : newline;
+    const std::string_view line(text.data() + begin, end - begin);
+    begin = end + 1;
     ++line_number;
-    const std::string stripped = trim(line);
+    const std::string_view stripped = trim(line);
     if (stripped.empty() || stripped[0] == '#') continue;
-    const std::vector<std::string> fields = split_fields(line);
+    split_fields(line, fields);
     if (first) {
       first = false;
       bool any_number = false;
-      for (const std::string& f : fields) any_number = any_number || parse_number(f).has_value();
+      for (std::string_view f : fields) any_number = any_number || parse_number(f).has_value();
       if (!any_number) {
         table.has_header = true;
-        header_names = fields;
+        header_names.assign(fields.begin(), fields.end());
         std::vector<std::string> numeric;
         for (std::size_t j = 0; j < fields.size(); ++j) {
           if (fields[j].empty()) {
             fail(source, line_number, static_cast<int>(j) + 1, "empty column name in the header");
           }
-          if (fields[j][0] != '#') numeric.push_back(fields[j]);
+          if (fields[j][0] != '#') numeric.emplace_back(fields[j]);
         }
         if (options.columns.empty()) {
           table.columns = numeric;
-          for (const std::string& f : fields) {
+          for (std::string_view f : fields) {
             mapping.push_back(f[0] == '#' ? -1 : 0);
           }
           int k = 0;
@@ -126,7 +150,7 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
           }
           for (const std::string& c : options.columns) {
             bool present = false;
-            for (const std::string& f : fields) present = present || f == c;
+            for (std::string_view f : fields) present = present || f == c;
             if (!present) {
               fail(source, line_number, 0, "missing column " + quoted(c) + " in the header");
             }
@@ -147,27 +171,26 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
            "expected " + std::to_string(mapping.size()) + " columns, got " +
                std::to_string(fields.size()));
     }
+    const auto field_error = [&](std::size_t j, const char* what) {
+      const std::string name = table.has_header ? " (" + header_names[j] + ")" : "";
+      return "column " + std::to_string(j + 1) + name + ": " + what + quoted(fields[j]);
+    };
     std::vector<double> row(table.columns.size(), 0.0);
     for (std::size_t j = 0; j < fields.size(); ++j) {
       if (mapping[j] < 0) continue;
-      const std::string name = table.has_header ? " (" + header_names[j] + ")" : "";
       const std::optional<double> value = parse_number(fields[j]);
       const int column = static_cast<int>(j) + 1;
       if (!value) {
-        fail(source, line_number, column,
-             "column " + std::to_string(column) + name + ": expected a number, got " +
-                 quoted(fields[j]));
+        fail(source, line_number, column, field_error(j, "expected a number, got "));
       }
       if (!std::isfinite(*value)) {
-        fail(source, line_number, column,
-             "column " + std::to_string(column) + name + ": non-finite value " + quoted(fields[j]));
+        fail(source, line_number, column, field_error(j, "non-finite value "));
       }
       row[static_cast<std::size_t>(mapping[j])] = *value;
     }
     table.rows.push_back(std::move(row));
     table.line_numbers.push_back(line_number);
   }
-  if (in.bad()) fail(source, line_number, 0, "read error");
   return table;
 }
 
@@ -177,15 +200,47 @@ CsvTable read_csv(const std::string& path, const CsvReadOptions& options) {
   return parse_csv(in, path, options);
 }
 
-std::string format_double(double value) {
-  if (std::isnan(value)) return "nan";
-  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  char buffer[32];
-  for (int precision = 15; precision <= 17; ++precision) {
-    std::snprintf(buffer, sizeof(buffer), "%.*g", precision, value);
-    if (std::strtod(buffer, nullptr) == value) break;
+char* format_double(double value, char* out) {
+  const auto put = [&out](std::string_view text) {
+    return out = std::copy(text.begin(), text.end(), out);
+  };
+  if (std::isnan(value)) return put("nan");
+  if (std::isinf(value)) return put(value > 0 ? "inf" : "-inf");
+  // The shortest digits that read back to the same bits, as "-d.ddde-XX".
+  char text[kMaxFormattedDoubleChars];
+  const char* const end =
+      std::to_chars(text, text + sizeof text, value, std::chars_format::scientific).ptr;
+  const char* const e = std::find(static_cast<const char*>(text), end, 'e');
+  int exponent = 0;
+  std::from_chars(e + (e[1] == '+' ? 2 : 1), end, exponent);
+  const char* const mantissa = text[0] == '-' ? text + 1 : text;
+  if (mantissa != text) *out++ = '-';
+  char digits[17];
+  int count = 0;
+  for (const char* p = mantissa; p != e; ++p) {
+    if (*p != '.') digits[count++] = *p;
   }
-  return buffer;
+  // Laid out as %.15g lays them out, the precision raised to the digits' count: the text of the
+  // first of %.15g, %.16g and %.17g that reads back exactly, as pcr has always written numbers.
+  if (exponent < -4 || exponent >= std::max(count, 15)) {
+    return put({mantissa, static_cast<std::size_t>(end - mantissa)});
+  }
+  if (exponent < 0) {
+    put("0.");
+    out = std::fill_n(out, -exponent - 1, '0');
+    return put({digits, static_cast<std::size_t>(count)});
+  }
+  for (int i = 0; i <= exponent; ++i) *out++ = i < count ? digits[i] : '0';
+  if (count > exponent + 1) {
+    *out++ = '.';
+    put({digits + exponent + 1, static_cast<std::size_t>(count - exponent - 1)});
+  }
+  return out;
+}
+
+std::string format_double(double value) {
+  char text[kMaxFormattedDoubleChars];
+  return std::string(text, format_double(value, text));
 }
 
 std::string csv_line(const std::vector<std::string>& fields) {
@@ -196,6 +251,48 @@ std::string csv_line(const std::vector<std::string>& fields) {
   }
   out += '\n';
   return out;
+}
+
+namespace {
+/// CsvWriter hands its buffer to the stream once it holds this much.
+constexpr std::size_t kCsvWriterChunk = std::size_t{1} << 16;
+}  // namespace
+
+CsvWriter::CsvWriter(std::ostream& out) : out_(out) { buffer_.reserve(kCsvWriterChunk + 4096); }
+
+CsvWriter::~CsvWriter() { flush(); }
+
+void CsvWriter::separate() {
+  if (row_started_) buffer_ += ',';
+  row_started_ = true;
+}
+
+void CsvWriter::add(double value) {
+  separate();
+  char text[kMaxFormattedDoubleChars];
+  buffer_.append(text, format_double(value, text));
+}
+
+void CsvWriter::add(int value) {
+  separate();
+  char text[16];
+  buffer_.append(text, std::to_chars(text, text + sizeof text, value).ptr);
+}
+
+void CsvWriter::add(std::string_view text) {
+  separate();
+  buffer_ += text;
+}
+
+void CsvWriter::end_row() {
+  buffer_ += '\n';
+  row_started_ = false;
+  if (buffer_.size() >= kCsvWriterChunk) flush();
+}
+
+void CsvWriter::flush() {
+  out_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
+  buffer_.clear();
 }
 
 OutputFile::OutputFile(const std::string& path) : path_(path) {

@@ -1,5 +1,5 @@
 # ctest driver (cmake -P): install a pcr build tree into a fresh prefix, then configure, build and
-# run tests/consumer against that installation.
+# run tests/consumer against that installation; then check the installed `pcr` tool.
 #   -DPCR_BUILD_DIR=  the pcr build tree      -DWORK_DIR=   scratch directory (wiped)
 #   -DGENERATOR= -DCXX_COMPILER=             -DEXPECTED_COMPONENTS=core,io,...
 cmake_minimum_required(VERSION 3.18)
@@ -36,4 +36,13 @@ execute_process(COMMAND ${build}/pcr_consumer RESULT_VARIABLE result OUTPUT_VARI
 message("${output}")
 if(NOT result EQUAL 0 OR NOT output MATCHES "pose: x = ")
   message(FATAL_ERROR "pcr_consumer failed (${result})")
+endif()
+
+# The installed `pcr` hands the calibration subcommands to the `pcr-full` installed next to it.
+if(",${EXPECTED_COMPONENTS}," MATCHES ",calib,")
+  execute_process(COMMAND ${prefix}/bin/pcr sensitivity --help RESULT_VARIABLE result
+                  OUTPUT_VARIABLE output ERROR_VARIABLE error)
+  if(NOT result EQUAL 0 OR NOT output MATCHES "Usage: [^\n]*pcr sensitivity")
+    message(FATAL_ERROR "installed pcr sensitivity --help failed (${result}): ${output}${error}")
+  endif()
 endif()
