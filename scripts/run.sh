@@ -176,10 +176,11 @@ run_tests() {
   ctest --test-dir build --output-on-failure -j "$JOBS" --timeout 900 || failed+=("ctest build/")
 
   # The C++ tests again under ASan + UBSan. -O1 with assertions on (Debug keeps Eigen's
-  # bounds checks) keeps the run short.
+  # bounds checks) keeps the run short; -g1 (line tables only: the reports' stack traces keep
+  # their file:line) compiles 25-35 % faster than -g.
   phase build-asan/
   log "Building build-asan/ (AddressSanitizer + UndefinedBehaviorSanitizer)"
-  configure build-asan -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g" \
+  configure build-asan -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g1" \
     -DPCR_SANITIZE=ON -DPCR_BUILD_BENCHMARKS=OFF -DPCR_BUILD_PYTHON=OFF
   cmake --build build-asan -j "$JOBS"
   # Every test's output is kept (JUnit XML) and searched for reports, so one from a child process
