@@ -53,6 +53,9 @@ install(TARGETS ${PCR_EXPORTED_TARGETS} EXPORT pcrTargets
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 set(PCR_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/pcr)
 install(EXPORT pcrTargets NAMESPACE pcr:: DESTINATION ${PCR_INSTALL_CMAKEDIR})
+# The build tree is a package too (-Dpcr_DIR=<build>), so that `pip install ./python` can link the
+# libraries it already built.
+export(EXPORT pcrTargets NAMESPACE pcr:: FILE ${PROJECT_BINARY_DIR}/pcrTargets.cmake)
 configure_package_config_file(cmake/pcrConfig.cmake.in ${PROJECT_BINARY_DIR}/pcrConfig.cmake
   INSTALL_DESTINATION ${PCR_INSTALL_CMAKEDIR})
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/pcrConfigVersion.cmake
