@@ -1,16 +1,15 @@
 // pcr_calibrate: staged, bounded identification of a robot description from measured poses
 // (issue 3, section 5). Thin: parse arguments, call pcr::calibrate, print and write the report.
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 
 #include "pcr/calib/calibration_report.hpp"
 #include "pcr/calib/dataset.hpp"
@@ -32,8 +31,9 @@ bool same_file(const std::string& a, const std::string& b) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Identify a pcr-robot description from measured platform poses (Mauze et al. 2021, "
-               "Section 5)."};
+  CLI::App app{
+      "Identify a pcr-robot description from measured platform poses (Mauze et al. 2021, "
+      "Section 5)."};
   std::string robot_path, data_path, validation_path, stages_path, output_path, report_path;
   double weight = pcr::kDefaultOrientationWeight;
   bool quiet = false;
@@ -53,7 +53,8 @@ int main(int argc, char** argv) {
   try {
     for (const std::string& input : {robot_path, data_path, validation_path, stages_path}) {
       if (input.empty()) continue;
-      if (same_file(input, output_path) || (!report_path.empty() && same_file(input, report_path))) {
+      if (same_file(input, output_path) ||
+          (!report_path.empty() && same_file(input, report_path))) {
         throw pcr::InputError("refusing to overwrite the input " + input);
       }
     }
@@ -62,7 +63,8 @@ int main(int argc, char** argv) {
     const std::vector<pcr::CalibrationSample> calibration =
         pcr::calibration_samples(pcr::read_dataset(data_path, n));
     std::vector<pcr::CalibrationSample> validation;
-    if (!validation_path.empty()) validation = pcr::calibration_samples(pcr::read_dataset(validation_path, n));
+    if (!validation_path.empty())
+      validation = pcr::calibration_samples(pcr::read_dataset(validation_path, n));
 
     pcr::CalibrationOptions options;
     if (!stages_path.empty()) options.stages = pcr::load_calibration_stages(stages_path);

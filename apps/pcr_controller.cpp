@@ -53,13 +53,20 @@ Arguments parse(int argc, char** argv) {
       if (i + 1 >= argc) usage((std::string(a) + ": missing value").c_str());
       return argv[++i];
     };
-    if (!std::strcmp(a, "--turns")) args.turns = positive(a, value());
-    else if (!std::strcmp(a, "--period")) args.period_s = positive(a, value());
-    else if (!std::strcmp(a, "--diameter")) args.diameter_m = positive(a, value());
-    else if (!std::strcmp(a, "--rate")) args.rate_hz = positive(a, value());
-    else if (!std::strcmp(a, "--realtime")) args.realtime = true;
-    else if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h")) usage("help");
-    else usage((std::string("unknown argument '") + a + "'").c_str());
+    if (!std::strcmp(a, "--turns"))
+      args.turns = positive(a, value());
+    else if (!std::strcmp(a, "--period"))
+      args.period_s = positive(a, value());
+    else if (!std::strcmp(a, "--diameter"))
+      args.diameter_m = positive(a, value());
+    else if (!std::strcmp(a, "--rate"))
+      args.rate_hz = positive(a, value());
+    else if (!std::strcmp(a, "--realtime"))
+      args.realtime = true;
+    else if (!std::strcmp(a, "--help") || !std::strcmp(a, "-h"))
+      usage("help");
+    else
+      usage((std::string("unknown argument '") + a + "'").c_str());
   }
   return args;
 }
@@ -89,8 +96,8 @@ int main(int argc, char** argv) {
   for (long k = 0; k < ticks; ++k) {
     const double t = static_cast<double>(k) * dt;
     if (args.realtime) {
-      std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(
-                                                std::chrono::duration<double>(t)));
+      std::this_thread::sleep_until(
+          start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(t)));
     }
     const Clock::time_point t0 = Clock::now();
     tick = follower.step(t);
@@ -107,14 +114,16 @@ int main(int argc, char** argv) {
   std::sort(sorted.begin(), sorted.end());
   const double median = sorted[sorted.size() / 2];
   const double p99 = sorted[std::min(sorted.size() - 1, sorted.size() * 99 / 100)];
-  std::printf("pcr_controller: circle of diameter %.3f mm, %.3g turn(s) of %.3g s at %.0f Hz (%s)\n",
-              args.diameter_m * 1e3, args.turns, args.period_s, args.rate_hz,
-              args.realtime ? "real time" : "simulated clock");
+  std::printf(
+      "pcr_controller: circle of diameter %.3f mm, %.3g turn(s) of %.3g s at %.0f Hz (%s)\n",
+      args.diameter_m * 1e3, args.turns, args.period_s, args.rate_hz,
+      args.realtime ? "real time" : "simulated clock");
   std::printf("  ticks %ld, failed %ld, Newton iterations %.2f per tick\n", ticks, failures,
               static_cast<double>(iterations) / static_cast<double>(ticks));
-  std::printf("  IK time per tick: median %.1f us, 99%% %.1f us, worst %.1f us; over %.0f us "
-              "budget: %ld\n",
-              median * 1e6, p99 * 1e6, sorted.back() * 1e6, dt * 1e6, misses);
+  std::printf(
+      "  IK time per tick: median %.1f us, 99%% %.1f us, worst %.1f us; over %.0f us "
+      "budget: %ld\n",
+      median * 1e6, p99 * 1e6, sorted.back() * 1e6, dt * 1e6, misses);
   std::printf("  last q = (");
   for (int i = 0; i < tick.q.size(); ++i) std::printf("%s%.9f", i ? ", " : "", tick.q(i));
   std::printf(") m, wall time %.3f s\n", wall);

@@ -7,9 +7,9 @@
 // double FK solves and Newton iterations, failed warm starts, per-stage iterations and times
 // (s), mean e_p (m) of the identified model on the calibration set.
 
-#include <string>
-
 #include <benchmark/benchmark.h>
+
+#include <string>
 
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/calib/sampling.hpp"

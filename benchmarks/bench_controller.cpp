@@ -3,13 +3,12 @@
 // seconds. Wall-clock times include preemption by other processes; the thread's CPU time
 // (CLOCK_THREAD_CPUTIME_ID) does not, so its worst case is the solver's own.
 //   build/benchmarks/bench_controller
+#include <benchmark/benchmark.h>
 #include <time.h>
 
 #include <algorithm>
 #include <chrono>
 #include <vector>
-
-#include <benchmark/benchmark.h>
 
 #include "pcr/controller.hpp"
 

@@ -1,11 +1,12 @@
 // Speed of the header-only core on the default robot at the default accuracy.
-//   build/benchmarks/bench_kinematics [--benchmark_repetitions=5 --benchmark_report_aggregates_only]
+//   build/benchmarks/bench_kinematics [--benchmark_repetitions=5
+//   --benchmark_report_aggregates_only]
+#include <benchmark/benchmark.h>
+
 #include <algorithm>
 #include <chrono>
 #include <random>
 #include <vector>
-
-#include <benchmark/benchmark.h>
 
 #include "pcr/kinematics.hpp"
 

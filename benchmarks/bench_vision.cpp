@@ -20,7 +20,8 @@ Scene robot_scene() {
   scene.camera.K << 5000, 0, 849.5, 0, 5000, 849.5, 0, 0, 1;
   scene.camera.distortion << -0.05, 0.02, 0, 0, 0;
   scene.plane = PlanePose::looking_down(0.5, 0.01, -0.008);
-  scene.tags = mount_tags(load_mounts(kMounts), pcr::femto_3pf(), pcr::Pose2<double>{}, {}, &scene.segments);
+  scene.tags =
+      mount_tags(load_mounts(kMounts), pcr::femto_3pf(), pcr::Pose2<double>{}, {}, &scene.segments);
   scene.circles.push_back(RenderCircle{Eigen::Vector2d::Zero(), 0.05});
   return scene;
 }
@@ -72,7 +73,12 @@ void BM_RenderScene(benchmark::State& state) {
     benchmark::DoNotOptimize(image.pixels.data());
   }
 }
-BENCHMARK(BM_RenderScene)->ArgName("supersampling")->Arg(1)->Arg(3)->Arg(4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RenderScene)
+    ->ArgName("supersampling")
+    ->Arg(1)
+    ->Arg(3)
+    ->Arg(4)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -1,13 +1,12 @@
 #pragma once
 // A fresh directory for one test's files, removed with it. Its name holds the process id and the
 // test's name, so parallel ctest jobs, the sanitizer build and other users never share one.
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <string>
 #include <system_error>
-
-#include <gtest/gtest.h>
 
 namespace pcr::test {
 
@@ -16,8 +15,8 @@ class ScratchDirectory {
   /// `tag` names the test program; the current test (or suite, outside a test) is appended.
   explicit ScratchDirectory(const std::string& tag) {
     const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const std::string test = info ? std::string(info->test_suite_name()) + "." + info->name()
-                                  : std::string("suite");
+    const std::string test =
+        info ? std::string(info->test_suite_name()) + "." + info->name() : std::string("suite");
     path_ = std::filesystem::temp_directory_path() /
             ("pcr_" + tag + "_" + std::to_string(::getpid()) + "_" + test);
     std::filesystem::remove_all(path_);

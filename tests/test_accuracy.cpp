@@ -1,6 +1,8 @@
 // Trajectories and ISO 9283 accuracy (issue 6, sections 1-2): path geometry against closed forms,
 // the ISO 9283 formulas against a hand-computed example, AP ~ 0 when the model is the truth,
 // errors naming the pose, and the repeatability against the known camera noise.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -8,10 +10,7 @@
 #include <sstream>
 #include <string>
 
-#include <gtest/gtest.h>
-
 #include "pcr/calib/accuracy.hpp"
-
 #include "scratch_directory.hpp"
 
 namespace pcr {
@@ -94,8 +93,7 @@ TEST(Trajectory, PathFromCsv) {
   ASSERT_EQ(poses.size(), 2u);
   EXPECT_EQ(poses[1].y, 2e-3);
   EXPECT_EQ(poses[1].theta, 0.01);
-  const std::string bad =
-      write_file(scratch, "bad_path.csv", "x,y,theta\n0,0,0\n1e-3,oops,0\n");
+  const std::string bad = write_file(scratch, "bad_path.csv", "x,y,theta\n0,0,0\n1e-3,oops,0\n");
   try {
     load_path_csv(bad);
     FAIL() << "expected InputError";
@@ -110,8 +108,11 @@ TEST(Iso9283, FormulasMatchAHandComputedExample) {
   const double u = 1e-6;
   std::vector<Pose2<double>> commanded = {{0, 0, 0}, {1e-3, 0, -0.01}};
   std::vector<std::vector<Pose2<double>>> attained(2);
-  attained[0] = {{1 * u, 0, 0.001}, {3 * u, 0, 0.003}, {1 * u, 2 * u, 0.002},
-                 {3 * u, 2 * u, 0.002}, {2 * u, 1 * u, 0.002}};
+  attained[0] = {{1 * u, 0, 0.001},
+                 {3 * u, 0, 0.003},
+                 {1 * u, 2 * u, 0.002},
+                 {3 * u, 2 * u, 0.002},
+                 {2 * u, 1 * u, 0.002}};
   // Pose 1: two identical attained poses, 3 um / 4 um off, 2 mrad under the command.
   attained[1] = {{1e-3 + 3 * u, 4 * u, -0.012}, {1e-3 + 3 * u, 4 * u, -0.012}};
   const Iso9283Result r = iso9283(commanded, attained);
@@ -119,8 +120,8 @@ TEST(Iso9283, FormulasMatchAHandComputedExample) {
   const Iso9283Pose& p = r.poses[0];
   EXPECT_NEAR(p.barycentre.x, 2 * u, 1e-18);
   EXPECT_NEAR(p.barycentre.y, 1 * u, 1e-18);
-  EXPECT_NEAR(p.ap_p, std::sqrt(5.0) * u, 1e-18);      // Eq. 10
-  EXPECT_NEAR(p.ap_theta, 0.002, 1e-15);               // Eq. 11
+  EXPECT_NEAR(p.ap_p, std::sqrt(5.0) * u, 1e-18);  // Eq. 10
+  EXPECT_NEAR(p.ap_theta, 0.002, 1e-15);           // Eq. 11
   // l_j = sqrt(2), sqrt(2), sqrt(2), sqrt(2), 0 um: l_bar = 4 sqrt(2) / 5, S_l^2 = 1.6 / 4 um^2.
   EXPECT_NEAR(p.l_bar, 4 * std::sqrt(2.0) / 5 * u, 1e-18);
   EXPECT_NEAR(p.s_l, std::sqrt(0.4) * u, 1e-18);
@@ -169,8 +170,8 @@ TEST(Iso9283, MeasuredCsvRoundTripAndErrors) {
   EXPECT_EQ(m.commanded[1].theta, 0.01);
   EXPECT_EQ(m.attained[1][1].x, 1.1e-3);
 
-  const std::string gap = write_file(scratch, "gap.csv",
-                                     "pose,x_c,y_c,theta_c,x,y,theta\n0,0,0,0,0,0,0\n2,0,0,0,0,0,0\n");
+  const std::string gap = write_file(
+      scratch, "gap.csv", "pose,x_c,y_c,theta_c,x,y,theta\n0,0,0,0,0,0,0\n2,0,0,0,0,0,0\n");
   try {
     load_measured_csv(gap);
     FAIL() << "expected InputError";
@@ -238,8 +239,8 @@ TEST(Accuracy, TrueModelOnANoiselessVirtualRobotIsExact) {
   spec.num_poses = 12;
   AccuracyOptions options;
   options.repeat = 3;
-  const AccuracyEvaluation truth = evaluate_on_virtual_robot(robot.truth().params, robot,
-                                                             square_path(spec), options);
+  const AccuracyEvaluation truth =
+      evaluate_on_virtual_robot(robot.truth().params, robot, square_path(spec), options);
   ASSERT_EQ(truth.attained.size(), 12u);
   ASSERT_EQ(truth.attained[0].size(), 3u);
   EXPECT_LT(truth.iso.ap_p.max, 1e-9);
@@ -248,14 +249,14 @@ TEST(Accuracy, TrueModelOnANoiselessVirtualRobotIsExact) {
 
   // Mapped with the true extrinsics (here the model's too): the same.
   options.frame = AttainedFrame::kTrueExtrinsics;
-  const AccuracyEvaluation mapped = evaluate_on_virtual_robot(robot.truth().params, robot,
-                                                              square_path(spec), options);
+  const AccuracyEvaluation mapped =
+      evaluate_on_virtual_robot(robot.truth().params, robot, square_path(spec), options);
   EXPECT_LT(mapped.iso.ap_p.max, 1e-9);
 
   // The nominal model misses by far more than the noise floor (the check can fail).
   options.frame = AttainedFrame::kTrueExtrinsics;
-  const AccuracyEvaluation nominal = evaluate_on_virtual_robot(robot.nominal().params, robot,
-                                                               square_path(spec), options);
+  const AccuracyEvaluation nominal =
+      evaluate_on_virtual_robot(robot.nominal().params, robot, square_path(spec), options);
   EXPECT_GT(nominal.iso.ap_p.max, 1e-6);
 }
 
@@ -272,7 +273,7 @@ RobotParams<double> regauged(const RobotParams<double>& truth, const Pose2<doubl
     limb.B = H_inv.transform(truth.limb(i).B);
     limb.beta = truth.limb(i).beta - H.theta;
   }
-  out.extrinsics.camera = G * truth.extrinsics.camera;  // ^Wnew T_Se = ^Wnew T_W ^W T_Se
+  out.extrinsics.camera = G * truth.extrinsics.camera;    // ^Wnew T_Se = ^Wnew T_W ^W T_Se
   out.extrinsics.pattern = truth.extrinsics.pattern * H;  // ^M T_Pnew = ^M T_P ^P T_Pnew
   return out;
 }
@@ -290,14 +291,14 @@ TEST(Accuracy, ModelFramesMakeTheEvaluationGaugeInvariant) {
   spec.num_poses = 8;
   AccuracyOptions options;
   options.repeat = 2;
-  const AccuracyEvaluation in_model = evaluate_on_virtual_robot(model, robot, circle_path(spec),
-                                                                options);
+  const AccuracyEvaluation in_model =
+      evaluate_on_virtual_robot(model, robot, circle_path(spec), options);
   EXPECT_LT(in_model.iso.ap_p.max, 1e-9);
   EXPECT_LT(in_model.iso.ap_theta_abs.max, 1e-6);
   // Compared in the truth's frames, the same model looks hundreds of micrometres off.
   options.frame = AttainedFrame::kTrueExtrinsics;
-  const AccuracyEvaluation in_truth = evaluate_on_virtual_robot(model, robot, circle_path(spec),
-                                                                options);
+  const AccuracyEvaluation in_truth =
+      evaluate_on_virtual_robot(model, robot, circle_path(spec), options);
   EXPECT_GT(in_truth.iso.ap_p.min, 50e-6);
 }
 
@@ -308,13 +309,13 @@ TEST(Accuracy, RepeatabilityMatchesTheCameraNoise) {
   CirclePath spec;
   spec.num_poses = 12;
   AccuracyOptions options;  // 30 cycles
-  const AccuracyEvaluation e = evaluate_on_virtual_robot(robot.truth().params, robot,
-                                                         circle_path(spec), options);
+  const AccuracyEvaluation e =
+      evaluate_on_virtual_robot(robot.truth().params, robot, circle_path(spec), options);
   const double sigma = vr_options.noise_position, sigma_theta = vr_options.noise_angle;
   // Isotropic Gaussian (x, y): l is Rayleigh, E[l] = sigma sqrt(pi/2), sd(l) = sigma
   // sqrt((4 - pi)/2), so RP_l -> 3.2187 sigma (x sqrt(29/30) for the estimated barycentre).
-  const double rayleigh = (std::sqrt(M_PI / 2) + 3 * std::sqrt((4 - M_PI) / 2)) *
-                          std::sqrt(29.0 / 30.0);
+  const double rayleigh =
+      (std::sqrt(M_PI / 2) + 3 * std::sqrt((4 - M_PI) / 2)) * std::sqrt(29.0 / 30.0);
   // Over 12 poses the mean RP_l has a standard error of about 0.08 sigma.
   EXPECT_NEAR(e.iso.rp_l.mean / sigma, rayleigh, 0.35);
   EXPECT_NEAR(e.iso.rp_theta.mean / sigma_theta, 3.0, 0.4);
@@ -322,7 +323,6 @@ TEST(Accuracy, RepeatabilityMatchesTheCameraNoise) {
   EXPECT_LT(e.iso.ap_p.max, sigma);
   EXPECT_LT(e.iso.ap_theta_abs.max, sigma_theta);
 }
-
 
 #ifdef PCR_CLI_PATH
 /// Runs `pcr <arguments>`, stdout to `out`, stderr to the scratch directory's stderr.txt.
@@ -344,13 +344,12 @@ std::string read_text(const std::string& path) {
 TEST(AccuracyCli, TableFromMeasuredPoses) {
   const test::ScratchDirectory scratch("accuracy");
   // Pose 0: attained 3 um / 4 um off in x / y on average (AP_p = 5 um), 1 mrad in theta.
-  const std::string measured = write_file(
-      scratch, "cli_measured.csv",
-      "pose,x_c,y_c,theta_c,x,y,theta\n"
-      "0,0,0,0,2e-6,4e-6,0.001\n"
-      "0,0,0,0,4e-6,4e-6,0.001\n"
-      "1,1e-3,0,0,1e-3,1e-6,0\n"
-      "1,1e-3,0,0,1e-3,1e-6,0\n");
+  const std::string measured = write_file(scratch, "cli_measured.csv",
+                                          "pose,x_c,y_c,theta_c,x,y,theta\n"
+                                          "0,0,0,0,2e-6,4e-6,0.001\n"
+                                          "0,0,0,0,4e-6,4e-6,0.001\n"
+                                          "1,1e-3,0,0,1e-3,1e-6,0\n"
+                                          "1,1e-3,0,0,1e-3,1e-6,0\n");
   const std::string out = scratch.file("out.csv");
   ASSERT_EQ(run_cli(scratch, "accuracy --measured " + measured + " --format csv", out), 0)
       << read_text(scratch.file("stderr.txt"));

@@ -2,14 +2,14 @@
 // differences, the gauge fix against the predictions it must not change, and the whole staged
 // identification on a virtual robot against its truth (the paper's 99 + 56 configurations).
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/calib/cost.hpp"
@@ -61,7 +61,8 @@ TEST(CostFunctor, ExactDerivativesMatchCentralDifferences) {
   std::vector<double> p = flat(base);
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-0.5, 0.5);
-  for (int k = 0; k < count; ++k) p[static_cast<std::size_t>(k)] += u(rng) * h[static_cast<std::size_t>(k)];
+  for (int k = 0; k < count; ++k)
+    p[static_cast<std::size_t>(k)] += u(rng) * h[static_cast<std::size_t>(k)];
   JointVector q(3);
   q << 0.004, -0.003, 0.002;
   const Pose2<double> measured{1e-3, -2e-3, 0.01};
@@ -81,8 +82,9 @@ TEST(CostFunctor, ExactDerivativesMatchCentralDifferences) {
   const PoseMeasurementError functor(base, q, measured, kDefaultOrientationWeight,
                                      kDefaultResidualScale, &cache);
   for (int k = 0; k < count; ++k) {
-    const double scale = h[static_cast<std::size_t>(k)] > 0 ? h[static_cast<std::size_t>(k)]
-                                                            : std::abs(p[static_cast<std::size_t>(k)]);
+    const double scale = h[static_cast<std::size_t>(k)] > 0
+                             ? h[static_cast<std::size_t>(k)]
+                             : std::abs(p[static_cast<std::size_t>(k)]);
     const double step = 1e-3 * scale;
     // Richardson-extrapolated central differences: truncation error O(step^4).
     double d1[3], d2[3];
@@ -118,10 +120,9 @@ TEST(CostFunctor, AnalyticJacobianMatchesAutoDiff) {
   const std::vector<double> h = parameter_half_widths(*nominal.uncertainty, base.num_limbs);
   std::mt19937_64 rng(13);
   std::uniform_real_distribution<double> u(-0.9, 0.9);
-  const JointVector configurations[] = {
-      (JointVector(3) << 0.004, -0.003, 0.002).finished(),
-      (JointVector(3) << -0.009, 0.008, 0.001).finished(),
-      (JointVector(3) << 0.0, 0.0, 0.0).finished()};
+  const JointVector configurations[] = {(JointVector(3) << 0.004, -0.003, 0.002).finished(),
+                                        (JointVector(3) << -0.009, 0.008, 0.001).finished(),
+                                        (JointVector(3) << 0.0, 0.0, 0.0).finished()};
   for (const JointVector& q : configurations) {
     std::vector<double> p = flat(base);
     for (int k = 0; k < count; ++k) {
@@ -152,13 +153,14 @@ TEST(CostFunctor, AnalyticJacobianMatchesAutoDiff) {
       for (int k = 0; k < count; ++k) {
         const std::size_t uk = static_cast<std::size_t>(k);
         scale[uk] = h[uk] > 0 ? h[uk] : std::abs(p[uk]);
-        row_scale = std::max(row_scale, std::abs(jb[static_cast<std::size_t>(i * count + k)]) * scale[uk]);
+        row_scale =
+            std::max(row_scale, std::abs(jb[static_cast<std::size_t>(i * count + k)]) * scale[uk]);
       }
       ASSERT_GT(row_scale, 0);
       for (int k = 0; k < count; ++k) {
         const std::size_t e = static_cast<std::size_t>(i * count + k);
-        EXPECT_NEAR(ja[e] * scale[static_cast<std::size_t>(k)], jb[e] * scale[static_cast<std::size_t>(k)],
-                    1e-8 * row_scale)
+        EXPECT_NEAR(ja[e] * scale[static_cast<std::size_t>(k)],
+                    jb[e] * scale[static_cast<std::size_t>(k)], 1e-8 * row_scale)
             << parameter_name(parameter_id(k, 3)) << " residual " << i;
       }
     }
@@ -175,9 +177,9 @@ TEST(CostFunctor, ReturnsFalseWhenForwardKinematicsFails) {
   p[static_cast<std::size_t>(parameter_index(ParameterId{ParameterKind::kLength, 0}, 3))] =
       std::numeric_limits<double>::quiet_NaN();
   FkCache cache;
-  std::unique_ptr<ceres::CostFunction> cost(PoseMeasurementError::Create(
-      nominal.params, JointVector::Zero(3), Pose2<double>{}, kDefaultOrientationWeight,
-      kDefaultResidualScale, &cache));
+  std::unique_ptr<ceres::CostFunction> cost(
+      PoseMeasurementError::Create(nominal.params, JointVector::Zero(3), Pose2<double>{},
+                                   kDefaultOrientationWeight, kDefaultResidualScale, &cache));
   double residuals[3];
   const double* params[] = {p.data()};
   std::vector<double> jac(3 * p.size());
@@ -249,13 +251,14 @@ TEST(Calibrator, VirtualRobotReachesTheNoiseFloor) {
   }
   std::printf("nominal (extrinsics only) validation: mean e_p %.3g m, mean e_theta %.3g rad\n",
               nominal_val.mean_p, nominal_val.mean_theta);
-  std::printf("identified calibration: mean e_p %.3g m, e_theta %.3g rad; validation %.3g m, %.3g rad\n",
-              identified_cal.mean_p, identified_cal.mean_theta, identified_val.mean_p,
-              identified_val.mean_theta);
+  std::printf(
+      "identified calibration: mean e_p %.3g m, e_theta %.3g rad; validation %.3g m, %.3g rad\n",
+      identified_cal.mean_p, identified_cal.mean_theta, identified_val.mean_p,
+      identified_val.mean_theta);
   EXPECT_EQ(identified_val.failed, 0);
-  EXPECT_GT(nominal_val.mean_p, 10e-6);           // tens of micrometres before identification
+  EXPECT_GT(nominal_val.mean_p, 10e-6);  // tens of micrometres before identification
   EXPECT_LE(identified_cal.mean_p, 0.05e-6);
-  EXPECT_LE(identified_val.mean_p, 0.05e-6);      // the noise floor
+  EXPECT_LE(identified_val.mean_p, 0.05e-6);  // the noise floor
   EXPECT_LE(identified_val.mean_theta, 5e-6);
   EXPECT_NEAR(result.residual_variance, 1.0, 0.3);  // whitened residuals: noise only
 

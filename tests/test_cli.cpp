@@ -1,4 +1,5 @@
 // The `pcr` command-line tool, run as a program on files in a temporary directory.
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <cmath>
@@ -6,8 +7,6 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "pcr/csv_io.hpp"
 #include "pcr/robot_io.hpp"
@@ -31,7 +30,6 @@ std::string slurp(const fs::path& path) {
 
 class Cli : public ::testing::Test {
  protected:
-
   /// Runs `pcr <args>` (or another program) with stdout and stderr captured.
   Result run(const std::string& args, const std::string& stdin_text = "",
              const std::string& program = PCR_CLI_PATH) {
@@ -73,8 +71,8 @@ TEST_F(Cli, HelpWorksForEveryCommand) {
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << command << ": " << r.out;
   }
   EXPECT_NE(run("fk --help").out.find("--robot"), std::string::npos);
-  EXPECT_NE(run("").status, 0);               // a subcommand is required
-  EXPECT_NE(run("fk --bogus").status, 0);     // bad usage
+  EXPECT_NE(run("").status, 0);            // a subcommand is required
+  EXPECT_NE(run("fk --bogus").status, 0);  // bad usage
   EXPECT_NE(run("fk --bogus").err.find("bogus"), std::string::npos);
 }
 
@@ -93,8 +91,7 @@ TEST_F(Cli, HelpListsEverySubcommand) {
     // Also those pcr hands to pcr-full: their usage names the program as it was called.
     const Result r = run(command + " --help");
     EXPECT_EQ(r.status, 0) << command;
-    EXPECT_NE(r.out.find("Usage: " + std::string(PCR_CLI_PATH) + " " + command),
-              std::string::npos)
+    EXPECT_NE(r.out.find("Usage: " + std::string(PCR_CLI_PATH) + " " + command), std::string::npos)
         << r.out;
   }
 }
@@ -144,9 +141,8 @@ TEST_F(Cli, ForwardThenInverseThenForwardReturnsThePose) {
   const std::string fk_out = (dir_ / "fk.csv").string();
   Result r = run("fk --input '" + joints + "' --output '" + fk_out + "'");
   ASSERT_EQ(r.status, 0) << r.err;
-  const pcr::CsvTable fk =
-      parse(slurp(fk_out), {"q1", "q2", "q3", "x", "y", "theta", "converged", "iterations",
-                            "residual", "max_strain"});
+  const pcr::CsvTable fk = parse(slurp(fk_out), {"q1", "q2", "q3", "x", "y", "theta", "converged",
+                                                 "iterations", "residual", "max_strain"});
   ASSERT_EQ(fk.rows.size(), 5u);
   for (const auto& row : fk.rows) EXPECT_EQ(row[6], 1.0);
   // Home pose is (0, 0, 0); equal joints on the symmetric robot leave x = y = 0 (120° symmetry).

@@ -1,17 +1,16 @@
 // The embedded controller (issue 6, section 4): a 1 kHz loop following the circle by warm-started
 // IK never allocates, never throws, and its joints put the platform on the commanded poses (checked
 // by forward kinematics, an independent solve).
+#include <gtest/gtest.h>
+
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <new>
 #include <vector>
 
-#include <gtest/gtest.h>
-
-#include "pcr/controller.hpp"
-
 #include "allocation_counter.hpp"
+#include "pcr/controller.hpp"
 
 namespace pcr {
 namespace {
@@ -28,7 +27,7 @@ static_assert(noexcept(path_ik_step(std::declval<const RobotParams<double>&>(),
 
 TEST(Controller, FollowsTheCircleWithoutAllocatingAndReachesEveryPose) {
   const RobotParams<double> robot = femto_3pf();
-  const CirclePath circle;  // the paper's: diameter 3 mm, theta = 0
+  const CirclePath circle;    // the paper's: diameter 3 mm, theta = 0
   const double period = 1.0;  // s per turn: 1000 ticks
   const int ticks = static_cast<int>(std::lround(period / kTick));
   std::vector<ControllerTick> log(static_cast<std::size_t>(ticks) + 1);  // allocated beforehand

@@ -1,6 +1,8 @@
 // Numeric CSV tables: header detection, comment columns, selection by name, and error messages
 // that name the source, the line and the column.
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -10,8 +12,6 @@
 #include <random>
 #include <sstream>
 #include <streambuf>
-
-#include <gtest/gtest.h>
 
 #include "allocation_counter.hpp"
 #include "pcr/csv_io.hpp"

@@ -1,14 +1,14 @@
 // pcr demo end to end (issue 6, section 3), small: the report's numbers against the noise floor
 // and the truth, and the output directory's safety rules.
 
+#include <gtest/gtest.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include "scratch_directory.hpp"
 
@@ -32,9 +32,10 @@ TEST(Demo, SmallRunReachesTheNoiseFloor) {
   const pcr::test::ScratchDirectory scratch("demo");
   const fs::path out = scratch.path() / "out";
   // Vision included when built: it is the nominal description's source.
-  ASSERT_EQ(run_demo(scratch, "--output " + out.string() +
-                     " --calibration 40 --validation 12 --repeat 6 --poses 8 --seed 3"),
-            0);
+  ASSERT_EQ(
+      run_demo(scratch, "--output " + out.string() +
+                            " --calibration 40 --validation 12 --repeat 6 --poses 8 --seed 3"),
+      0);
   const nlohmann::json report = read_json(out / "report.json");
   const auto& table3 = report["calibration"]["table3"];
   // The paper's repeatability is 9.13 nm per axis: e_p ~ 11 nm on average at the noise floor.
@@ -58,9 +59,10 @@ TEST(Demo, SmallRunReachesTheNoiseFloor) {
     EXPECT_TRUE(fs::exists(out / file)) << file;
   }
   // Running again into its own directory is allowed.
-  EXPECT_EQ(run_demo(scratch, "--output " + out.string() +
-                                  " --calibration 20 --validation 4 --repeat 3 --poses 4 --no-vision"),
-            0);
+  EXPECT_EQ(
+      run_demo(scratch, "--output " + out.string() +
+                            " --calibration 20 --validation 4 --repeat 3 --poses 4 --no-vision"),
+      0);
 }
 
 TEST(Demo, RefusesSomeoneElsesDirectory) {

@@ -2,13 +2,13 @@
 // the cantilever under a dead tip force perpendicular to its axis (Bisshopp and Drucker, 1945,
 // in elliptic integrals) and the circular arc under a pure tip moment.
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <stdexcept>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "pcr/reference.hpp"
 #include "pcr/rod.hpp"
@@ -50,11 +50,10 @@ double carlson_rd(double x, double y, double z) {
       const double c1 = 3.0 / 14.0, c2 = 1.0 / 6.0, c3 = 9.0 / 22.0, c4 = 3.0 / 26.0;
       const double c5 = 0.25 * c3, c6 = 1.5 * c4;
       const double ea = dx * dy, eb = dz * dz, ec = ea - eb, ed = ea - 6.0 * eb, ee = ed + 2.0 * ec;
-      return 3.0 * sum +
-             factor *
-                 (1.0 + ed * (-c1 + c5 * ed - c6 * dz * ee) +
-                  dz * (c2 * ee + dz * (-c3 * ec + dz * c4 * ea))) /
-                 (mean * std::sqrt(mean));
+      return 3.0 * sum + factor *
+                             (1.0 + ed * (-c1 + c5 * ed - c6 * dz * ee) +
+                              dz * (c2 * ee + dz * (-c3 * ec + dz * c4 * ea))) /
+                             (mean * std::sqrt(mean));
     }
   }
 }
@@ -68,7 +67,8 @@ double ellint_f(double phi, double k) {
 /// Incomplete integral of the second kind E(phi, k).
 double ellint_e(double phi, double k) {
   const double s = std::sin(phi), c = std::cos(phi), delta2 = 1.0 - k * k * s * s;
-  return s * carlson_rf(c * c, delta2, 1.0) - k * k * s * s * s / 3.0 * carlson_rd(c * c, delta2, 1.0);
+  return s * carlson_rf(c * c, delta2, 1.0) -
+         k * k * s * s * s / 3.0 * carlson_rd(c * c, delta2, 1.0);
 }
 
 TEST(EllipticIntegrals, CarlsonFormsMatchHighPrecisionValues) {
@@ -157,7 +157,8 @@ double solve_bracketed(const std::function<double(double)>& f, double a, double 
       best_f = std::abs(fx);
       best = x;
     }
-    if (best_f <= f_tolerance || b - a <= 4 * std::numeric_limits<double>::epsilon() * std::abs(x)) {
+    if (best_f <= f_tolerance ||
+        b - a <= 4 * std::numeric_limits<double>::epsilon() * std::abs(x)) {
       break;
     }
     (fx < 0.0 ? a : b) = x;
@@ -169,7 +170,7 @@ double solve_bracketed(const std::function<double(double)>& f, double a, double 
   return best;
 }
 
-constexpr double kLength = 0.030;                   // m
+constexpr double kLength = 0.030;                         // m
 const double kEi = pcr::bending_stiffness(69e9, 125e-6);  // N m^2
 constexpr int kFineSteps = 2000;
 
@@ -189,8 +190,8 @@ pcr::RodState<double> cantilever_tip(double force, const Integrator& integrate) 
     return integrate(pcr::RodState<double>{0, 0, 0, 0.0, force, m0}).m;
   };
   // m(L) = m0 - P int cos(theta) ds: negative at m0 = 0, non-negative at m0 = P L.
-  const double m0 = solve_bracketed(tip_moment, 0.0, 1.0001 * force * kLength,
-                                    1e-15 * force * kLength);
+  const double m0 =
+      solve_bracketed(tip_moment, 0.0, 1.0001 * force * kLength, 1e-15 * force * kLength);
   return integrate(pcr::RodState<double>{0, 0, 0, 0.0, force, m0});
 }
 

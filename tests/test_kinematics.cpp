@@ -1,16 +1,15 @@
 // Forward and inverse kinematics: round trips, exact Jacobians, equilibrium, symmetry,
 // statuses, and the real-time guarantees (no allocation).
+#include <gtest/gtest.h>
+
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <new>
 #include <random>
 
-#include <gtest/gtest.h>
-
-#include "pcr/kinematics.hpp"
-
 #include "allocation_counter.hpp"
+#include "pcr/kinematics.hpp"
 #include "random_robots.hpp"
 
 namespace pcr {
@@ -102,7 +101,8 @@ TEST(Kinematics, JacobianMatchesCentralDifferences) {
   const RobotParams<double> robot = femto_3pf();
   const SolverOptions options;
   const PlatformLoad<double> load{Vector2<double>(2e-4, -1e-4), 3e-6};
-  const ForwardSolution fk = forward_kinematics(robot, joints({0.003, -0.002, 0.001}), options, load);
+  const ForwardSolution fk =
+      forward_kinematics(robot, joints({0.003, -0.002, 0.001}), options, load);
   ASSERT_TRUE(fk.summary.converged());
   ShootingPoint<double> point;
   point.pose = fk.pose;
@@ -113,10 +113,12 @@ TEST(Kinematics, JacobianMatchesCentralDifferences) {
   // Off the solution too, where the residual is not zero.
   point.pose.theta += 0.01;
   point.wrenches[1].m += 1e-6;
-  internal::ShootingProblem forward(internal::ShootingProblem::Kind::kForward, robot, load, options);
+  internal::ShootingProblem forward(internal::ShootingProblem::Kind::kForward, robot, load,
+                                    options);
   forward.set_input(fk.q);
   check_jacobian(forward, forward.pack(point));
-  internal::ShootingProblem inverse(internal::ShootingProblem::Kind::kInverse, robot, load, options);
+  internal::ShootingProblem inverse(internal::ShootingProblem::Kind::kInverse, robot, load,
+                                    options);
   ShootingVector pose(3);
   pose << fk.pose.x, fk.pose.y, fk.pose.theta;
   inverse.set_input(pose);
@@ -124,7 +126,8 @@ TEST(Kinematics, JacobianMatchesCentralDifferences) {
 }
 
 // The clamps' reactions balance the external load: sum n_i(0) = f and
-// sum (A_i(q) x n_i(0) + m_i(0)) = p_P x f + m_z about W's origin (the whole robot is in equilibrium).
+// sum (A_i(q) x n_i(0) + m_i(0)) = p_P x f + m_z about W's origin (the whole robot is in
+// equilibrium).
 TEST(Kinematics, ClampReactionsBalanceTheLoad) {
   const RobotParams<double> robot = femto_3pf();
   const PlatformLoad<double> load{Vector2<double>(5e-4, 3e-4), -4e-6};
@@ -139,7 +142,8 @@ TEST(Kinematics, ClampReactionsBalanceTheLoad) {
     force += Vector2<double>(w.nx, w.ny);
     moment += a.x() * w.ny - a.y() * w.nx + w.m;
   }
-  const double expected_moment = fk.pose.x * load.force.y() - fk.pose.y * load.force.x() + load.moment;
+  const double expected_moment =
+      fk.pose.x * load.force.y() - fk.pose.y * load.force.x() + load.moment;
   EXPECT_NEAR(force.x(), load.force.x(), 1e-14);
   EXPECT_NEAR(force.y(), load.force.y(), 1e-14);
   EXPECT_NEAR(moment, expected_moment, 1e-15);
@@ -159,7 +163,8 @@ TEST(Kinematics, SymmetricRobotCommutesWithRotation) {
   EXPECT_NEAR(b.pose.theta, a.pose.theta, 1e-12);
 }
 
-// Without external load the pose does not depend on E (the paper's Table 2), and forces scale with E.
+// Without external load the pose does not depend on E (the paper's Table 2), and forces scale with
+// E.
 TEST(Kinematics, YoungModulusHasNoEffectWithoutLoad) {
   RobotParams<double> robot = femto_3pf();
   const JointVector q = joints({0.002, 0.004, -0.001});
@@ -254,13 +259,15 @@ TEST(Kinematics, PreStressedRedundantRobotsFindTheirBowedHome) {
   }
   std::mt19937_64 rng(12);
   for (int n = 4; n <= 6; ++n) {
-    for (int k = 0; k < 3; ++k) robots.push_back(testing::perturbed(testing::regular_robot(n), rng));
+    for (int k = 0; k < 3; ++k)
+      robots.push_back(testing::perturbed(testing::regular_robot(n), rng));
   }
   for (std::size_t r = 0; r < robots.size(); ++r) {
     const RobotParams<double>& robot = robots[r];
     const int n = robot.num_limbs;
     const ForwardSolution home = home_solution(robot);
-    ASSERT_TRUE(home.summary.converged()) << "robot " << r << ": " << to_string(home.summary.status);
+    ASSERT_TRUE(home.summary.converged())
+        << "robot " << r << ": " << to_string(home.summary.status);
     EXPECT_GT(home.summary.max_strain, 1e-4) << "robot " << r;
     // An equilibrium of the exact model too: at 4x the steps the pose moves by far less than 1 nm.
     SolverOptions fine;
@@ -278,7 +285,8 @@ TEST(Kinematics, PreStressedRedundantRobotsFindTheirBowedHome) {
     ForwardSequence sequence(robot);
     sequence.set_warm_start(home);
     const ForwardSolution& moved = sequence.solve(q);
-    EXPECT_TRUE(moved.summary.converged()) << "robot " << r << ": " << to_string(moved.summary.status);
+    EXPECT_TRUE(moved.summary.converged())
+        << "robot " << r << ": " << to_string(moved.summary.status);
   }
 }
 
@@ -339,8 +347,10 @@ TEST(Kinematics, SolvesNeverAllocate) {
   g_counting = true;
   for (int k = 0; k < 50; ++k) {
     const double phase = 0.1 * k;
-    fk = forward_kinematics(robot, joints({0.001 * std::cos(phase), 0.001 * std::sin(phase), 0.0}), fk);
-    ik = inverse_kinematics(robot, Pose2<double>{1e-3 * std::cos(phase), 1e-3 * std::sin(phase), 0.0}, ik);
+    fk = forward_kinematics(robot, joints({0.001 * std::cos(phase), 0.001 * std::sin(phase), 0.0}),
+                            fk);
+    ik = inverse_kinematics(robot,
+                            Pose2<double>{1e-3 * std::cos(phase), 1e-3 * std::sin(phase), 0.0}, ik);
   }
   const ForwardSolution cold = forward_kinematics(robot, joints({0.006, -0.004, 0.002}));
   const ForwardSolution beyond = forward_kinematics(robot, joints({-0.006, -0.006, -0.006}));

@@ -2,6 +2,8 @@
 // file out, checked with the core's FK against the noise-free measurements of the truth.
 // Kept fast: the nominal description is uncertain only in the rod lengths and the extrinsics.
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -9,12 +11,10 @@
 #include <sstream>
 #include <string>
 
-#include <gtest/gtest.h>
-
 #include "pcr/calib/dataset.hpp"
-#include "pcr/csv_io.hpp"
 #include "pcr/calib/sampling.hpp"
 #include "pcr/calib/virtual_robot.hpp"
+#include "pcr/csv_io.hpp"
 #include "pcr/kinematics.hpp"
 #include "pcr/robot_io.hpp"
 #include "scratch_directory.hpp"
@@ -88,11 +88,11 @@ TEST_F(PcrCalibrate, IdentifiedFileReproducesTheTruthsMeasurements) {
   std::ofstream(path("stages.json"))
       << R"({"stages": [{"name": "extrinsics", "free": ["extrinsics"]},
                         {"name": "lengths", "free": ["l", "camera", "pattern"], "bounds_scale": 1}]})";
-  ASSERT_EQ(run("--robot " + path("nominal.json") + " --data " + path("calibration.csv") +
-                " --validation " + path("validation.csv") + " --stages " + path("stages.json") +
-                " --output " + path("identified.json") + " --report " + path("report.json") +
-                " --quiet"),
-            0);
+  ASSERT_EQ(
+      run("--robot " + path("nominal.json") + " --data " + path("calibration.csv") +
+          " --validation " + path("validation.csv") + " --stages " + path("stages.json") +
+          " --output " + path("identified.json") + " --report " + path("report.json") + " --quiet"),
+      0);
   const RobotDescription identified = load_robot(path("identified.json"));
   ASSERT_TRUE(identified.uncertainty.has_value());
   EXPECT_NE(slurp(path("report.json")).find("identified_model_validation_set"), std::string::npos);

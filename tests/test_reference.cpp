@@ -4,23 +4,22 @@
 // across the reachable stroke box; and the RK4 error falls about 16x per doubling of the step
 // count (fourth order).
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <vector>
 
-#include <gtest/gtest.h>
-
 #include "pcr/kinematics.hpp"
 #include "pcr/reference.hpp"
 #include "pcr/robot.hpp"
-
 #include "random_robots.hpp"
 
 namespace {
 
-constexpr double kStrainLimit = 0.01;  // about the limit of fused silica
+constexpr double kStrainLimit = 0.01;      // about the limit of fused silica
 constexpr double kPositionPromise = 1e-9;  // m: SolverOptions' default accuracy, with margin
 constexpr double kAnglePromise = 1e-6;     // rad
 
@@ -114,9 +113,10 @@ TEST_F(ReferenceTest, EveryRobotIsSampledAcrossItsWorkspace) {
   EXPECT_GT(max_strain, 0.005);
   EXPECT_GE(mild, 20);
   EXPECT_LE(unjudged_, 6);
-  std::printf("[ reference ] %zu configurations of 24 robots, %d mildly bent (0.05%%-0.3%%), "
-              "max strain %.3f%%; %d redrawn (CVODE reference not converged)\n",
-              cases_->size(), mild, 100 * max_strain, unjudged_);
+  std::printf(
+      "[ reference ] %zu configurations of 24 robots, %d mildly bent (0.05%%-0.3%%), "
+      "max strain %.3f%%; %d redrawn (CVODE reference not converged)\n",
+      cases_->size(), mild, 100 * max_strain, unjudged_);
 }
 
 TEST_F(ReferenceTest, CvodeSolutionsConvergeAndAreTolerancesIndependent) {
@@ -176,11 +176,12 @@ TEST_F(ReferenceTest, DefaultForwardKinematicsIsWithinOneNanometreAndOneMicrorad
     max_steps = std::max(max_steps, c.rk4.summary.rod_steps);
   }
   ASSERT_NE(worst_case, nullptr);
-  std::printf("[ reference ] default FK: worst %.3e m, %.3e rad (up to %d RK4 steps); worst "
-              "position on robot %d (n = %d), strain %.3f%%, %d steps, estimate %.2e m\n",
-              worst.position, worst.angle, max_steps, worst_case->robot_index,
-              worst_case->robot.num_limbs, 100 * worst_case->rk4.summary.max_strain,
-              worst_case->rk4.summary.rod_steps, worst_case->rk4.summary.position_error_estimate);
+  std::printf(
+      "[ reference ] default FK: worst %.3e m, %.3e rad (up to %d RK4 steps); worst "
+      "position on robot %d (n = %d), strain %.3f%%, %d steps, estimate %.2e m\n",
+      worst.position, worst.angle, max_steps, worst_case->robot_index, worst_case->robot.num_limbs,
+      100 * worst_case->rk4.summary.max_strain, worst_case->rk4.summary.rod_steps,
+      worst_case->rk4.summary.position_error_estimate);
 }
 
 TEST_F(ReferenceTest, DefaultInverseKinematicsIsWithinOneNanometre) {
@@ -213,16 +214,18 @@ TEST_F(ReferenceTest, DefaultInverseKinematicsIsWithinOneNanometre) {
   EXPECT_GE(solved, 100);
   EXPECT_LE(other_branch, 5);
   ASSERT_NE(worst_case, nullptr);
-  std::printf("[ reference ] default IK (%d poses, %d of them cold on another branch): worst "
-              "joint error %.3e m, on robot %d (n = %d)\n", solved, other_branch, worst,
-              worst_case->robot_index, worst_case->robot.num_limbs);
+  std::printf(
+      "[ reference ] default IK (%d poses, %d of them cold on another branch): worst "
+      "joint error %.3e m, on robot %d (n = %d)\n",
+      solved, other_branch, worst, worst_case->robot_index, worst_case->robot.num_limbs);
 }
 
 TEST_F(ReferenceTest, ErrorFallsSixteenfoldPerDoubling) {
   // The most strongly bent configuration: its error is far above CVODE's floor at 16 and 32 steps.
-  const Case& c = *std::max_element(cases_->begin(), cases_->end(), [](const Case& a, const Case& b) {
-    return a.rk4.summary.max_strain < b.rk4.summary.max_strain;
-  });
+  const Case& c =
+      *std::max_element(cases_->begin(), cases_->end(), [](const Case& a, const Case& b) {
+        return a.rk4.summary.max_strain < b.rk4.summary.max_strain;
+      });
   PoseError e[2];
   for (int k = 0; k < 2; ++k) {
     pcr::SolverOptions options;
@@ -234,8 +237,10 @@ TEST_F(ReferenceTest, ErrorFallsSixteenfoldPerDoubling) {
   ASSERT_GT(e[1].position, 1e-11);  // well above the reference's own error
   const double position_ratio = e[0].position / e[1].position;
   const double angle_ratio = e[0].angle / e[1].angle;
-  std::printf("[ reference ] strain %.4f%%: 16 -> 32 steps, error ratio %.2f (position), "
-              "%.2f (angle)\n", 100 * c.rk4.summary.max_strain, position_ratio, angle_ratio);
+  std::printf(
+      "[ reference ] strain %.4f%%: 16 -> 32 steps, error ratio %.2f (position), "
+      "%.2f (angle)\n",
+      100 * c.rk4.summary.max_strain, position_ratio, angle_ratio);
   EXPECT_GT(position_ratio, 10.0);
   EXPECT_LT(position_ratio, 22.0);
   EXPECT_GT(angle_ratio, 10.0);

@@ -1,15 +1,15 @@
 // The pcr-robot JSON format: every kind of bad file gives a message naming the file, the field
 // path and the value; writing and reading back is lossless to the bit; the shipped default file.
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
-
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include "pcr/robot_io.hpp"
 #include "scratch_directory.hpp"
@@ -50,13 +50,13 @@ std::string error_of(const std::string& text) {
 std::string error_of(const char* text) { return error_of(std::string(text)); }
 std::string error_of(const Json& j) { return error_of(j.dump()); }
 
-#define EXPECT_MESSAGE(message, ...)                                               \
-  do {                                                                             \
-    const std::string m_ = (message);                                              \
-    EXPECT_NE(m_.find("bad.json"), std::string::npos) << m_;                       \
-    for (const char* part : {__VA_ARGS__}) {                                       \
+#define EXPECT_MESSAGE(message, ...)                                                    \
+  do {                                                                                  \
+    const std::string m_ = (message);                                                   \
+    EXPECT_NE(m_.find("bad.json"), std::string::npos) << m_;                            \
+    for (const char* part : {__VA_ARGS__}) {                                            \
       EXPECT_NE(m_.find(part), std::string::npos) << "'" << part << "' not in: " << m_; \
-    }                                                                              \
+    }                                                                                   \
   } while (0)
 
 bool same(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }

@@ -1,7 +1,7 @@
 // The RK4 rod integrator against closed forms and finite differences.
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "pcr/rod.hpp"
 

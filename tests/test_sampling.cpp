@@ -1,8 +1,8 @@
 // Poisson-disc sampling of joint configurations: spacing, box, FK convergence from home, strain
 // limit (checked with independent cold-start FK), reproducibility.
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "pcr/calib/sampling.hpp"
 #include "pcr/robot_io.hpp"
@@ -13,7 +13,8 @@ namespace {
 double min_pairwise_distance(const std::vector<JointVector>& points) {
   double d = INFINITY;
   for (std::size_t a = 0; a < points.size(); ++a) {
-    for (std::size_t b = a + 1; b < points.size(); ++b) d = std::min(d, (points[a] - points[b]).norm());
+    for (std::size_t b = a + 1; b < points.size(); ++b)
+      d = std::min(d, (points[a] - points[b]).norm());
   }
   return d;
 }

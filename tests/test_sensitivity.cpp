@@ -1,8 +1,8 @@
 // Sensitivity analysis (Table 2): exact implicit derivatives against central differences of FK,
 // the zero rows (E, all diameters together), and the ranking for the default robot.
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "pcr/calib/sensitivity.hpp"
 
@@ -27,7 +27,8 @@ Eigen::Vector3d central_difference(const RobotParams<double>& robot, const Joint
   const ForwardSolution fp = forward_kinematics(plus, q, tight, load);
   const ForwardSolution fm = forward_kinematics(minus, q, tight, load);
   EXPECT_TRUE(fp.summary.converged() && fm.summary.converged());
-  return Eigen::Vector3d(fp.pose.x - fm.pose.x, fp.pose.y - fm.pose.y, fp.pose.theta - fm.pose.theta) /
+  return Eigen::Vector3d(fp.pose.x - fm.pose.x, fp.pose.y - fm.pose.y,
+                         fp.pose.theta - fm.pose.theta) /
          (2 * h);
 }
 
@@ -35,12 +36,16 @@ Eigen::Vector3d central_difference(const RobotParams<double>& robot, const Joint
 /// tolerance, small enough that the O(h^2) truncation does too.
 double step_for(const RobotParams<double>& robot, const ParameterId& id) {
   switch (id.kind) {
-    case ParameterKind::kYoungModulus: return 1e-4 * robot.limb(id.limb).young_modulus;
-    case ParameterKind::kDiameter: return 1e-4 * robot.limb(id.limb).diameter;
+    case ParameterKind::kYoungModulus:
+      return 1e-4 * robot.limb(id.limb).young_modulus;
+    case ParameterKind::kDiameter:
+      return 1e-4 * robot.limb(id.limb).diameter;
     case ParameterKind::kAlpha:
     case ParameterKind::kBeta:
-    case ParameterKind::kGamma: return 1e-4;  // rad
-    default: return 1e-6;  // m
+    case ParameterKind::kGamma:
+      return 1e-4;  // rad
+    default:
+      return 1e-6;  // m
   }
 }
 
@@ -70,7 +75,9 @@ void cross_check(const PlatformLoad<double>& load) {
   }
 }
 
-TEST(Sensitivity, ImplicitDerivativesMatchCentralDifferences) { cross_check(PlatformLoad<double>()); }
+TEST(Sensitivity, ImplicitDerivativesMatchCentralDifferences) {
+  cross_check(PlatformLoad<double>());
+}
 
 TEST(Sensitivity, ImplicitDerivativesMatchCentralDifferencesUnderLoad) {
   cross_check(PlatformLoad<double>{Vector2<double>(5e-3, -2e-3), 1e-5});
@@ -120,12 +127,14 @@ TEST(Sensitivity, TableOfTheDefaultRobot) {
   // Ranking: l, A and B ahead of beta and gamma.
   auto rank = [&](const std::string& kind) {
     for (std::size_t k = 0; k < report.ranking.size(); ++k) {
-      if (report.rows[static_cast<std::size_t>(report.ranking[k])].kind == kind) return static_cast<int>(k);
+      if (report.rows[static_cast<std::size_t>(report.ranking[k])].kind == kind)
+        return static_cast<int>(k);
     }
     return -1;
   };
   for (const char* strong : {"l", "A_x", "A_y", "B_x", "B_y"}) {
-    for (const char* weak : {"beta", "gamma"}) EXPECT_LT(rank(strong), rank(weak)) << strong << " vs " << weak;
+    for (const char* weak : {"beta", "gamma"})
+      EXPECT_LT(rank(strong), rank(weak)) << strong << " vs " << weak;
   }
   // The ranking's errors are sensitivity x half-width.
   const SensitivityRow& l = row(report, "l");

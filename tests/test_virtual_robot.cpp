@@ -1,14 +1,14 @@
 // Virtual robot (truth drawn in the uncertainty intervals, Eq. 5 measurements, noise) and the
 // dataset CSV format.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
-
-#include <Eigen/Dense>
-#include <gtest/gtest.h>
 
 #include "pcr/calib/dataset.hpp"
 #include "pcr/calib/virtual_robot.hpp"
@@ -41,7 +41,8 @@ VirtualRobotOptions noiseless(std::uint64_t seed) {
 TEST(VirtualRobot, NoiselessMeasurementIsEquation5OfTheTrueRobot) {
   VirtualRobot robot(default_robot(), noiseless(7));
   const RobotParams<double>& truth = robot.truth().params;
-  for (const JointVector& q : {joints(0, 0, 0), joints(3e-3, -2e-3, 1e-3), joints(-4e-3, 4e-3, 2e-3)}) {
+  for (const JointVector& q :
+       {joints(0, 0, 0), joints(3e-3, -2e-3, 1e-3), joints(-4e-3, 4e-3, 2e-3)}) {
     const VirtualMeasurement m = robot.measure(q);
     ASSERT_TRUE(m.ok) << to_string(m.summary.status);
     // FK of the true robot from a cold start, independent of the virtual robot's warm start.
@@ -141,7 +142,8 @@ TEST(VirtualRobot, NoiseHasTheRequestedStandardDeviation) {
   EXPECT_LT(std::abs(dx.mean()), 4 * kDefaultNoisePosition / std::sqrt(count));
   EXPECT_LT(std::abs(dt.mean()), 4 * kDefaultNoiseAngle / std::sqrt(count));
   // x and y independent.
-  const double corr = ((dx - dx.mean()) * (dy - dy.mean())).sum() / ((count - 1) * stddev(dx) * stddev(dy));
+  const double corr =
+      ((dx - dx.mean()) * (dy - dy.mean())).sum() / ((count - 1) * stddev(dx) * stddev(dy));
   EXPECT_LT(std::abs(corr), 0.1);
 }
 
@@ -172,7 +174,8 @@ TEST(VirtualRobot, UnmodelledEffectsAreSwitchedOnOneAtATime) {
   double spread = 0;
   for (int i = 0; i < n; ++i) {
     const double d = unequal.truth().params.limb(i).diameter;
-    EXPECT_LE(std::abs(d - base.truth().params.limb(i).diameter), options.effects.diameter_half_width);
+    EXPECT_LE(std::abs(d - base.truth().params.limb(i).diameter),
+              options.effects.diameter_half_width);
     spread = std::max(spread, std::abs(d - unequal.truth().params.limb(0).diameter));
     EXPECT_EQ(unequal.truth().params.limb(i).alpha, base.truth().params.limb(i).alpha);
   }
@@ -184,11 +187,12 @@ TEST(VirtualRobot, UnmodelledEffectsAreSwitchedOnOneAtATime) {
   VirtualRobot loaded(nominal, options);
   EXPECT_EQ(robot_to_json(loaded.truth()), robot_to_json(base.truth()));
   const JointVector q = joints(1e-3, 1e-3, 1e-3);
-  const Pose2<double> free_pose = base.measure_or_throw(q), loaded_pose = loaded.measure_or_throw(q);
+  const Pose2<double> free_pose = base.measure_or_throw(q),
+                      loaded_pose = loaded.measure_or_throw(q);
   // The platform moves with the load, and FK of the loaded truth predicts it.
   EXPECT_GT(std::hypot(free_pose.x - loaded_pose.x, free_pose.y - loaded_pose.y), 3e-7);
-  const ForwardSolution fk = forward_kinematics(base.truth().params, q, SolverOptions(),
-                                                options.effects.load);
+  const ForwardSolution fk =
+      forward_kinematics(base.truth().params, q, SolverOptions(), options.effects.load);
   const Pose2<double> expected = base.truth().params.extrinsics.measurement_from_platform(fk.pose);
   EXPECT_NEAR(loaded_pose.x, expected.x, 1e-12);
   EXPECT_NEAR(loaded_pose.y, expected.y, 1e-12);
@@ -340,7 +344,8 @@ TEST(CalibCli, SampleSimulateSensitivity) {
   EXPECT_NE(run("simulate --configs " + dir + "bad.csv --output " + dir + "bad_data.csv"), 0);
   EXPECT_FALSE(std::ifstream(dir + "bad_data.csv").good());
 
-  ASSERT_EQ(run("sensitivity --csv " + dir + "sens.csv --json " + dir + "sens.json > /dev/null"), 0);
+  ASSERT_EQ(run("sensitivity --csv " + dir + "sens.csv --json " + dir + "sens.json > /dev/null"),
+            0);
   std::ifstream csv_in(dir + "sens.csv");
   std::string line;
   std::getline(csv_in, line);

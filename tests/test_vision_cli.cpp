@@ -1,19 +1,18 @@
-// `pcr render`, `pcr measure` and `pcr camera` run as programs: one rendered robot measured end to end
-// against the render's ground truth, every bad input of issue 4 (Sec. 4) exiting non-zero with a
-// message naming the mount, the file or the id and writing no output, and a camera calibrated from
-// rendered chessboards.
+// `pcr render`, `pcr measure` and `pcr camera` run as programs: one rendered robot measured end to
+// end against the render's ground truth, every bad input of issue 4 (Sec. 4) exiting non-zero with
+// a message naming the mount, the file or the id and writing no output, and a camera calibrated
+// from rendered chessboards.
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <memory>
-#include <sstream>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/camera.hpp"
@@ -61,9 +60,10 @@ class VisionCli : public ::testing::Test {
     scratch_ = std::make_unique<pcr::test::ScratchDirectory>("vision_cli");
     save_camera(test_camera(), path("camera.yaml"));
     // The shared good scene: rods and wafer outline drawn, noise, blur, gradient, a small tilt.
-    const Result r = run("render --mounts '" + kMounts + "' --camera '" + path("camera.yaml") + "' --output '" +
-                         path("home.png") + "' --truth '" + path("truth.json") +
-                         "' --tilt-x 0.01 --tilt-y -0.008 --noise 0.01 --blur 0.8 --gradient 0.1 --supersampling 3 --seed 7");
+    const Result r = run("render --mounts '" + kMounts + "' --camera '" + path("camera.yaml") +
+                         "' --output '" + path("home.png") + "' --truth '" + path("truth.json") +
+                         "' --tilt-x 0.01 --tilt-y -0.008 --noise 0.01 --blur 0.8 --gradient 0.1 "
+                         "--supersampling 3 --seed 7");
     ASSERT_EQ(r.status, 0) << r.all();
   }
   static void TearDownTestSuite() { scratch_.reset(); }
@@ -74,8 +74,8 @@ class VisionCli : public ::testing::Test {
     static int count = 0;
     const std::string tag = std::to_string(count++);
     const fs::path out = dir() / ("stdout" + tag + ".txt"), err = dir() / ("stderr" + tag + ".txt");
-    const std::string command =
-        std::string("'") + PCR_CLI_PATH + "' " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
+    const std::string command = std::string("'") + PCR_CLI_PATH + "' " + args + " > '" +
+                                out.string() + "' 2> '" + err.string() + "'";
     const int raw = std::system(command.c_str());
     Result r;
     r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
@@ -87,7 +87,8 @@ class VisionCli : public ::testing::Test {
   }
 
   /// The femto-3pf layout with `edit` applied to its JSON, written to `name`.
-  static std::string mounts_with(const std::string& name, const std::function<void(nlohmann::json&)>& edit) {
+  static std::string mounts_with(const std::string& name,
+                                 const std::function<void(nlohmann::json&)>& edit) {
     nlohmann::json j = nlohmann::json::parse(slurp(kMounts));
     edit(j);
     std::ofstream(path(name)) << j.dump(2);
@@ -96,15 +97,19 @@ class VisionCli : public ::testing::Test {
 
   /// Runs `pcr measure` expecting a failure; checks the exit status, that every `needle` is in the
   /// message and that no output file (nor a temporary one) was left.
-  static void expect_measure_error(const std::string& mounts, const std::string& camera, const std::string& image,
+  static void expect_measure_error(const std::string& mounts, const std::string& camera,
+                                   const std::string& image,
                                    const std::vector<std::string>& needles) {
     const std::string output = path("bad_out.json");
-    const Result r = run("measure --mounts '" + mounts + "' --camera '" + camera + "' --image '" + image +
-                         "' --output '" + output + "' --annotated '" + path("bad_out.png") + "'");
+    const Result r =
+        run("measure --mounts '" + mounts + "' --camera '" + camera + "' --image '" + image +
+            "' --output '" + output + "' --annotated '" + path("bad_out.png") + "'");
     EXPECT_NE(r.status, 0) << r.all();
-    for (const std::string& n : needles) EXPECT_NE(r.err.find(n), std::string::npos) << "'" << n << "' not in: " << r.err;
+    for (const std::string& n : needles)
+      EXPECT_NE(r.err.find(n), std::string::npos) << "'" << n << "' not in: " << r.err;
     for (const auto& e : fs::directory_iterator(dir()))
-      EXPECT_EQ(e.path().filename().string().rfind("bad_out", 0), std::string::npos) << "left " << e.path();
+      EXPECT_EQ(e.path().filename().string().rfind("bad_out", 0), std::string::npos)
+          << "left " << e.path();
   }
 };
 
@@ -113,9 +118,9 @@ std::unique_ptr<pcr::test::ScratchDirectory> VisionCli::scratch_;
 // The measured robot file's A, alpha, B, beta contain the rendered truth within the written
 // half-widths, and (the layout's offsets being exact here) lie close to it: the image part alone.
 TEST_F(VisionCli, RenderThenMeasureRecoversTheTruth) {
-  const Result r = run("measure --mounts '" + kMounts + "' --camera '" + path("camera.yaml") + "' --image '" +
-                       path("home.png") + "' --output '" + path("nominal.json") + "' --annotated '" +
-                       path("annotated.png") + "'");
+  const Result r = run("measure --mounts '" + kMounts + "' --camera '" + path("camera.yaml") +
+                       "' --image '" + path("home.png") + "' --output '" + path("nominal.json") +
+                       "' --annotated '" + path("annotated.png") + "'");
   ASSERT_EQ(r.status, 0) << r.all();
   EXPECT_TRUE(fs::file_size(path("annotated.png")) > 0);
   const RobotDescription measured = load_robot(path("nominal.json"));
@@ -139,7 +144,8 @@ TEST_F(VisionCli, RenderThenMeasureRecoversTheTruth) {
       EXPECT_LT(u.A[k], 2e-3);
       EXPECT_LT(u.B[k], 2e-3);
     }
-    const double da = std::remainder(m.alpha - alpha, 2 * M_PI), db = std::remainder(m.beta - beta, 2 * M_PI);
+    const double da = std::remainder(m.alpha - alpha, 2 * M_PI),
+                 db = std::remainder(m.beta - beta, 2 * M_PI);
     EXPECT_LE(std::abs(da), u.alpha) << "limb " << i;
     EXPECT_LE(std::abs(db), u.beta) << "limb " << i;
     EXPECT_LT(std::abs(da), 3e-3) << "limb " << i;
@@ -151,8 +157,10 @@ TEST_F(VisionCli, RenderThenMeasureRecoversTheTruth) {
 }
 
 TEST_F(VisionCli, MissingMarkerNamesTheMountAndId) {
-  const std::string mounts = mounts_with("missing.json", [](nlohmann::json& j) { j["mounts"][4]["id"] = 7; });
-  expect_measure_error(mounts, path("camera.yaml"), path("home.png"), {"mount B2", "id 7", "home.png"});
+  const std::string mounts =
+      mounts_with("missing.json", [](nlohmann::json& j) { j["mounts"][4]["id"] = 7; });
+  expect_measure_error(mounts, path("camera.yaml"), path("home.png"),
+                       {"mount B2", "id 7", "home.png"});
 }
 
 TEST_F(VisionCli, DuplicatedIdInTheImageNamesTheId) {
@@ -171,16 +179,22 @@ TEST_F(VisionCli, DuplicatedIdInTheImageNamesTheId) {
 }
 
 TEST_F(VisionCli, DuplicatedIdInTheLayoutNamesTheIdAndFile) {
-  const std::string mounts = mounts_with("dup_layout.json", [](nlohmann::json& j) { j["mounts"][3]["id"] = 0; });
-  expect_measure_error(mounts, path("camera.yaml"), path("home.png"), {"dup_layout.json", "tag id 0", "B1"});
+  const std::string mounts =
+      mounts_with("dup_layout.json", [](nlohmann::json& j) { j["mounts"][3]["id"] = 0; });
+  expect_measure_error(mounts, path("camera.yaml"), path("home.png"),
+                       {"dup_layout.json", "tag id 0", "B1"});
 }
 
 TEST_F(VisionCli, WrongFamilyNamesTheMount) {
-  const std::string mounts = mounts_with("family.json", [](nlohmann::json& j) { j["family"] = "tag25h9"; });
-  expect_measure_error(mounts, path("camera.yaml"), path("home.png"), {"mount A1 (tag25h9 id 0) not found", "home.png"});
+  const std::string mounts =
+      mounts_with("family.json", [](nlohmann::json& j) { j["family"] = "tag25h9"; });
+  expect_measure_error(mounts, path("camera.yaml"), path("home.png"),
+                       {"mount A1 (tag25h9 id 0) not found", "home.png"});
   // An unknown family is a layout error naming the file.
-  const std::string unknown = mounts_with("unknown.json", [](nlohmann::json& j) { j["family"] = "tag99h99"; });
-  expect_measure_error(unknown, path("camera.yaml"), path("home.png"), {"unknown.json", "tag99h99"});
+  const std::string unknown =
+      mounts_with("unknown.json", [](nlohmann::json& j) { j["family"] = "tag99h99"; });
+  expect_measure_error(unknown, path("camera.yaml"), path("home.png"),
+                       {"unknown.json", "tag99h99"});
 }
 
 TEST_F(VisionCli, UnreadableOrBlankImageNamesTheFile) {
@@ -211,10 +225,11 @@ TEST_F(VisionCli, MarkerCutByTheBorderNamesTheMount) {
       ASSERT_TRUE(p.x() > 2 * ring_px && p.y() > 2 * ring_px && p.x() < cam.width - 2 * ring_px &&
                   p.y() < cam.height - 2 * ring_px);
   save_camera(cam, path("shifted.yaml"));
-  const Result r = run("render --mounts '" + kMounts + "' --camera '" + path("shifted.yaml") + "' --output '" +
-                       path("cut.png") + "' --blur 0.7 --supersampling 2");
+  const Result r = run("render --mounts '" + kMounts + "' --camera '" + path("shifted.yaml") +
+                       "' --output '" + path("cut.png") + "' --blur 0.7 --supersampling 2");
   ASSERT_EQ(r.status, 0) << r.all();
-  expect_measure_error(kMounts, path("shifted.yaml"), path("cut.png"), {"mount A1", "cut by the image border", "cut.png"});
+  expect_measure_error(kMounts, path("shifted.yaml"), path("cut.png"),
+                       {"mount A1", "cut by the image border", "cut.png"});
 }
 
 TEST_F(VisionCli, CameraOfAnotherSizeNamesTheFiles) {
@@ -224,22 +239,31 @@ TEST_F(VisionCli, CameraOfAnotherSizeNamesTheFiles) {
   expect_measure_error(kMounts, path("small.yaml"), path("home.png"), {"home.png", "1600"});
   // A camera file missing its matrix names the file and the field.
   std::ofstream(path("broken.yaml")) << "%YAML:1.0\n---\nimage_width: 1700\nimage_height: 1700\n";
-  expect_measure_error(kMounts, path("broken.yaml"), path("home.png"), {"broken.yaml", "camera_matrix"});
+  expect_measure_error(kMounts, path("broken.yaml"), path("home.png"),
+                       {"broken.yaml", "camera_matrix"});
 }
 
 // The wafer outline is drawn (dark on the circle of 50 mm radius) unless --no-rods, and the tags'
 // ground truth does not depend on it.
 TEST_F(VisionCli, RenderDrawsTheWaferOutline) {
-  const std::string common = "render --mounts '" + kMounts + "' --camera '" + path("camera.yaml") + "' --supersampling 1";
-  ASSERT_EQ(run(common + " --output '" + path("plain.png") + "' --truth '" + path("plain.json") + "' --no-rods").status, 0);
-  ASSERT_EQ(run(common + " --output '" + path("wafer.png") + "' --truth '" + path("wafer.json") + "'").status, 0);
+  const std::string common =
+      "render --mounts '" + kMounts + "' --camera '" + path("camera.yaml") + "' --supersampling 1";
+  ASSERT_EQ(run(common + " --output '" + path("plain.png") + "' --truth '" + path("plain.json") +
+                "' --no-rods")
+                .status,
+            0);
+  ASSERT_EQ(
+      run(common + " --output '" + path("wafer.png") + "' --truth '" + path("wafer.json") + "'")
+          .status,
+      0);
   const GrayImage plain = read_image(path("plain.png")), wafer = read_image(path("wafer.png"));
   const CameraModel cam = test_camera();
   const PlanePose plane = PlanePose::looking_down(0.5);
   int dark = 0, n = 0;
   for (int k = 0; k < 36; ++k) {
     const double a = 2 * M_PI * (k + 0.5) / 36;
-    const Eigen::Vector2d px = cam.project(plane.to_camera(0.05 * Eigen::Vector2d(std::cos(a), std::sin(a))));
+    const Eigen::Vector2d px =
+        cam.project(plane.to_camera(0.05 * Eigen::Vector2d(std::cos(a), std::sin(a))));
     const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
     const float w = wafer.pixels[static_cast<std::size_t>(v) * wafer.width + u];
     const float p = plain.pixels[static_cast<std::size_t>(v) * plain.width + u];
@@ -248,7 +272,8 @@ TEST_F(VisionCli, RenderDrawsTheWaferOutline) {
     ++n;
   }
   EXPECT_GE(dark, n - 2);  // a 3 px band: the nearest pixel is on it (rods may cross it elsewhere)
-  const nlohmann::json a = nlohmann::json::parse(slurp(path("plain.json"))), b = nlohmann::json::parse(slurp(path("wafer.json")));
+  const nlohmann::json a = nlohmann::json::parse(slurp(path("plain.json"))),
+                       b = nlohmann::json::parse(slurp(path("wafer.json")));
   EXPECT_EQ(a["tags"], b["tags"]);
   EXPECT_DOUBLE_EQ(b["wafer_outline"]["diameter"].get<double>(), 0.1);
 }
@@ -261,19 +286,22 @@ TEST_F(VisionCli, CameraFromRenderedChessboards) {
   cam.K << 900, 0, 402, 0, 905, 297, 0, 0, 1;
   cam.distortion << -0.2, 0.1, 0, 0, 0;
   save_camera(cam, path("board_camera.yaml"));
-  const double poses[][3] = {{0.0, 0.0, 0.0}, {0.3, 0.0, 0.05}, {-0.3, 0.1, 0.1}, {0.1, 0.35, 0.15}, {0.0, -0.35, 0.2}, {0.25, 0.25, 0.25}};
+  const double poses[][3] = {{0.0, 0.0, 0.0},   {0.3, 0.0, 0.05},  {-0.3, 0.1, 0.1},
+                             {0.1, 0.35, 0.15}, {0.0, -0.35, 0.2}, {0.25, 0.25, 0.25}};
   std::string images;
   for (int k = 0; k < 6; ++k) {
     const std::string image = path("board" + std::to_string(k) + ".png");
     std::ostringstream args;
-    args << "render --chessboard 9x6 --square 0.008 --camera '" << path("board_camera.yaml") << "' --height 0.12 --tilt-x "
-         << poses[k][0] << " --tilt-y " << poses[k][1] << " --board-pose 0,0," << poses[k][2]
-         << " --supersampling 3 --blur 0.7 --output '" << image << "'";
+    args << "render --chessboard 9x6 --square 0.008 --camera '" << path("board_camera.yaml")
+         << "' --height 0.12 --tilt-x " << poses[k][0] << " --tilt-y " << poses[k][1]
+         << " --board-pose 0,0," << poses[k][2] << " --supersampling 3 --blur 0.7 --output '"
+         << image << "'";
     const Result r = run(args.str());
     ASSERT_EQ(r.status, 0) << r.all();
     images += " '" + image + "'";
   }
-  const Result r = run("camera --board 9x6 --square 0.008 --images" + images + " --output '" + path("calibrated.yaml") + "'");
+  const Result r = run("camera --board 9x6 --square 0.008 --images" + images + " --output '" +
+                       path("calibrated.yaml") + "'");
   ASSERT_EQ(r.status, 0) << r.all();
   const CameraModel c = load_camera(path("calibrated.yaml"));
   EXPECT_EQ(c.width, 800);
@@ -286,8 +314,8 @@ TEST_F(VisionCli, CameraFromRenderedChessboards) {
   // A blank image: an error naming the file, no output. (Not a large image without a board:
   // cv::findChessboardCorners without CALIB_CB_FAST_CHECK searches it for minutes.)
   write_png(GrayImage(320, 240, 0.5f), path("blank_board.png"));
-  const Result bad = run("camera --board 9x6 --square 0.008 --images '" + path("blank_board.png") + "' --output '" +
-                         path("bad_out.yaml") + "'");
+  const Result bad = run("camera --board 9x6 --square 0.008 --images '" + path("blank_board.png") +
+                         "' --output '" + path("bad_out.yaml") + "'");
   EXPECT_NE(bad.status, 0) << bad.all();
   EXPECT_NE(bad.err.find("blank_board.png"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(path("bad_out.yaml")));

@@ -1,9 +1,9 @@
 // Rendering and detection against the renderer's ground truth (the exact projection of the tag's
 // corners through the camera model).
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
-
-#include <gtest/gtest.h>
 
 #include "pcr/vision/render.hpp"
 #include "pcr/vision/tags.hpp"

@@ -1,9 +1,9 @@
 // Bad input: each gives an InputError naming the mount, the file or the id. And the camera files.
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <fstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/measure.hpp"
@@ -12,9 +12,13 @@
 namespace pcr::vision {
 namespace {
 
-std::string tmp(const std::string& name) { return std::string(PCR_BINARY_DIR) + "/test_vision_inputs_" + name; }
+std::string tmp(const std::string& name) {
+  return std::string(PCR_BINARY_DIR) + "/test_vision_inputs_" + name;
+}
 
-MountLayout layout() { return load_mounts(std::string(PCR_SOURCE_DIR) + "/data/mounts-femto-3pf.json"); }
+MountLayout layout() {
+  return load_mounts(std::string(PCR_SOURCE_DIR) + "/data/mounts-femto-3pf.json");
+}
 
 Scene small_scene() {
   Scene scene;
@@ -45,7 +49,8 @@ std::string measure_error(const Scene& s, const MountLayout& l) {
 TEST(VisionInputs, GoodSceneMeasures) {
   const Scene s = small_scene();
   const RobotMeasurement m = measure_robot(render(s), "home.png", layout(), s.camera, femto_3pf());
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR((m.limbs[i].A - femto_3pf().limb(i).A).norm(), 0.0, 20e-6);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR((m.limbs[i].A - femto_3pf().limb(i).A).norm(), 0.0, 20e-6);
 }
 
 TEST(VisionInputs, MissingMarkerNamesTheMount) {
@@ -144,10 +149,11 @@ TEST(VisionInputs, CameraFileRoundTripAndErrors) {
     EXPECT_NE(std::string(e.what()).find("camera_matrix"), std::string::npos) << e.what();
   }
   const std::string bad = tmp("bad.yaml");
-  std::ofstream(bad) << "%YAML:1.0\n---\nimage_width: 100\nimage_height: 100\ncamera_matrix: !!opencv-matrix\n"
-                        "   rows: 2\n   cols: 2\n   dt: d\n   data: [ 1., 0., 0., 1. ]\n"
-                        "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
-                        "   data: [ 0., 0., 0., 0., 0. ]\n";
+  std::ofstream(bad)
+      << "%YAML:1.0\n---\nimage_width: 100\nimage_height: 100\ncamera_matrix: !!opencv-matrix\n"
+         "   rows: 2\n   cols: 2\n   dt: d\n   data: [ 1., 0., 0., 1. ]\n"
+         "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
+         "   data: [ 0., 0., 0., 0., 0. ]\n";
   try {
     load_camera(bad);
     FAIL();
@@ -186,7 +192,8 @@ TEST(VisionInputs, ChessboardCalibrationRecoversTheCamera) {
   cam.K << 900, 0, 402, 0, 905, 297, 0, 0, 1;
   cam.distortion << -0.2, 0.1, 0, 0, 0;
   std::vector<std::string> paths;
-  const double tilts[][2] = {{0.0, 0.0}, {0.3, 0.0}, {-0.3, 0.1}, {0.1, 0.35}, {0.0, -0.35}, {0.25, 0.25}};
+  const double tilts[][2] = {{0.0, 0.0},  {0.3, 0.0},   {-0.3, 0.1},
+                             {0.1, 0.35}, {0.0, -0.35}, {0.25, 0.25}};
   for (int k = 0; k < 6; ++k) {
     Scene s;
     s.camera = cam;

@@ -1,11 +1,11 @@
 // Marker poses, clamp points, registration and uncertainty against rendered ground truth.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <complex>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/measure.hpp"
@@ -51,7 +51,8 @@ PoseError tag_pose_error(double noise, double blur, int trials) {
     sa += ea * ea;
     ssig += std::sqrt(m.covariance(0, 0));
     zmax = std::max({zmax, std::abs(e.x()) / std::sqrt(m.covariance(0, 0)),
-                     std::abs(e.y()) / std::sqrt(m.covariance(1, 1)), std::abs(ea) / std::sqrt(m.covariance(2, 2))});
+                     std::abs(e.y()) / std::sqrt(m.covariance(1, 1)),
+                     std::abs(ea) / std::sqrt(m.covariance(2, 2))});
   }
   const double um_per_px = 25.0;  // 0.2 m / 8000 px
   PoseError r;
@@ -71,8 +72,10 @@ TEST(VisionMeasure, TagPoseAccuracyAt25umPerPixel) {
   EXPECT_LT(clean.angle_mrad_rms, 1.0);
   for (double noise : {0.01, 0.03}) {
     const PoseError e = tag_pose_error(noise, 1.0, 6);
-    std::printf("noise %.2f blur 1 px: centre %.4f px = %.3f um rms, angle %.4f mrad rms, sigma %.3f um, max |z| %.2f\n",
-                noise, e.centre_px_rms, e.centre_um_rms, e.angle_mrad_rms, e.mean_sigma_um, e.z_max);
+    std::printf(
+        "noise %.2f blur 1 px: centre %.4f px = %.3f um rms, angle %.4f mrad rms, sigma %.3f um, "
+        "max |z| %.2f\n",
+        noise, e.centre_px_rms, e.centre_um_rms, e.angle_mrad_rms, e.mean_sigma_um, e.z_max);
     EXPECT_LT(e.centre_px_rms, 0.1);
     EXPECT_LT(e.angle_mrad_rms, 2.0);
   }
@@ -91,7 +94,8 @@ std::vector<Eigen::Vector2d> register_onto(const std::vector<Eigen::Vector2d>& f
   mf /= double(from.size());
   mt /= double(to.size());
   for (std::size_t i = 0; i < from.size(); ++i)
-    num += std::conj(std::complex<double>(from[i].x(), from[i].y()) - mf) * (std::complex<double>(to[i].x(), to[i].y()) - mt);
+    num += std::conj(std::complex<double>(from[i].x(), from[i].y()) - mf) *
+           (std::complex<double>(to[i].x(), to[i].y()) - mt);
   const std::complex<double> rot = num / std::abs(num);
   *angle = std::arg(rot);
   std::vector<Eigen::Vector2d> out;
@@ -102,7 +106,9 @@ std::vector<Eigen::Vector2d> register_onto(const std::vector<Eigen::Vector2d>& f
   return out;
 }
 
-MountLayout femto_layout() { return load_mounts(std::string(PCR_SOURCE_DIR) + "/data/mounts-femto-3pf.json"); }
+MountLayout femto_layout() {
+  return load_mounts(std::string(PCR_SOURCE_DIR) + "/data/mounts-femto-3pf.json");
+}
 
 CameraModel robot_camera() {
   CameraModel cam;
@@ -135,8 +141,8 @@ int sweep_count_from_env() {
   return env ? std::max(0, std::atoi(env)) : 2;
 }
 
-void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Coverage& ca, Coverage& cb,
-                  Coverage* cg) {
+void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Coverage& ca,
+                  Coverage& cb, Coverage* cg) {
   const MountLayout nominal = femto_layout();
   const RobotParams<double> design = femto_3pf();
   const int sweep_count = sweep_count_from_env();
@@ -154,10 +160,12 @@ void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Co
     }
     MountLayout actual = nominal;
     if (exact_offsets) {
-      for (Mount& m : actual.mounts) m.clamp_offset_uncertainty.setZero(), m.rod_angle_uncertainty = 0;
+      for (Mount& m : actual.mounts)
+        m.clamp_offset_uncertainty.setZero(), m.rod_angle_uncertainty = 0;
     } else {
       for (Mount& m : actual.mounts) {
-        m.clamp_offset += Eigen::Vector2d(u(rng) * m.clamp_offset_uncertainty.x(), u(rng) * m.clamp_offset_uncertainty.y());
+        m.clamp_offset += Eigen::Vector2d(u(rng) * m.clamp_offset_uncertainty.x(),
+                                          u(rng) * m.clamp_offset_uncertainty.y());
         m.rod_angle += u(rng) * m.rod_angle_uncertainty;
       }
     }
@@ -174,7 +182,8 @@ void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Co
     opt.gradient = 0.3;
     opt.seed = 7 + s;
     const GrayImage im = render_scene(scene, opt);
-    RobotMeasurement meas = measure_robot(im, "scene" + std::to_string(s), used, scene.camera, design);
+    RobotMeasurement meas =
+        measure_robot(im, "scene" + std::to_string(s), used, scene.camera, design);
 
     std::vector<Eigen::Vector2d> At, Bt, Ad, Bd;
     for (int i = 0; i < 3; ++i) {
@@ -190,12 +199,16 @@ void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Co
       for (int c = 0; c < 2; ++c) {
         cA.add(l.A[c] - Ar[i][c], l.A_halfwidth[c]);
         cB.add(l.B[c] - Br[i][c], l.B_halfwidth[c]);
-        if (std::getenv("PCR_VISION_DEBUG")) std::printf("s%d limb %d c%d: A err %.2f hw %.2f  B err %.2f hw %.2f um\n", s, i, c, (l.A[c] - Ar[i][c]) * 1e6, l.A_halfwidth[c] * 1e6, (l.B[c] - Br[i][c]) * 1e6, l.B_halfwidth[c] * 1e6);
+        if (std::getenv("PCR_VISION_DEBUG"))
+          std::printf("s%d limb %d c%d: A err %.2f hw %.2f  B err %.2f hw %.2f um\n", s, i, c,
+                      (l.A[c] - Ar[i][c]) * 1e6, l.A_halfwidth[c] * 1e6, (l.B[c] - Br[i][c]) * 1e6,
+                      l.B_halfwidth[c] * 1e6);
       }
       ca.add(wrap_angle(l.alpha - (truth.limb(i).alpha + rw)), l.alpha_halfwidth);
       cb.add(wrap_angle(l.beta - (truth.limb(i).beta + rp)), l.beta_halfwidth);
     }
-    if (cg && s < sweep_count) {  // actuator sweeps: 1 mm in 125 um steps, the limb's proximal tag only
+    if (cg &&
+        s < sweep_count) {  // actuator sweeps: 1 mm in 125 um steps, the limb's proximal tag only
       const int limb = s % 3;
       std::vector<GrayImage> images;
       std::vector<std::string> names;
@@ -206,13 +219,15 @@ void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Co
         sweep.segments.clear();
         sweep.tags.clear();
         for (const RenderTag& t : mount_tags(actual, truth, platform, q))
-          if (t.id == actual.mounts[actual.find(limb, MountRole::kProximal)].id) sweep.tags.push_back(t);
+          if (t.id == actual.mounts[actual.find(limb, MountRole::kProximal)].id)
+            sweep.tags.push_back(t);
         opt.seed = 5000 + 10 * s + k;
         images.push_back(render_scene(sweep, opt));
         names.push_back("sweep" + std::to_string(k));
       }
       measure_sweep(images, names, limb, used, scene.camera, meas);
-      cg->add(wrap_angle(*meas.limbs[limb].gamma - truth.limb(limb).gamma), *meas.limbs[limb].gamma_halfwidth);
+      cg->add(wrap_angle(*meas.limbs[limb].gamma - truth.limb(limb).gamma),
+              *meas.limbs[limb].gamma_halfwidth);
     }
   }
 }
@@ -222,10 +237,13 @@ TEST(VisionMeasure, RobotIntervalsContainTheTruth) {
     Coverage cA, cB, ca, cb, cg;
     const int scenes = scene_count(exact ? 5 : 2);
     run_coverage(exact, scenes, cA, cB, ca, cb, &cg);
-    std::printf("%s offsets, %d scenes: coverage A %.3f (mean half-width %.2f um), B %.3f (%.2f um), alpha %.3f "
-                "(%.3f mrad), beta %.3f (%.3f mrad), gamma %.3f (%.3f mrad, %d sweeps)\n",
-                exact ? "exact" : "machined", scenes, cA.rate(), cA.mean() * 1e6, cB.rate(), cB.mean() * 1e6,
-                ca.rate(), ca.mean() * 1e3, cb.rate(), cb.mean() * 1e3, cg.rate(), cg.mean() * 1e3, cg.total);
+    std::printf(
+        "%s offsets, %d scenes: coverage A %.3f (mean half-width %.2f um), B %.3f (%.2f um), alpha "
+        "%.3f "
+        "(%.3f mrad), beta %.3f (%.3f mrad), gamma %.3f (%.3f mrad, %d sweeps)\n",
+        exact ? "exact" : "machined", scenes, cA.rate(), cA.mean() * 1e6, cB.rate(),
+        cB.mean() * 1e6, ca.rate(), ca.mean() * 1e3, cb.rate(), cb.mean() * 1e3, cg.rate(),
+        cg.mean() * 1e3, cg.total);
     EXPECT_GE(cA.rate(), 0.95);
     EXPECT_GE(cB.rate(), 0.95);
     EXPECT_GE(ca.rate(), 0.95);

@@ -76,10 +76,14 @@ void run_accuracy(const AccuracyArguments& args) {
     vr.noise_angle = args.noise_angle;
     vr.solver = args.solve.options();
     for (const std::string& e : args.effects) {
-      if (e == "misalignments") vr.effects.misalignments = true;
-      else if (e == "diameters") vr.effects.unequal_diameters = true;
-      else if (e == "load") vr.effects.external_load = true;
-      else throw InputError("--effects: unknown effect '" + e + "' (misalignments, diameters, load)");
+      if (e == "misalignments")
+        vr.effects.misalignments = true;
+      else if (e == "diameters")
+        vr.effects.unequal_diameters = true;
+      else if (e == "load")
+        vr.effects.external_load = true;
+      else
+        throw InputError("--effects: unknown effect '" + e + "' (misalignments, diameters, load)");
     }
     if (!args.solve.force.empty() || args.solve.moment != 0) {
       // A known load: the model commands with it and the virtual robot carries it.
@@ -104,9 +108,12 @@ void run_accuracy(const AccuracyArguments& args) {
     options.command.step.strain_limit = args.strain_limit;
     options.command.step.solver = args.solve.options();
     options.command.step.load = args.solve.load();
-    if (args.frame == "true") options.frame = AttainedFrame::kTrueExtrinsics;
-    else if (args.frame == "model") options.frame = AttainedFrame::kModelExtrinsics;
-    else throw InputError("--frame: expected true or model, got '" + args.frame + "'");
+    if (args.frame == "true")
+      options.frame = AttainedFrame::kTrueExtrinsics;
+    else if (args.frame == "model")
+      options.frame = AttainedFrame::kModelExtrinsics;
+    else
+      throw InputError("--frame: expected true or model, got '" + args.frame + "'");
     std::cerr << "pcr accuracy: " << name << ", " << path.size() << " poses x " << args.repeat
               << " cycles on the virtual robot (" << truth_note << ")\n";
     const AccuracyEvaluation e = evaluate_on_virtual_robot(model.params, robot, path, options);
@@ -117,9 +124,12 @@ void run_accuracy(const AccuracyArguments& args) {
   }
   const std::vector<std::pair<std::string, const Iso9283Result*>> rows = {{name, &iso}};
   OutputFile out(args.output);
-  if (args.format == "json") out.stream() << iso9283_json(rows);
-  else if (args.format == "csv") out.stream() << iso9283_poses_csv(iso);
-  else out.stream() << iso9283_table_markdown(rows);
+  if (args.format == "json")
+    out.stream() << iso9283_json(rows);
+  else if (args.format == "csv")
+    out.stream() << iso9283_poses_csv(iso);
+  else
+    out.stream() << iso9283_table_markdown(rows);
   out.commit();
 }
 
@@ -128,8 +138,9 @@ void run_accuracy(const AccuracyArguments& args) {
 void register_accuracy_command(CLI::App& app) {
   auto args = std::make_shared<AccuracyArguments>();
   CLI::App* cmd = app.add_subcommand(
-      "accuracy", "ISO 9283 accuracy of a path commanded by IK (Table 4), on a virtual robot or "
-                  "from measured poses");
+      "accuracy",
+      "ISO 9283 accuracy of a path commanded by IK (Table 4), on a virtual robot or "
+      "from measured poses");
   pcr::cli::add_robot_option(*cmd, args->robot);
   cmd->add_option("--path", args->path, "square, circle, or a CSV file of poses (x,y,theta)")
       ->capture_default_str();
@@ -142,7 +153,8 @@ void register_accuracy_command(CLI::App& app) {
   cmd->add_option("--count", args->count, "poses on the path (default 40 square, 36 circle)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--repeat", args->repeat, "ISO 9283 cycles per pose")
-      ->check(CLI::Range(2, 100000))->capture_default_str();
+      ->check(CLI::Range(2, 100000))
+      ->capture_default_str();
   auto* truth = cmd->add_option("--truth", args->truth,
                                 "the virtual robot's true description (JSON, used as is)");
   cmd->add_option("--nominal", args->nominal,
@@ -151,9 +163,11 @@ void register_accuracy_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "seed of the truth draw and of the noise")
       ->capture_default_str();
   cmd->add_option("--noise-position", args->noise_position, "camera noise std on x and y (m)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--noise-angle", args->noise_angle, "camera noise std on theta (rad)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--effects", args->effects,
                   "unmodelled effects of the virtual robot: misalignments, diameters, load")
       ->delimiter(',');
@@ -163,7 +177,8 @@ void register_accuracy_command(CLI::App& app) {
                   "of a nominal model's robot parameters alone)")
       ->capture_default_str();
   cmd->add_option("--strain-limit", args->strain_limit, "max bending strain of a commanded pose")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--poses", args->poses,
                   "write the commanded and attained poses (the --measured CSV format)");
   cmd->add_option("--measured", args->measured,

@@ -2,13 +2,12 @@
 // The `pcr` subcommands. Each lives in apps/pcr/<name>_command.cpp and registers itself on the
 // top-level app; main.cpp calls every register_<name>_command().
 
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "pcr/csv_io.hpp"
 #include "pcr/kinematics.hpp"
@@ -67,8 +66,10 @@ struct SolveArguments {
   void add_to(CLI::App& command) {
     command.add_option("--force", force, "external force on the platform, fx,fy (N, in W)");
     command.add_option("--moment", moment, "external moment on the platform, mz (N m)");
-    command.add_option("--steps", steps,
-                       "RK4 steps per rod (0: chosen from the solution's error estimate, 1 nm / 1 urad)")
+    command
+        .add_option(
+            "--steps", steps,
+            "RK4 steps per rod (0: chosen from the solution's error estimate, 1 nm / 1 urad)")
         ->check(CLI::Range(0, 100000))
         ->capture_default_str();
   }
@@ -132,8 +133,8 @@ void solve_rows(const char* command, const CsvTable& table, const std::string& o
 
 /// The columns after the inputs (and, for IK, the joints) of both commands' output.
 inline const std::vector<std::string>& summary_columns() {
-  static const std::vector<std::string> columns = {"converged", "iterations", "residual",
-                                                   "status", "max_strain"};
+  static const std::vector<std::string> columns = {"converged", "iterations", "residual", "status",
+                                                   "max_strain"};
   return columns;
 }
 

@@ -8,12 +8,11 @@
 #include <filesystem>
 #include <functional>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "commands.hpp"
 #include "pcr/calib/accuracy.hpp"
@@ -170,7 +169,8 @@ pcr::RobotDescription measure_nominal(const pcr::RobotDescription& design,
       names.push_back("sweep limb " + std::to_string(limb) + " step " + std::to_string(k));
     }
     const SweepResult r = measure_sweep(images, names, limb, layout, scene.camera, m);
-    progress.say(fmt("      limb %.0f: actuator direction line rms %.2f um", limb, r.line_rms * 1e6));
+    progress.say(
+        fmt("      limb %.0f: actuator direction line rms %.2f um", limb, r.line_rms * 1e6));
   }
   write_annotated(image, m, layout, scene.camera, (out / "images" / "home-annotated.png").string());
   const pcr::RobotDescription nominal = measured_description(design, m);
@@ -178,8 +178,9 @@ pcr::RobotDescription measure_nominal(const pcr::RobotDescription& design,
   markdown += "## 1. Measurement (rendered images, AprilTag)\n\n";
   markdown += fmt("Plane fit: corner rms %.4f px; registration rms A %.1f um, B %.1f um.\n\n",
                   m.fit.corner_rms_px, m.registration_rms_A * 1e6, m.registration_rms_B * 1e6);
-  markdown += "| limb | A_x err (um) | A_y err (um) | +- (um) | alpha err (mrad) | +- (mrad) | "
-              "gamma err (mrad) | +- (mrad) |\n|---|---|---|---|---|---|---|---|\n";
+  markdown +=
+      "| limb | A_x err (um) | A_y err (um) | +- (um) | alpha err (mrad) | +- (mrad) | "
+      "gamma err (mrad) | +- (mrad) |\n|---|---|---|---|---|---|---|---|\n";
   json limbs = json::array();
   // The measured A_i are in the design's W (best-fit registration onto the design's A_i): compare
   // them with the truth's A_i registered the same way, so the errors are the measurement's own.
@@ -198,9 +199,8 @@ pcr::RobotDescription measure_nominal(const pcr::RobotDescription& design,
     markdown += "| " + std::to_string(i) +
                 fmt(" | %.1f | %.1f | %.1f", a_error.x() * 1e6, a_error.y() * 1e6,
                     l.A_halfwidth.maxCoeff() * 1e6) +
-                fmt(" | %.3f | %.3f | %.3f | %.3f |\n", alpha_error * 1e3,
-                    l.alpha_halfwidth * 1e3, gamma_err * 1e3,
-                    l.gamma_halfwidth ? *l.gamma_halfwidth * 1e3 : std::nan(""));
+                fmt(" | %.3f | %.3f | %.3f | %.3f |\n", alpha_error * 1e3, l.alpha_halfwidth * 1e3,
+                    gamma_err * 1e3, l.gamma_halfwidth ? *l.gamma_halfwidth * 1e3 : std::nan(""));
     limbs.push_back({{"A_m", {l.A.x(), l.A.y()}},
                      {"A_halfwidth_m", {l.A_halfwidth.x(), l.A_halfwidth.y()}},
                      {"alpha_rad", l.alpha},
@@ -208,8 +208,9 @@ pcr::RobotDescription measure_nominal(const pcr::RobotDescription& design,
                      {"beta_rad", l.beta},
                      {"gamma_rad", l.gamma ? *l.gamma : std::nan("")}});
   }
-  markdown += "\n(measured minus true, both registered onto the design's proximal clamps; the "
-              "+- columns are the measured half-widths)\n\n";
+  markdown +=
+      "\n(measured minus true, both registered onto the design's proximal clamps; the "
+      "+- columns are the measured half-widths)\n\n";
   report["measurement"] = {{"images", "images/home.png"},
                            {"annotated", "images/home-annotated.png"},
                            {"camera", "camera.yaml"},
@@ -236,10 +237,8 @@ std::string table2_markdown(const pcr::SensitivityReport& s) {
 }
 
 std::string table3_row(const std::string& label, const pcr::PoseErrorStats& s) {
-  return "| " + label +
-         fmt(" | %.4f | %.4f | %.4f", s.max_p * 1e6, s.mean_p * 1e6, s.min_p * 1e6) +
-         fmt(" | %.3f | %.3f | %.3f |\n", s.max_theta * 1e6, s.mean_theta * 1e6,
-             s.min_theta * 1e6);
+  return "| " + label + fmt(" | %.4f | %.4f | %.4f", s.max_p * 1e6, s.mean_p * 1e6, s.min_p * 1e6) +
+         fmt(" | %.3f | %.3f | %.3f |\n", s.max_theta * 1e6, s.mean_theta * 1e6, s.min_theta * 1e6);
 }
 
 /// Per-configuration errors for the plots (Figures 8 and 9), those behind Table 3.
@@ -279,16 +278,17 @@ std::string accuracy_section(const pcr::CalibrationResult& calibrated, pcr::Virt
   for (const auto& [path_name, path] :
        {std::pair<std::string, std::vector<pcr::Pose2<double>>>{"square", pcr::square_path(square)},
         {"circle", pcr::circle_path(circle)}}) {
-    for (const auto& [model_name, model] :
-         {std::pair<std::string, const pcr::RobotParams<double>*>{"nominal", &calibrated.extrinsics_only},
-          {"identified", &calibrated.identified}}) {
+    for (const auto& [model_name, model] : {std::pair<std::string, const pcr::RobotParams<double>*>{
+                                                "nominal", &calibrated.extrinsics_only},
+                                            {"identified", &calibrated.identified}}) {
       const pcr::AccuracyEvaluation e =
           pcr::evaluate_on_virtual_robot(*model, robot, path, options);
       pcr::write_file_atomically(
           (out / ("attained-" + path_name + "-" + model_name + ".csv")).string(),
           pcr::measured_to_csv(e.commanded, e.attained));
-      pcr::write_file_atomically((out / ("accuracy-" + path_name + "-" + model_name + ".csv")).string(),
-                                 pcr::iso9283_poses_csv(e.iso));
+      pcr::write_file_atomically(
+          (out / ("accuracy-" + path_name + "-" + model_name + ".csv")).string(),
+          pcr::iso9283_poses_csv(e.iso));
       progress.say("      " + path_name + ", " + model_name +
                    fmt(" model: AP_p max %.4f um, mean %.4f um", e.iso.ap_p.max * 1e6,
                        e.iso.ap_p.mean * 1e6));
@@ -314,7 +314,8 @@ void run_demo(const DemoArgs& args) {
   json report;
   report["seed"] = args.seed;
   report["unmodelled_effects"] = args.effects;
-  std::string md = "# pcr demo: the method of Mauze et al. (2021) on the built-in virtual robot\n\n";
+  std::string md =
+      "# pcr demo: the method of Mauze et al. (2021) on the built-in virtual robot\n\n";
   md += "Seed " + std::to_string(args.seed) + ", unmodelled effects: " +
         (args.effects.empty() ? std::string("none") : CLI::detail::join(args.effects, ", ")) +
         ". Units: um and urad in the tables, SI in every file. Files: see report.json.\n\n";
@@ -390,10 +391,12 @@ void run_demo(const DemoArgs& args) {
 
   // 4. Calibration.
   progress.begin("three-stage calibration (Table 3)");
-  const std::vector<pcr::CalibrationSample> calibration = pcr::calibration_samples(calibration_data);
+  const std::vector<pcr::CalibrationSample> calibration =
+      pcr::calibration_samples(calibration_data);
   const std::vector<pcr::CalibrationSample> validation = pcr::calibration_samples(validation_data);
   pcr::CalibrationOptions calib_options;
-  if (!args.quiet) calib_options.progress = [](const std::string& l) { std::cerr << "      " << l << "\n"; };
+  if (!args.quiet)
+    calib_options.progress = [](const std::string& l) { std::cerr << "      " << l << "\n"; };
   const pcr::CalibrationResult calibrated = pcr::calibrate(nominal, calibration, calib_options);
   pcr::RobotDescription identified = nominal;
   identified.name = "femto-3pf (identified)";
@@ -402,26 +405,30 @@ void run_demo(const DemoArgs& args) {
   const pcr::CalibrationTable table3 = pcr::calibration_table(calibrated, calibration, validation);
   pcr::write_file_atomically((out / "calibration-report.txt").string(),
                              pcr::calibration_report_text(calibrated, table3));
-  pcr::write_file_atomically((out / "calibration-errors.csv").string(),
-                             errors_csv(table3));
+  pcr::write_file_atomically((out / "calibration-errors.csv").string(), errors_csv(table3));
   report["calibration"] = json::parse(pcr::calibration_report_json(calibrated, table3));
-  md += "## 3. Calibration (Table 3)\n\n| model, set | e_p max (um) | e_p mean (um) | e_p min (um) | "
-        "e_theta max (urad) | e_theta mean (urad) | e_theta min (urad) |\n|---|---|---|---|---|---|---|\n";
+  md +=
+      "## 3. Calibration (Table 3)\n\n| model, set | e_p max (um) | e_p mean (um) | e_p min (um) | "
+      "e_theta max (urad) | e_theta mean (urad) | e_theta min (urad) "
+      "|\n|---|---|---|---|---|---|---|\n";
   md += table3_row("nominal, calibration", table3.nominal_calibration);
   md += table3_row("nominal, validation", table3.nominal_validation);
   md += table3_row("identified, calibration", table3.identified_calibration);
   md += table3_row("identified, validation", table3.identified_validation);
-  md += "\nNominal model: the measured geometry with identified extrinsics (the paper's first "
-        "stage). Stages:\n\n";
+  md +=
+      "\nNominal model: the measured geometry with identified extrinsics (the paper's first "
+      "stage). Stages:\n\n";
   for (const pcr::StageReport& s : calibrated.stages) {
     md += "- " + s.name + ": " + std::to_string(s.free_parameters.size()) + " free parameters, " +
           std::to_string(s.iterations) + " iterations, " +
           fmt("cost %.3e -> %.3e m^2, %.2f s\n", s.initial_cost, s.final_cost, s.time_s);
   }
-  md += "\nFull report (identified values with standard deviations, bounds, gauge): "
-        "calibration-report.txt.\n\n";
+  md +=
+      "\nFull report (identified values with standard deviations, bounds, gauge): "
+      "calibration-report.txt.\n\n";
   progress.say(fmt("      validation mean e_p: nominal %.3f um, identified %.4f um",
-                   table3.nominal_validation.mean_p * 1e6, table3.identified_validation.mean_p * 1e6));
+                   table3.nominal_validation.mean_p * 1e6,
+                   table3.identified_validation.mean_p * 1e6));
   progress.end();
 
   // 5. Trajectories and accuracy.
@@ -430,11 +437,20 @@ void run_demo(const DemoArgs& args) {
         accuracy_section(calibrated, robot, args, out, report, progress);
   progress.end();
 
-  report["files"] = {"report.md", "report.json", "design.json", "truth.json", "nominal.json",
-                     "identified.json", "sensitivity.csv", "calibration.csv", "validation.csv",
-                     "calibration-report.txt", "calibration-errors.csv",
+  report["files"] = {"report.md",
+                     "report.json",
+                     "design.json",
+                     "truth.json",
+                     "nominal.json",
+                     "identified.json",
+                     "sensitivity.csv",
+                     "calibration.csv",
+                     "validation.csv",
+                     "calibration-report.txt",
+                     "calibration-errors.csv",
                      "accuracy-{square,circle}-{nominal,identified}.csv",
-                     "attained-{square,circle}-{nominal,identified}.csv", "images/"};
+                     "attained-{square,circle}-{nominal,identified}.csv",
+                     "images/"};
   report["time_s"] = Progress::seconds_since(start);
   md += fmt("\nTotal time %.1f s.\n", Progress::seconds_since(start));
   pcr::write_file_atomically((out / "report.json").string(), report.dump(2) + "\n");
@@ -448,8 +464,9 @@ void run_demo(const DemoArgs& args) {
 void register_demo_command(CLI::App& app) {
   auto args = std::make_shared<DemoArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "demo", "the whole method on the built-in virtual robot: measure, sensitivity, sampling, "
-              "calibration, trajectory accuracy; writes a report directory");
+      "demo",
+      "the whole method on the built-in virtual robot: measure, sensitivity, sampling, "
+      "calibration, trajectory accuracy; writes a report directory");
   cmd->add_option("--output", args->output, "output directory")->capture_default_str();
   cmd->add_option("--seed", args->seed, "seed of the virtual robot, images, sampling, noise")
       ->capture_default_str();

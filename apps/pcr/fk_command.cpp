@@ -47,8 +47,9 @@ void run_fk(const FkArguments& args) {
 void register_fk_command(CLI::App& app) {
   auto args = std::make_shared<FkArguments>();
   CLI::App* fk = app.add_subcommand(
-      "fk", "Forward kinematics: rows q1,...,qn (m) -> q1,...,qn,x,y,theta,converged,"
-            "iterations,residual,status,max_strain. Exit status 1 if a row did not converge.");
+      "fk",
+      "Forward kinematics: rows q1,...,qn (m) -> q1,...,qn,x,y,theta,converged,"
+      "iterations,residual,status,max_strain. Exit status 1 if a row did not converge.");
   pcr::cli::add_robot_option(*fk, args->robot);
   fk->add_option("--input", args->input, "CSV of joint values (default: stdin)");
   fk->add_option("--output", args->output, "output CSV (default: stdout)");

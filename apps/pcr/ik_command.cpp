@@ -54,10 +54,11 @@ void run_ik(const IkArguments& args) {
 void register_ik_command(CLI::App& app) {
   auto args = std::make_shared<IkArguments>();
   CLI::App* ik = app.add_subcommand(
-      "ik", "Inverse kinematics: rows x,y,theta (m, m, rad) -> x,y,theta,q1,...,qn,converged,"
-            "iterations,residual,status,max_strain. Joints outside q_range give converged=0, "
-            "status out_of_range. With 2 limbs theta is solved for (the input theta is ignored). "
-            "Exit status 1 if a row did not converge.");
+      "ik",
+      "Inverse kinematics: rows x,y,theta (m, m, rad) -> x,y,theta,q1,...,qn,converged,"
+      "iterations,residual,status,max_strain. Joints outside q_range give converged=0, "
+      "status out_of_range. With 2 limbs theta is solved for (the input theta is ignored). "
+      "Exit status 1 if a row did not converge.");
   pcr::cli::add_robot_option(*ik, args->robot);
   ik->add_option("--input", args->input, "CSV of poses (default: stdin)");
   ik->add_option("--output", args->output, "output CSV (default: stdout)");

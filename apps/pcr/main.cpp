@@ -2,13 +2,12 @@
 // Thin: parse the arguments, call the library, print.
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <cerrno>
 #include <cstring>
 #include <exception>
 #include <filesystem>
 #include <iostream>
-
-#include <CLI/CLI.hpp>
 
 #include "commands.hpp"
 
@@ -54,10 +53,10 @@ int main(int argc, char** argv) {
 #ifdef PCR_FULL_TOOL
   // This binary links only pcr::io, so its subcommands start in milliseconds; the others, and the
   // help that lists them all, are the full tool's, which loads Ceres, OpenCV and what they need.
-  const bool own_command =
-      argc > 1 && !app.get_subcommands([&](const CLI::App* command) {
-                        return command->check_name(argv[1]);
-                      }).empty();
+  const bool own_command = argc > 1 && !app.get_subcommands([&](const CLI::App* command) {
+                                             return command->check_name(argv[1]);
+                                           })
+                                            .empty();
   if (!own_command) exec_full_tool(argv);
 #endif
   try {

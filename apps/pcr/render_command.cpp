@@ -2,10 +2,9 @@
 #ifdef PCR_HAS_VISION
 #include <cstdio>
 #include <fstream>
-#include <sstream>
 #include <iostream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "commands.hpp"
 #include "pcr/vision/render.hpp"
@@ -19,9 +18,12 @@ std::vector<double> parse_list(const std::string& text, std::size_t n, const std
   while (std::getline(ss, item, ',')) {
     char* end = nullptr;
     out.push_back(std::strtod(item.c_str(), &end));
-    if (item.empty() || *end != '\0') throw pcr::InputError(option + ": '" + text + "' is not a list of numbers");
+    if (item.empty() || *end != '\0')
+      throw pcr::InputError(option + ": '" + text + "' is not a list of numbers");
   }
-  if (n && out.size() != n) throw pcr::InputError(option + ": expected " + std::to_string(n) + " numbers, got '" + text + "'");
+  if (n && out.size() != n)
+    throw pcr::InputError(option + ": expected " + std::to_string(n) + " numbers, got '" + text +
+                          "'");
   return out;
 }
 
@@ -37,34 +39,48 @@ void register_render_command(CLI::App& app) {
     bool rods = true;
   };
   auto args = std::make_shared<Args>();
-  CLI::App* cmd = app.add_subcommand("render", "render the rod-mount tags seen by a camera (PNG + JSON truth)");
+  CLI::App* cmd =
+      app.add_subcommand("render", "render the rod-mount tags seen by a camera (PNG + JSON truth)");
   pcr::cli::add_robot_option(*cmd, args->robot);
-  cmd->add_option("--mounts", args->mounts, "mount layout JSON (e.g. data/mounts-femto-3pf.json); required unless --chessboard");
-  cmd->add_option("--camera", args->camera, "OpenCV camera YAML (default: 4000 x 4000 px, f = 8000 px)");
+  cmd->add_option(
+      "--mounts", args->mounts,
+      "mount layout JSON (e.g. data/mounts-femto-3pf.json); required unless --chessboard");
+  cmd->add_option("--camera", args->camera,
+                  "OpenCV camera YAML (default: 4000 x 4000 px, f = 8000 px)");
   cmd->add_option("--camera-out", args->camera_out, "write the camera used as OpenCV YAML");
   cmd->add_option("--output", args->output, "PNG to write")->required();
   cmd->add_option("--truth", args->truth, "JSON ground truth to write");
-  cmd->add_option("--height", args->height, "camera height above the work plane (m)")->capture_default_str();
+  cmd->add_option("--height", args->height, "camera height above the work plane (m)")
+      ->capture_default_str();
   cmd->add_option("--tilt-x", args->tilt_x, "camera tilt about its x axis (rad)");
   cmd->add_option("--tilt-y", args->tilt_y, "camera tilt about its y axis (rad)");
   cmd->add_option("--q", args->q, "actuator positions q1,...,qn (m, default 0)");
-  cmd->add_option("--platform", args->platform, "platform pose x,y,theta in W (m, rad) for the distal tags");
-  cmd->add_option("--supersampling", args->render.supersampling, "samples per pixel per axis")->capture_default_str();
-  cmd->add_option("--blur", args->render.blur_sigma_px, "Gaussian blur sigma (px)");
-  cmd->add_option("--noise", args->render.noise_sigma, "Gaussian noise sigma (fraction of full scale)");
-  cmd->add_option("--gradient", args->render.gradient, "illumination change across the image (fraction)");
-  cmd->add_option("--seed", args->render.seed, "noise seed");
-  cmd->add_option("--bits", args->bits, "PNG bits per pixel (8 or 16)")->check(CLI::IsMember({8, 16}));
-  cmd->add_flag("!--no-rods", args->rods, "do not draw the rods nor the platform outline");
-  cmd->add_option("--wafer-diameter", args->wafer, "platform outline: wafer circle centred on P (m, 0 = none)")
+  cmd->add_option("--platform", args->platform,
+                  "platform pose x,y,theta in W (m, rad) for the distal tags");
+  cmd->add_option("--supersampling", args->render.supersampling, "samples per pixel per axis")
       ->capture_default_str();
-  cmd->add_option("--chessboard", args->chessboard, "also draw a chessboard of COLSxROWS inner corners (for pcr camera)");
+  cmd->add_option("--blur", args->render.blur_sigma_px, "Gaussian blur sigma (px)");
+  cmd->add_option("--noise", args->render.noise_sigma,
+                  "Gaussian noise sigma (fraction of full scale)");
+  cmd->add_option("--gradient", args->render.gradient,
+                  "illumination change across the image (fraction)");
+  cmd->add_option("--seed", args->render.seed, "noise seed");
+  cmd->add_option("--bits", args->bits, "PNG bits per pixel (8 or 16)")
+      ->check(CLI::IsMember({8, 16}));
+  cmd->add_flag("!--no-rods", args->rods, "do not draw the rods nor the platform outline");
+  cmd->add_option("--wafer-diameter", args->wafer,
+                  "platform outline: wafer circle centred on P (m, 0 = none)")
+      ->capture_default_str();
+  cmd->add_option("--chessboard", args->chessboard,
+                  "also draw a chessboard of COLSxROWS inner corners (for pcr camera)");
   cmd->add_option("--square", args->square, "chessboard square edge (m)")->capture_default_str();
-  cmd->add_option("--board-pose", args->board_pose, "chessboard centre pose x,y,theta in the plane (m, rad)");
+  cmd->add_option("--board-pose", args->board_pose,
+                  "chessboard centre pose x,y,theta in the plane (m, rad)");
   cmd->callback([args]() {
     using namespace pcr;
     using namespace pcr::vision;
-    if (args->mounts.empty() && args->chessboard.empty()) throw InputError("pcr render: give --mounts or --chessboard");
+    if (args->mounts.empty() && args->chessboard.empty())
+      throw InputError("pcr render: give --mounts or --chessboard");
     const RobotDescription robot = load_robot_or_default(args->robot);
     Scene scene;
     if (args->camera.empty()) {
@@ -74,22 +90,31 @@ void register_render_command(CLI::App& app) {
       scene.camera = load_camera(args->camera);
     }
     scene.plane = PlanePose::looking_down(args->height, args->tilt_x, args->tilt_y);
-    const std::vector<double> q = args->q.empty() ? std::vector<double>{} : parse_list(args->q, robot.params.num_limbs, "--q");
+    const std::vector<double> q = args->q.empty()
+                                      ? std::vector<double>{}
+                                      : parse_list(args->q, robot.params.num_limbs, "--q");
     const std::vector<double> pl = parse_list(args->platform, 3, "--platform");
     const Pose2<double> platform{pl[0], pl[1], pl[2]};
     if (!args->mounts.empty()) {
-      scene.tags = mount_tags(load_mounts(args->mounts), robot.params, platform, q, args->rods ? &scene.segments : nullptr);
-      // The platform is a 100 mm silicon wafer (paper, Sec. 4.1); only an outline, the tags stay on top.
-      if (args->rods && args->wafer > 0) scene.circles.push_back(RenderCircle{platform.translation(), 0.5 * args->wafer});
+      scene.tags = mount_tags(load_mounts(args->mounts), robot.params, platform, q,
+                              args->rods ? &scene.segments : nullptr);
+      // The platform is a 100 mm silicon wafer (paper, Sec. 4.1); only an outline, the tags stay on
+      // top.
+      if (args->rods && args->wafer > 0)
+        scene.circles.push_back(RenderCircle{platform.translation(), 0.5 * args->wafer});
     }
     if (!args->chessboard.empty()) {
       RenderChessboard board;
-      if (std::sscanf(args->chessboard.c_str(), "%dx%d", &board.cols, &board.rows) != 2 || board.cols < 2 || board.rows < 2)
-        throw InputError("--chessboard: expected COLSxROWS (inner corners), got '" + args->chessboard + "'");
-      if (!(args->square > 0)) throw InputError("--square: must be > 0, got " + std::to_string(args->square));
+      if (std::sscanf(args->chessboard.c_str(), "%dx%d", &board.cols, &board.rows) != 2 ||
+          board.cols < 2 || board.rows < 2)
+        throw InputError("--chessboard: expected COLSxROWS (inner corners), got '" +
+                         args->chessboard + "'");
+      if (!(args->square > 0))
+        throw InputError("--square: must be > 0, got " + std::to_string(args->square));
       board.square_m = args->square;
       const std::vector<double> c = parse_list(args->board_pose, 3, "--board-pose");
-      scene.chessboard = RenderChessboard::centred(board.cols, board.rows, board.square_m, {c[0], c[1], c[2]});
+      scene.chessboard =
+          RenderChessboard::centred(board.cols, board.rows, board.square_m, {c[0], c[1], c[2]});
     }
     const GrayImage image = render_scene(scene, args->render);
     write_png(image, args->output, args->bits);
@@ -102,17 +127,26 @@ void register_render_command(CLI::App& app) {
         j["wafer_outline"] = {{"centre_W", {platform.x, platform.y}}, {"diameter", args->wafer}};
       if (scene.chessboard) {
         const RenderChessboard& b = *scene.chessboard;
-        j["chessboard"] = {{"cols", b.cols}, {"rows", b.rows}, {"square", b.square_m},
+        j["chessboard"] = {{"cols", b.cols},
+                           {"rows", b.rows},
+                           {"square", b.square_m},
                            {"corner0_pose", {b.pose.x, b.pose.y, b.pose.theta}}};
       }
-      j["plane_in_camera"] = {{"rotation", std::vector<double>(scene.plane.rotation.data(), scene.plane.rotation.data() + 9)},
-                              {"translation", {scene.plane.translation.x(), scene.plane.translation.y(), scene.plane.translation.z()}},
-                              {"note", "rotation column-major; plane frame = W"}};
+      j["plane_in_camera"] = {
+          {"rotation",
+           std::vector<double>(scene.plane.rotation.data(), scene.plane.rotation.data() + 9)},
+          {"translation",
+           {scene.plane.translation.x(), scene.plane.translation.y(), scene.plane.translation.z()}},
+          {"note", "rotation column-major; plane frame = W"}};
       for (const RenderTag& t : scene.tags) {
-        j["tags"].push_back({{"family", t.family}, {"id", t.id}, {"size", t.size_m}, {"pose", {t.pose.x, t.pose.y, t.pose.theta}},
+        j["tags"].push_back({{"family", t.family},
+                             {"id", t.id},
+                             {"size", t.size_m},
+                             {"pose", {t.pose.x, t.pose.y, t.pose.theta}},
                              {"corners_px", [&] {
                                 nlohmann::json c;
-                                for (const auto& p : tag_corner_pixels(scene, t)) c.push_back({p.x(), p.y()});
+                                for (const auto& p : tag_corner_pixels(scene, t))
+                                  c.push_back({p.x(), p.y()});
                                 return c;
                               }()}});
       }
@@ -120,8 +154,11 @@ void register_render_command(CLI::App& app) {
         const LimbParams<double>& l = robot.params.limb(i);
         const double qi = i < static_cast<int>(q.size()) ? q[i] : 0.0;
         const Eigen::Vector2d A = l.proximal_position(qi), B = platform.transform(l.B);
-        j["limbs"].push_back({{"A_W", {A.x(), A.y()}}, {"alpha_W", l.alpha}, {"B_W", {B.x(), B.y()}},
-                              {"beta_W", l.beta + platform.theta}, {"q", qi}});
+        j["limbs"].push_back({{"A_W", {A.x(), A.y()}},
+                              {"alpha_W", l.alpha},
+                              {"B_W", {B.x(), B.y()}},
+                              {"beta_W", l.beta + platform.theta},
+                              {"q", qi}});
       }
       const std::string tmp = args->truth + ".tmp";
       {
@@ -129,7 +166,8 @@ void register_render_command(CLI::App& app) {
         out << j.dump(2) << "\n";
         if (!out) throw std::runtime_error(args->truth + ": cannot write");
       }
-      if (std::rename(tmp.c_str(), args->truth.c_str()) != 0) throw std::runtime_error(args->truth + ": cannot rename");
+      if (std::rename(tmp.c_str(), args->truth.c_str()) != 0)
+        throw std::runtime_error(args->truth + ": cannot rename");
     }
     std::cout << "wrote " << args->output << " (" << image.width << " x " << image.height << " px, "
               << scene.tags.size() << " tags)\n";

@@ -24,8 +24,8 @@ void run_robot(const RobotArguments& args) {
     l_min = std::min(l_min, p.limb(i).length);
     l_max = std::max(l_max, p.limb(i).length);
   }
-  std::cerr << (args.robot.empty() ? "<default robot>" : args.robot) << ": '" << robot.name
-            << "', " << p.num_limbs << " limbs, E = " << format_double(robot.young_modulus)
+  std::cerr << (args.robot.empty() ? "<default robot>" : args.robot) << ": '" << robot.name << "', "
+            << p.num_limbs << " limbs, E = " << format_double(robot.young_modulus)
             << " Pa, l = " << format_double(l_min)
             << (l_max != l_min ? " to " + format_double(l_max) : std::string()) << " m, "
             << (robot.uncertainty ? "with" : "without") << " uncertainty: valid\n";
@@ -35,9 +35,10 @@ void run_robot(const RobotArguments& args) {
 
 void register_robot_command(CLI::App& app) {
   auto args = std::make_shared<RobotArguments>();
-  CLI::App* cmd = app.add_subcommand(
-      "robot", "Validate a pcr-robot description and write it in canonical form "
-               "(full precision; a summary goes to stderr).");
+  CLI::App* cmd =
+      app.add_subcommand("robot",
+                         "Validate a pcr-robot description and write it in canonical form "
+                         "(full precision; a summary goes to stderr).");
   pcr::cli::add_robot_option(*cmd, args->robot);
   cmd->add_option("--output", args->output, "output JSON file (default: stdout)");
   cmd->callback([args] { run_robot(*args); });

@@ -49,9 +49,9 @@ void run_sample(const SampleArguments& args) {
   const SamplingResult result = poisson_disc_sample(robot.params, options);
   if (!result.complete) {
     throw std::runtime_error("only " + std::to_string(result.configurations.size()) +
-                             " admissible configurations are " + std::to_string(result.min_distance) +
-                             " m apart; asked for " + std::to_string(options.count) +
-                             " (lower --min-distance)");
+                             " admissible configurations are " +
+                             std::to_string(result.min_distance) + " m apart; asked for " +
+                             std::to_string(options.count) + " (lower --min-distance)");
   }
   std::vector<JointVector> calibration, validation;
   split_configurations(result.configurations, args.count, &calibration, &validation);
@@ -71,20 +71,23 @@ void register_sample_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "sample", "joint configurations by Poisson-disc sampling (FK converged, strain-limited)");
   pcr::cli::add_robot_option(*cmd, args->robot);
-  cmd->add_option("--count", args->count, "calibration configurations")->check(CLI::PositiveNumber)
+  cmd->add_option("--count", args->count, "calibration configurations")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--seed", args->seed, "sampling seed")->capture_default_str();
   cmd->add_option("--output", args->output, "configurations CSV to write (q1,...,qn)")->required();
   cmd->add_option("--validation-output", args->validation_output,
                   "also write a disjoint validation set (drawn together, then split)");
   cmd->add_option("--validation-count", args->validation_count, "validation configurations")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--min-distance", args->min_distance,
                   "Poisson-disc radius in joint space (m; default: chosen from the count)");
   cmd->add_option("--box", args->box,
                   "joint sub-box: min,max for all joints, or min1,max1,...,minn,maxn (m)")
       ->delimiter(',');
   cmd->add_option("--strain-limit", args->strain_limit, "max bending strain")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->callback([args] { run_sample(*args); });
 }

@@ -1,5 +1,6 @@
 // pcr simulate: a dataset measured on a virtual robot (truth drawn in the nominal description's
-// uncertainty intervals, Eq. 5 measurements with the paper's noise). See pcr/calib/virtual_robot.hpp.
+// uncertainty intervals, Eq. 5 measurements with the paper's noise). See
+// pcr/calib/virtual_robot.hpp.
 #include <iostream>
 #include <memory>
 
@@ -32,10 +33,14 @@ void run_simulate(const SimulateArguments& args) {
   fx.misalignment_half_width = args.misalignment;
   fx.diameter_half_width = args.diameter_spread;
   for (const std::string& e : args.effects) {
-    if (e == "misalignments") fx.misalignments = true;
-    else if (e == "diameters") fx.unequal_diameters = true;
-    else if (e == "load") fx.external_load = true;
-    else throw InputError("--effects: unknown effect '" + e + "' (misalignments, diameters, load)");
+    if (e == "misalignments")
+      fx.misalignments = true;
+    else if (e == "diameters")
+      fx.unequal_diameters = true;
+    else if (e == "load")
+      fx.external_load = true;
+    else
+      throw InputError("--effects: unknown effect '" + e + "' (misalignments, diameters, load)");
   }
   if (!args.solve.force.empty() || args.solve.moment != 0) {
     fx.external_load = true;
@@ -71,16 +76,21 @@ void run_simulate(const SimulateArguments& args) {
 void register_simulate_command(CLI::App& app) {
   auto args = std::make_shared<SimulateArguments>();
   CLI::App* cmd = app.add_subcommand(
-      "simulate", "measure joint configurations on a virtual robot drawn from a nominal description");
+      "simulate",
+      "measure joint configurations on a virtual robot drawn from a nominal description");
   pcr::cli::add_robot_option(*cmd, args->robot);
-  cmd->add_option("--seed", args->seed, "seed of the truth draw and of the noise")->capture_default_str();
+  cmd->add_option("--seed", args->seed, "seed of the truth draw and of the noise")
+      ->capture_default_str();
   cmd->add_option("--configs", args->configs, "joint configurations CSV (q1,...,qn)")->required();
-  cmd->add_option("--output", args->output, "dataset CSV to write (q1,...,qn,x,y,theta)")->required();
+  cmd->add_option("--output", args->output, "dataset CSV to write (q1,...,qn,x,y,theta)")
+      ->required();
   cmd->add_option("--truth", args->truth, "also write the true robot description (JSON)");
   cmd->add_option("--noise-position", args->noise_position, "std of x and y (m)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--noise-angle", args->noise_angle, "std of theta (rad)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--effects", args->effects,
                   "unmodelled effects to switch on: misalignments, diameters, load")
       ->delimiter(',');

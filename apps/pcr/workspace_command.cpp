@@ -31,8 +31,8 @@ void run_workspace(const WorkspaceArguments& args) {
 
   OutputFile out(args.output);
   std::vector<std::string> header = cli::joint_names(n);
-  for (const char* c : {"x", "y", "theta", "fk_status", "fk_iterations", "max_strain",
-                        "ik_status", "ik_iterations", "ik_start", "q_error", "pose_error"}) {
+  for (const char* c : {"x", "y", "theta", "fk_status", "fk_iterations", "max_strain", "ik_status",
+                        "ik_iterations", "ik_start", "q_error", "pose_error"}) {
     header.emplace_back(c);
   }
   out.stream() << csv_line(header);

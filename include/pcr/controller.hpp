@@ -12,11 +12,11 @@ namespace pcr {
 
 /// What one tick produced.
 struct ControllerTick {
-  double time = 0.0;       ///< s
-  Pose2<double> desired;   ///< the path's pose at `time`
-  JointVector q;           ///< joints to send (m): solved, or held on failure (zero before any)
+  double time = 0.0;      ///< s
+  Pose2<double> desired;  ///< the path's pose at `time`
+  JointVector q;          ///< joints to send (m): solved, or held on failure (zero before any)
   PathPoseStatus status = PathPoseStatus::kNoSolution;
-  int iterations = 0;      ///< Newton iterations spent this tick
+  int iterations = 0;  ///< Newton iterations spent this tick
   bool ok() const noexcept { return status == PathPoseStatus::kOk; }
 };
 

@@ -32,7 +32,7 @@ struct CsvReadOptions {
 };
 
 struct CsvTable {
-  std::string source;                     ///< file name, or "<stdin>"
+  std::string source;  ///< file name, or "<stdin>"
   bool has_header{false};
   std::vector<std::string> columns;       ///< names of the numeric columns (expected or read)
   std::vector<std::vector<double>> rows;  ///< numeric columns only, in `columns` order

@@ -48,10 +48,10 @@ struct InverseSolution {
 };
 
 /// Forward kinematics warm-started from a previous solution (the normal case in a control loop).
-inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
-                                          const ForwardSolution& warm_start,
-                                          const SolverOptions& options = SolverOptions(),
-                                          const PlatformLoad<double>& load = PlatformLoad<double>());
+inline ForwardSolution forward_kinematics(
+    const RobotParams<double>& robot, const JointVector& q, const ForwardSolution& warm_start,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// The home solution, q = 0: from the straight, unloaded guess, or for a robot whose straight
 /// guess fails (a pre-stressed robot with n >= 4 limbs) from a bowed variant of the robot (see
@@ -64,23 +64,23 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot,
 /// home is a bifurcation (straight rods of a robot with n >= 4 limbs), or with n >= 4 the path
 /// from home fails, q is solved directly from a bowed variant of the robot instead: the branch
 /// whose rods bow to their left, else the one where they bow to their right.
-inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
-                                          const SolverOptions& options = SolverOptions(),
-                                          const PlatformLoad<double>& load = PlatformLoad<double>());
+inline ForwardSolution forward_kinematics(
+    const RobotParams<double>& robot, const JointVector& q,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Inverse kinematics warm-started from a previous solution. For n = 2 only x and y of `pose`
 /// are imposed and theta is solved for.
-inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
-                                          const Pose2<double>& pose,
-                                          const InverseSolution& warm_start,
-                                          const SolverOptions& options = SolverOptions(),
-                                          const PlatformLoad<double>& load = PlatformLoad<double>());
+inline InverseSolution inverse_kinematics(
+    const RobotParams<double>& robot, const Pose2<double>& pose, const InverseSolution& warm_start,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Inverse kinematics from a cold start: from the home solution along a straight pose path.
-inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
-                                          const Pose2<double>& pose,
-                                          const SolverOptions& options = SolverOptions(),
-                                          const PlatformLoad<double>& load = PlatformLoad<double>());
+inline InverseSolution inverse_kinematics(
+    const RobotParams<double>& robot, const Pose2<double>& pose,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Inverse kinematics warm-started from a forward solution (same unknowns, other inputs). The FK
 /// Jacobian is left behind: its pose columns are not the IK's joint columns, so the first IK solve

@@ -9,8 +9,22 @@
 namespace pcr {
 
 enum class ParameterKind {
-  kYoungModulus, kDiameter, kLength, kAx, kAy, kAlpha, kBx, kBy, kBeta, kGamma,  // per limb
-  kCameraX, kCameraY, kCameraTheta, kPatternX, kPatternY, kPatternTheta,          // extrinsics
+  kYoungModulus,
+  kDiameter,
+  kLength,
+  kAx,
+  kAy,
+  kAlpha,
+  kBx,
+  kBy,
+  kBeta,
+  kGamma,  // per limb
+  kCameraX,
+  kCameraY,
+  kCameraTheta,
+  kPatternX,
+  kPatternY,
+  kPatternTheta,  // extrinsics
 };
 
 inline constexpr int kLimbParameters = 10;
@@ -33,8 +47,7 @@ inline ParameterId parameter_id(int index, int num_limbs) {
                        index / kLimbParameters};
   }
   const int e = index - kLimbParameters * num_limbs;
-  return ParameterId{static_cast<ParameterKind>(static_cast<int>(ParameterKind::kCameraX) + e),
-                     -1};
+  return ParameterId{static_cast<ParameterKind>(static_cast<int>(ParameterKind::kCameraX) + e), -1};
 }
 
 inline int parameter_index(const ParameterId& id, int num_limbs) {
@@ -45,10 +58,22 @@ inline int parameter_index(const ParameterId& id, int num_limbs) {
 
 /// Short kind name as in the paper's Table 2: "E", "d", "l", "A_x", ..., "camera_x", ...
 inline const char* parameter_kind_name(ParameterKind kind) {
-  static const char* const kNames[] = {"E",        "d",        "l",           "A_x",
-                                       "A_y",      "alpha",    "B_x",         "B_y",
-                                       "beta",     "gamma",    "camera_x",    "camera_y",
-                                       "camera_theta", "pattern_x", "pattern_y", "pattern_theta"};
+  static const char* const kNames[] = {"E",
+                                       "d",
+                                       "l",
+                                       "A_x",
+                                       "A_y",
+                                       "alpha",
+                                       "B_x",
+                                       "B_y",
+                                       "beta",
+                                       "gamma",
+                                       "camera_x",
+                                       "camera_y",
+                                       "camera_theta",
+                                       "pattern_x",
+                                       "pattern_y",
+                                       "pattern_theta"};
   return kNames[static_cast<int>(kind)];
 }
 
@@ -65,25 +90,41 @@ T& parameter_ref(RobotParams<T>& robot, const ParameterId& id) {
   if (id.limb >= 0) {
     LimbParams<T>& limb = robot.limb(id.limb);
     switch (id.kind) {
-      case ParameterKind::kYoungModulus: return limb.young_modulus;
-      case ParameterKind::kDiameter: return limb.diameter;
-      case ParameterKind::kLength: return limb.length;
-      case ParameterKind::kAx: return limb.A.x();
-      case ParameterKind::kAy: return limb.A.y();
-      case ParameterKind::kAlpha: return limb.alpha;
-      case ParameterKind::kBx: return limb.B.x();
-      case ParameterKind::kBy: return limb.B.y();
-      case ParameterKind::kBeta: return limb.beta;
-      default: return limb.gamma;
+      case ParameterKind::kYoungModulus:
+        return limb.young_modulus;
+      case ParameterKind::kDiameter:
+        return limb.diameter;
+      case ParameterKind::kLength:
+        return limb.length;
+      case ParameterKind::kAx:
+        return limb.A.x();
+      case ParameterKind::kAy:
+        return limb.A.y();
+      case ParameterKind::kAlpha:
+        return limb.alpha;
+      case ParameterKind::kBx:
+        return limb.B.x();
+      case ParameterKind::kBy:
+        return limb.B.y();
+      case ParameterKind::kBeta:
+        return limb.beta;
+      default:
+        return limb.gamma;
     }
   }
   switch (id.kind) {
-    case ParameterKind::kCameraX: return robot.extrinsics.camera.x;
-    case ParameterKind::kCameraY: return robot.extrinsics.camera.y;
-    case ParameterKind::kCameraTheta: return robot.extrinsics.camera.theta;
-    case ParameterKind::kPatternX: return robot.extrinsics.pattern.x;
-    case ParameterKind::kPatternY: return robot.extrinsics.pattern.y;
-    default: return robot.extrinsics.pattern.theta;
+    case ParameterKind::kCameraX:
+      return robot.extrinsics.camera.x;
+    case ParameterKind::kCameraY:
+      return robot.extrinsics.camera.y;
+    case ParameterKind::kCameraTheta:
+      return robot.extrinsics.camera.theta;
+    case ParameterKind::kPatternX:
+      return robot.extrinsics.pattern.x;
+    case ParameterKind::kPatternY:
+      return robot.extrinsics.pattern.y;
+    default:
+      return robot.extrinsics.pattern.theta;
   }
 }
 
@@ -96,7 +137,8 @@ const T& parameter_ref(const RobotParams<T>& robot, const ParameterId& id) {
 template <class T>
 void get_parameters(const RobotParams<T>& robot, T* values) {
   const int count = num_parameters(robot.num_limbs);
-  for (int k = 0; k < count; ++k) values[k] = parameter_ref(robot, parameter_id(k, robot.num_limbs));
+  for (int k = 0; k < count; ++k)
+    values[k] = parameter_ref(robot, parameter_id(k, robot.num_limbs));
 }
 
 /// Writes values[0 .. num_parameters) into a description whose other fields come from `base`.
@@ -104,7 +146,8 @@ template <class T>
 RobotParams<T> with_parameters(const RobotParams<T>& base, const T* values) {
   RobotParams<T> robot = base;
   const int count = num_parameters(robot.num_limbs);
-  for (int k = 0; k < count; ++k) parameter_ref(robot, parameter_id(k, robot.num_limbs)) = values[k];
+  for (int k = 0; k < count; ++k)
+    parameter_ref(robot, parameter_id(k, robot.num_limbs)) = values[k];
   return robot;
 }
 

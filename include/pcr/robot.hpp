@@ -3,10 +3,9 @@
 // Notation of Mauze et al. 2021 (Fig. 3): W world frame, P platform frame, A_i proximal clamps
 // (moved by the actuators), B_i distal clamps on the platform. SI units, angles in radians.
 
+#include <Eigen/Core>
 #include <array>
 #include <cmath>
-
-#include <Eigen/Core>
 
 #include "pcr/rod.hpp"
 #include "pcr/se2.hpp"

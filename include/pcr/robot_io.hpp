@@ -2,13 +2,12 @@
 // The `pcr-robot` JSON file format: a robot description with its uncertainty intervals.
 // Compiled in pcr::io (nlohmann_json stays private). Format documented in README.md.
 
+#include <Eigen/Core>
 #include <array>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "pcr/robot.hpp"
 
@@ -22,14 +21,14 @@ class InputError : public std::invalid_argument {
 
 /// Half-widths of the uncertainty intervals of one limb's parameters (SI units, radians).
 struct LimbUncertainty {
-  Eigen::Vector2d A{0, 0};   ///< m, on A_x and A_y
-  double alpha{0};           ///< rad
-  double gamma{0};           ///< rad
-  Eigen::Vector2d B{0, 0};   ///< m, on B_x and B_y
-  double beta{0};            ///< rad
-  double length{0};          ///< m
-  double diameter{0};        ///< m
-  double young_modulus{0};   ///< Pa
+  Eigen::Vector2d A{0, 0};  ///< m, on A_x and A_y
+  double alpha{0};          ///< rad
+  double gamma{0};          ///< rad
+  Eigen::Vector2d B{0, 0};  ///< m, on B_x and B_y
+  double beta{0};           ///< rad
+  double length{0};         ///< m
+  double diameter{0};       ///< m
+  double young_modulus{0};  ///< Pa
 };
 
 /// Uncertainty half-widths: a global default for every limb, per-limb values (the default with the
@@ -43,7 +42,8 @@ struct RobotUncertainty {
 
 struct RobotDescription {
   std::string name;
-  double young_modulus{0};  ///< the global E (Pa); params.limb(i).young_modulus holds the resolved value
+  double young_modulus{
+      0};  ///< the global E (Pa); params.limb(i).young_modulus holds the resolved value
   RobotParams<double> params;
   std::optional<RobotUncertainty> uncertainty;
 };

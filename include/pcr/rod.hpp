@@ -11,9 +11,8 @@
 // s = sin(theta) as states (c' = -s m/EI, s' = c m/EI): the right-hand side is then a polynomial.
 // theta is integrated alongside, so it stays continuous over full turns.
 
-#include <cmath>
-
 #include <Eigen/Core>
+#include <cmath>
 
 namespace pcr {
 
@@ -180,8 +179,8 @@ RodStepper<T, Sens> integrate_rod_pass(const RodState<T>& start, const T& ei, co
 template <class T>
 RodState<T> integrate_rod(const RodState<T>& start, const T& ei, const T& length, int steps,
                           T* max_abs_moment = nullptr) {
-  const auto pass = internal::integrate_rod_pass<T, false>(start, ei, length, steps,
-                                                           internal::NoVisitor{});
+  const auto pass =
+      internal::integrate_rod_pass<T, false>(start, ei, length, steps, internal::NoVisitor{});
   if (max_abs_moment) *max_abs_moment = pass.max_abs_moment;
   return pass.state();
 }
@@ -191,8 +190,8 @@ template <class T>
 RodTip<T> integrate_rod_with_sensitivity(const RodState<T>& start, const T& ei, const T& length,
                                          int steps) {
   RodTip<T> tip;
-  const auto pass = internal::integrate_rod_pass<T, true>(start, ei, length, steps,
-                                                          internal::NoVisitor{});
+  const auto pass =
+      internal::integrate_rod_pass<T, true>(start, ei, length, steps, internal::NoVisitor{});
   tip.state = pass.state();
   tip.max_abs_moment = pass.max_abs_moment;
   for (int j = 0; j < 3; ++j) {

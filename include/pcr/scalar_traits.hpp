@@ -1,7 +1,8 @@
 #pragma once
 // Plain value of a scalar, for decisions that must not be differentiated (branch selection,
 // convergence tests). Specialise ScalarTraits for other scalar types (pcr/calib/jet_traits.hpp
-// does it for ceres::Jet); a struct specialisation is found by two-phase lookup, an overload is not.
+// does it for ceres::Jet); a struct specialisation is found by two-phase lookup, an overload is
+// not.
 
 namespace pcr {
 

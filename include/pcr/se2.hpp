@@ -1,9 +1,8 @@
 #pragma once
 // Planar rigid transforms (SE(2)), templated on the scalar so Ceres Jets flow through.
 
-#include <cmath>
-
 #include <Eigen/Core>
+#include <cmath>
 
 namespace pcr {
 

@@ -5,11 +5,10 @@
 // Unknowns and residuals are scaled so that Newton sees numbers of order one: lengths by the mean
 // rod length L, forces by F = EI / L^2 (mean EI), moments by F L.
 
+#include <Eigen/Core>
 #include <array>
 #include <cmath>
 #include <type_traits>
-
-#include <Eigen/Core>
 
 #include "pcr/robot.hpp"
 #include "pcr/rod.hpp"
@@ -74,9 +73,9 @@ inline ShootingScale shooting_scale(const RobotParams<double>& robot) {
 /// Physical values of every shooting unknown and input.
 template <class T>
 struct ShootingPoint {
-  std::array<T, kMaxLimbs> q{};                   ///< joint values (m)
-  Pose2<T> pose;                                  ///< platform pose ^W T_P
-  std::array<Wrench<T>, kMaxLimbs> wrenches{};    ///< proximal wrench of each rod, (n, m)(0)
+  std::array<T, kMaxLimbs> q{};                 ///< joint values (m)
+  Pose2<T> pose;                                ///< platform pose ^W T_P
+  std::array<Wrench<T>, kMaxLimbs> wrenches{};  ///< proximal wrench of each rod, (n, m)(0)
 
   template <class U>
   ShootingPoint<U> cast() const {
@@ -248,8 +247,10 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
     const double to_scaled[3] = {scale.force, scale.force, scale.moment()};
     for (int j = 0; j < 3; ++j) {
       const int col = 3 * i + j;
-      (*partials)(3 * i + 0, col) = scalar_value(rod.sensitivity(0, j)) * to_scaled[j] / scale.length;
-      (*partials)(3 * i + 1, col) = scalar_value(rod.sensitivity(1, j)) * to_scaled[j] / scale.length;
+      (*partials)(3 * i + 0, col) =
+          scalar_value(rod.sensitivity(0, j)) * to_scaled[j] / scale.length;
+      (*partials)(3 * i + 1, col) =
+          scalar_value(rod.sensitivity(1, j)) * to_scaled[j] / scale.length;
       (*partials)(3 * i + 2, col) = scalar_value(rod.sensitivity(2, j)) * to_scaled[j];
       // Moment balance: arm x n + m(l).
       double dmoment = scalar_value(rod.sensitivity(3, j));

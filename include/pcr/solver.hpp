@@ -13,19 +13,28 @@ enum class SolveStatus {
   kNonFinite,      ///< the residual became NaN or infinite
   kOutOfRange,     ///< IK converged, but a joint value lies outside its stroke
   kUnsupported,    ///< the request is not a square problem (IK with n > 3 limbs)
-  kInvalidInput,   ///< wrong sizes, NaN inputs, or a robot with fewer than 2 / more than kMaxLimbs limbs
+  kInvalidInput,   ///< wrong sizes, NaN inputs, or a robot with fewer than 2 / more than kMaxLimbs
+                   ///< limbs
 };
 
 inline const char* to_string(SolveStatus status) {
   switch (status) {
-    case SolveStatus::kConverged: return "converged";
-    case SolveStatus::kMaxIterations: return "max_iterations";
-    case SolveStatus::kSingular: return "singular";
-    case SolveStatus::kBifurcation: return "bifurcation";
-    case SolveStatus::kNonFinite: return "non_finite";
-    case SolveStatus::kOutOfRange: return "out_of_range";
-    case SolveStatus::kUnsupported: return "unsupported";
-    case SolveStatus::kInvalidInput: return "invalid_input";
+    case SolveStatus::kConverged:
+      return "converged";
+    case SolveStatus::kMaxIterations:
+      return "max_iterations";
+    case SolveStatus::kSingular:
+      return "singular";
+    case SolveStatus::kBifurcation:
+      return "bifurcation";
+    case SolveStatus::kNonFinite:
+      return "non_finite";
+    case SolveStatus::kOutOfRange:
+      return "out_of_range";
+    case SolveStatus::kUnsupported:
+      return "unsupported";
+    case SolveStatus::kInvalidInput:
+      return "invalid_input";
   }
   return "unknown";
 }
@@ -62,15 +71,16 @@ struct SolverOptions {
 
 struct SolverSummary {
   SolveStatus status = SolveStatus::kMaxIterations;
-  int iterations = 0;             ///< Newton iterations, all sub-solves included
-  int residual_evaluations = 0;   ///< residual (+ Jacobian) evaluations
-  int continuation_steps = 0;     ///< sub-solves of the continuation; 0 for a direct solve
+  int iterations = 0;            ///< Newton iterations, all sub-solves included
+  int residual_evaluations = 0;  ///< residual (+ Jacobian) evaluations
+  int continuation_steps = 0;    ///< sub-solves of the continuation; 0 for a direct solve
   double initial_residual_norm = std::numeric_limits<double>::quiet_NaN();  ///< scaled max-norm
   /// Scaled max-norm; after a last chord step taken without evaluating the residual (its
   /// contraction is steady), the value that contraction predicts.
   double final_residual_norm = std::numeric_limits<double>::quiet_NaN();
-  double max_strain = std::numeric_limits<double>::quiet_NaN();  ///< max |kappa| d / 2 over the rods
-  int rod_steps = 0;  ///< RK4 steps per rod of the returned solution
+  double max_strain =
+      std::numeric_limits<double>::quiet_NaN();  ///< max |kappa| d / 2 over the rods
+  int rod_steps = 0;                             ///< RK4 steps per rod of the returned solution
   /// Estimated discretisation error of the returned outputs against the exact model (NaN when
   /// not estimated: a fixed rod_steps, or no converged solution): lengths (m) and angles (rad).
   double position_error_estimate = std::numeric_limits<double>::quiet_NaN();

@@ -23,9 +23,9 @@ inline constexpr double kDefaultStrainLimit = 0.01;
 /// poses; the path is closed: pose(num_poses) == pose(0), which is not repeated.
 struct SquarePath {
   Vector2<double> centre{0.0, 0.0};  ///< m, in W
-  double side = kPaperSquareSide;     ///< m
-  double rotation = 0.0;              ///< rad, of the square's sides with respect to W
-  double theta = 0.0;                 ///< rad, constant platform orientation
+  double side = kPaperSquareSide;    ///< m
+  double rotation = 0.0;             ///< rad, of the square's sides with respect to W
+  double theta = 0.0;                ///< rad, constant platform orientation
   int num_poses = 40;
 
   /// The pose at `fraction` of the perimeter (wrapped into [0, 1)).
@@ -51,7 +51,7 @@ struct SquarePath {
 /// A circle traversed counter-clockwise from the polar angle `start_angle`, at the constant
 /// platform orientation `theta`; closed like SquarePath.
 struct CirclePath {
-  Vector2<double> centre{0.0, 0.0};       ///< m, in W
+  Vector2<double> centre{0.0, 0.0};        ///< m, in W
   double diameter = kPaperCircleDiameter;  ///< m
   double start_angle = 0.0;                ///< rad, polar angle of the first pose about the centre
   double theta = 0.0;                      ///< rad, constant platform orientation
@@ -86,10 +86,14 @@ enum class PathPoseStatus {
 
 inline const char* to_string(PathPoseStatus status) noexcept {
   switch (status) {
-    case PathPoseStatus::kOk: return "ok";
-    case PathPoseStatus::kNoSolution: return "no_solution";
-    case PathPoseStatus::kOutOfRange: return "out_of_range";
-    case PathPoseStatus::kStrainExceeded: return "strain_exceeded";
+    case PathPoseStatus::kOk:
+      return "ok";
+    case PathPoseStatus::kNoSolution:
+      return "no_solution";
+    case PathPoseStatus::kOutOfRange:
+      return "out_of_range";
+    case PathPoseStatus::kStrainExceeded:
+      return "strain_exceeded";
   }
   return "unknown";
 }
@@ -105,7 +109,7 @@ struct PathStepOptions {
 struct PathStep {
   InverseSolution solution;  ///< q, the wrenches (the next warm start) and the solver summary
   PathPoseStatus status = PathPoseStatus::kNoSolution;
-  int iterations = 0;        ///< Newton iterations, fallback included
+  int iterations = 0;  ///< Newton iterations, fallback included
   bool ok() const noexcept { return status == PathPoseStatus::kOk; }
 };
 

@@ -26,9 +26,9 @@ int main(int argc, char** argv) {
       wrenches(static_cast<std::size_t>(rows * n * 3)), residual(rows), strain(rows);
   std::vector<int> status(rows), iterations(rows), steps(rows);
   std::unique_ptr<bool[]> converged(new bool[static_cast<std::size_t>(rows)]);
-  const pcr::python::BatchBuffers out{qo.data(),       pose.data(),         wrenches.data(),
-                                      converged.get(), status.data(),       iterations.data(),
-                                      residual.data(), strain.data(),       steps.data()};
+  const pcr::python::BatchBuffers out{qo.data(),       pose.data(),   wrenches.data(),
+                                      converged.get(), status.data(), iterations.data(),
+                                      residual.data(), strain.data(), steps.data()};
   const auto start = std::chrono::steady_clock::now();
   pcr::python::forward_batch(robot, q.data(), rows, pcr::SolverOptions(), {}, out);
   const double seconds =

@@ -2,14 +2,14 @@
 // Shared declarations of the pcr._pcr module: one wrap_<concept>() per file (module.cpp calls
 // them in order) and the small value types the bindings hand to Python.
 
-#include <array>
-#include <string>
-#include <vector>
-
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+
+#include <array>
+#include <string>
+#include <vector>
 
 #include "pcr/kinematics.hpp"
 #include "pcr/robot_io.hpp"

@@ -35,7 +35,8 @@ std::vector<Pose2<double>> pose_rows(const py::handle& object, const char* what)
   const py::ssize_t rows = a.ndim() == 1 ? 1 : a.shape(0);
   std::vector<Pose2<double>> out(static_cast<std::size_t>(rows));
   const double* p = a.data();
-  for (py::ssize_t r = 0; r < rows; ++r) out[r] = Pose2<double>{p[3 * r], p[3 * r + 1], p[3 * r + 2]};
+  for (py::ssize_t r = 0; r < rows; ++r)
+    out[r] = Pose2<double>{p[3 * r], p[3 * r + 1], p[3 * r + 2]};
   return out;
 }
 
@@ -60,8 +61,9 @@ std::vector<std::vector<Pose2<double>>> attained_rows(const py::handle& object) 
     return out;
   }
   if (!py::isinstance<py::sequence>(object) || py::isinstance<py::str>(object)) {
-    throw std::invalid_argument("attained: expected an (N, R, 3) array or a list of N (R_k, 3) "
-                                "arrays of poses");
+    throw std::invalid_argument(
+        "attained: expected an (N, R, 3) array or a list of N (R_k, 3) "
+        "arrays of poses");
   }
   for (const py::handle& item : object.cast<py::sequence>()) {
     const std::string what = "attained[" + std::to_string(out.size()) + "]";
@@ -96,7 +98,8 @@ py::object attained_array(const std::vector<std::vector<Pose2<double>>>& attaine
 template <class F>
 Eigen::VectorXd column(const Iso9283Result& r, F value) {
   Eigen::VectorXd out(static_cast<Eigen::Index>(r.poses.size()));
-  for (std::size_t k = 0; k < r.poses.size(); ++k) out(static_cast<Eigen::Index>(k)) = value(r.poses[k]);
+  for (std::size_t k = 0; k < r.poses.size(); ++k)
+    out(static_cast<Eigen::Index>(k)) = value(r.poses[k]);
   return out;
 }
 
@@ -121,8 +124,8 @@ AttainedFrame attained_frame(const std::string& name) {
   throw std::invalid_argument("frame: expected 'model' or 'true', got '" + name + "'");
 }
 
-PathCommandOptions command_options(double strain_limit, const Eigen::Vector2d& force,
-                                   double moment, const std::optional<SolverOptions>& solver,
+PathCommandOptions command_options(double strain_limit, const Eigen::Vector2d& force, double moment,
+                                   const std::optional<SolverOptions>& solver,
                                    bool cold_start_fallback) {
   PathCommandOptions o;
   o.step.strain_limit = strain_limit;
@@ -134,14 +137,15 @@ PathCommandOptions command_options(double strain_limit, const Eigen::Vector2d& f
 
 py::dict command_dict(const PathCommand& c, int n) {
   RowMatrix q(static_cast<Eigen::Index>(c.q.size()), n);
-  for (std::size_t r = 0; r < c.q.size(); ++r) q.row(static_cast<Eigen::Index>(r)) = c.q[r].transpose();
+  for (std::size_t r = 0; r < c.q.size(); ++r)
+    q.row(static_cast<Eigen::Index>(r)) = c.q[r].transpose();
   py::dict d;
   d["q"] = q;
   d["poses"] = poses_matrix(c.poses);
   d["max_strain"] = Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(
       c.max_strain.data(), static_cast<Eigen::Index>(c.max_strain.size())));
-  d["iterations"] = py::array_t<int>(static_cast<py::ssize_t>(c.iterations.size()),
-                                     c.iterations.data());
+  d["iterations"] =
+      py::array_t<int>(static_cast<py::ssize_t>(c.iterations.size()), c.iterations.data());
   return d;
 }
 
@@ -153,7 +157,8 @@ std::vector<std::pair<std::string, const Iso9283Result*>> named_rows(const py::h
   }
   if (py::isinstance<py::dict>(rows)) {
     for (const auto& kv : rows.cast<py::dict>()) {
-      out.emplace_back(py::str(kv.first).cast<std::string>(), kv.second.cast<const Iso9283Result*>());
+      out.emplace_back(py::str(kv.first).cast<std::string>(),
+                       kv.second.cast<const Iso9283Result*>());
     }
     return out;
   }
@@ -171,102 +176,166 @@ void wrap_accuracy(py::module_& m) {
   m.attr("PAPER_SQUARE_SIDE") = kPaperSquareSide;
   m.attr("PAPER_CIRCLE_DIAMETER") = kPaperCircleDiameter;
 
-  m.def("square_path",
-        [](double side, const Eigen::Vector2d& centre, double rotation, double theta, int count) {
-          SquarePath s;
-          s.side = side;
-          s.centre = centre;
-          s.rotation = rotation;
-          s.theta = theta;
-          s.num_poses = count;
-          return poses_matrix(square_path(s));
-        },
-        py::arg("side") = kPaperSquareSide, py::kw_only(),
-        py::arg("centre") = Eigen::Vector2d(0, 0), py::arg("rotation") = 0.0,
-        py::arg("theta") = 0.0, py::arg("count") = 40,
-        "The paper's square (side m) as a (count, 3) array of poses, counter-clockwise from the "
-        "corner (-side/2, -side/2) before `rotation` (rad), at the constant orientation theta; "
-        "closed (the first pose is not repeated), corners included when count is a multiple of 4.");
-  m.def("circle_path",
-        [](double diameter, const Eigen::Vector2d& centre, double start_angle, double theta,
-           int count) {
-          CirclePath c;
-          c.diameter = diameter;
-          c.centre = centre;
-          c.start_angle = start_angle;
-          c.theta = theta;
-          c.num_poses = count;
-          return poses_matrix(circle_path(c));
-        },
-        py::arg("diameter") = kPaperCircleDiameter, py::kw_only(),
-        py::arg("centre") = Eigen::Vector2d(0, 0), py::arg("start_angle") = 0.0,
-        py::arg("theta") = 0.0, py::arg("count") = 36,
-        "The paper's circle (diameter m) as a (count, 3) array of poses, counter-clockwise from "
-        "the polar angle start_angle (rad), at the constant orientation theta.");
-  m.def("load_path_csv", [](const std::string& path) { return poses_matrix(load_path_csv(path)); },
-        py::arg("path"),
-        "A path from CSV (columns x,y,theta in m, m, rad) -> (N, 3). ValueError naming the file "
-        "and line.");
+  m.def(
+      "square_path",
+      [](double side, const Eigen::Vector2d& centre, double rotation, double theta, int count) {
+        SquarePath s;
+        s.side = side;
+        s.centre = centre;
+        s.rotation = rotation;
+        s.theta = theta;
+        s.num_poses = count;
+        return poses_matrix(square_path(s));
+      },
+      py::arg("side") = kPaperSquareSide, py::kw_only(), py::arg("centre") = Eigen::Vector2d(0, 0),
+      py::arg("rotation") = 0.0, py::arg("theta") = 0.0, py::arg("count") = 40,
+      "The paper's square (side m) as a (count, 3) array of poses, counter-clockwise from the "
+      "corner (-side/2, -side/2) before `rotation` (rad), at the constant orientation theta; "
+      "closed (the first pose is not repeated), corners included when count is a multiple of 4.");
+  m.def(
+      "circle_path",
+      [](double diameter, const Eigen::Vector2d& centre, double start_angle, double theta,
+         int count) {
+        CirclePath c;
+        c.diameter = diameter;
+        c.centre = centre;
+        c.start_angle = start_angle;
+        c.theta = theta;
+        c.num_poses = count;
+        return poses_matrix(circle_path(c));
+      },
+      py::arg("diameter") = kPaperCircleDiameter, py::kw_only(),
+      py::arg("centre") = Eigen::Vector2d(0, 0), py::arg("start_angle") = 0.0,
+      py::arg("theta") = 0.0, py::arg("count") = 36,
+      "The paper's circle (diameter m) as a (count, 3) array of poses, counter-clockwise from "
+      "the polar angle start_angle (rad), at the constant orientation theta.");
+  m.def(
+      "load_path_csv", [](const std::string& path) { return poses_matrix(load_path_csv(path)); },
+      py::arg("path"),
+      "A path from CSV (columns x,y,theta in m, m, rad) -> (N, 3). ValueError naming the file "
+      "and line.");
 
-  m.def("command_path",
-        [](const RobotDescription& model, const py::object& path, double strain_limit,
-           const Eigen::Vector2d& force, double moment, const std::optional<SolverOptions>& solver,
-           bool cold_start_fallback) {
-          const std::vector<Pose2<double>> poses = pose_rows(path, "path");
-          const PathCommandOptions o =
-              command_options(strain_limit, force, moment, solver, cold_start_fallback);
-          PathCommand c;
-          {
-            py::gil_scoped_release release;
-            c = command_path(model.params, poses, o);
-          }
-          return command_dict(c, model.params.num_limbs);
-        },
-        py::arg("robot"), py::arg("path"), py::kw_only(),
-        py::arg("strain_limit") = kDefaultStrainLimit, py::arg("force") = Eigen::Vector2d(0, 0),
-        py::arg("moment") = 0.0, py::arg("options") = py::none(),
-        py::arg("cold_start_fallback") = true,
-        "IK along a path ((N, 3) poses), warm-started pose to pose from home. Returns a dict: q "
-        "(N, n) m, poses (N, 3) (theta solved when n = 2), max_strain (N,), iterations (N,). "
-        "ValueError 'pose k (x, y, theta): reason' at the first pose out of the workspace, the "
-        "strokes or the strain limit. Releases the GIL.");
+  m.def(
+      "command_path",
+      [](const RobotDescription& model, const py::object& path, double strain_limit,
+         const Eigen::Vector2d& force, double moment, const std::optional<SolverOptions>& solver,
+         bool cold_start_fallback) {
+        const std::vector<Pose2<double>> poses = pose_rows(path, "path");
+        const PathCommandOptions o =
+            command_options(strain_limit, force, moment, solver, cold_start_fallback);
+        PathCommand c;
+        {
+          py::gil_scoped_release release;
+          c = command_path(model.params, poses, o);
+        }
+        return command_dict(c, model.params.num_limbs);
+      },
+      py::arg("robot"), py::arg("path"), py::kw_only(),
+      py::arg("strain_limit") = kDefaultStrainLimit, py::arg("force") = Eigen::Vector2d(0, 0),
+      py::arg("moment") = 0.0, py::arg("options") = py::none(),
+      py::arg("cold_start_fallback") = true,
+      "IK along a path ((N, 3) poses), warm-started pose to pose from home. Returns a dict: q "
+      "(N, n) m, poses (N, 3) (theta solved when n = 2), max_strain (N,), iterations (N,). "
+      "ValueError 'pose k (x, y, theta): reason' at the first pose out of the workspace, the "
+      "strokes or the strain limit. Releases the GIL.");
 
   py::class_<Iso9283Result>(m, "Iso9283Result",
                             "ISO 9283 pose accuracy and repeatability of a path: per-pose arrays "
                             "(N,) or (N, 3) and the Table 4 summary (SI units).")
-      .def_property_readonly("commanded", [](const Iso9283Result& r) {
-        return poses_matrix(column_poses(r, [](const Iso9283Pose& p) { return p.commanded; }));
-      }, "(N, 3) commanded poses")
-      .def_property_readonly("barycentre", [](const Iso9283Result& r) {
-        return poses_matrix(column_poses(r, [](const Iso9283Pose& p) { return p.barycentre; }));
-      }, "(N, 3) mean attained poses (x_bar, y_bar, theta_bar)")
-      .def_property_readonly("cycles", [](const Iso9283Result& r) {
-        py::array_t<int> out(static_cast<py::ssize_t>(r.poses.size()));
-        for (std::size_t k = 0; k < r.poses.size(); ++k) out.mutable_at(k) = r.poses[k].cycles;
-        return out;
-      }, "(N,) attained poses per commanded pose")
-      .def_property_readonly("ap_x", [](const Iso9283Result& r) { return column(r, [](const Iso9283Pose& p) { return p.ap_x; }); }, "(N,) x_bar - x_c (m)")
-      .def_property_readonly("ap_y", [](const Iso9283Result& r) { return column(r, [](const Iso9283Pose& p) { return p.ap_y; }); }, "(N,) y_bar - y_c (m)")
-      .def_property_readonly("ap_p", [](const Iso9283Result& r) { return column(r, [](const Iso9283Pose& p) { return p.ap_p; }); }, "(N,) AP_p, Eq. 10 (m)")
-      .def_property_readonly("ap_theta", [](const Iso9283Result& r) { return column(r, [](const Iso9283Pose& p) { return p.ap_theta; }); }, "(N,) AP_theta, Eq. 11, signed (rad)")
-      .def_property_readonly("l_bar", [](const Iso9283Result& r) { return column(r, [](const Iso9283Pose& p) { return p.l_bar; }); }, "(N,) mean distance to the barycentre (m)")
-      .def_property_readonly("s_l", [](const Iso9283Result& r) { return column(r, [](const Iso9283Pose& p) { return p.s_l; }); }, "(N,) its sample standard deviation (m)")
-      .def_property_readonly("rp_l", [](const Iso9283Result& r) { return column(r, [](const Iso9283Pose& p) { return p.rp_l; }); }, "(N,) RP_l = l_bar + 3 S_l (m)")
-      .def_property_readonly("s_theta", [](const Iso9283Result& r) { return column(r, [](const Iso9283Pose& p) { return p.s_theta; }); }, "(N,) sample std of theta (rad)")
-      .def_property_readonly("rp_theta", [](const Iso9283Result& r) { return column(r, [](const Iso9283Pose& p) { return p.rp_theta; }); }, "(N,) 3 S_theta: RP_theta is +-rp_theta (rad)")
-      .def_property_readonly("summary", [](const Iso9283Result& r) {
-        py::dict d;
-        d["ap_p"] = stats_dict(r.ap_p);
-        d["ap_theta_abs"] = stats_dict(r.ap_theta_abs);
-        d["rp_l"] = stats_dict(r.rp_l);
-        d["rp_theta"] = stats_dict(r.rp_theta);
-        return d;
-      }, "Table 4: {'ap_p', 'ap_theta_abs', 'rp_l', 'rp_theta'} -> {'max', 'mean', 'min'} (m, rad)")
+      .def_property_readonly(
+          "commanded",
+          [](const Iso9283Result& r) {
+            return poses_matrix(column_poses(r, [](const Iso9283Pose& p) { return p.commanded; }));
+          },
+          "(N, 3) commanded poses")
+      .def_property_readonly(
+          "barycentre",
+          [](const Iso9283Result& r) {
+            return poses_matrix(column_poses(r, [](const Iso9283Pose& p) { return p.barycentre; }));
+          },
+          "(N, 3) mean attained poses (x_bar, y_bar, theta_bar)")
+      .def_property_readonly(
+          "cycles",
+          [](const Iso9283Result& r) {
+            py::array_t<int> out(static_cast<py::ssize_t>(r.poses.size()));
+            for (std::size_t k = 0; k < r.poses.size(); ++k) out.mutable_at(k) = r.poses[k].cycles;
+            return out;
+          },
+          "(N,) attained poses per commanded pose")
+      .def_property_readonly(
+          "ap_x",
+          [](const Iso9283Result& r) {
+            return column(r, [](const Iso9283Pose& p) { return p.ap_x; });
+          },
+          "(N,) x_bar - x_c (m)")
+      .def_property_readonly(
+          "ap_y",
+          [](const Iso9283Result& r) {
+            return column(r, [](const Iso9283Pose& p) { return p.ap_y; });
+          },
+          "(N,) y_bar - y_c (m)")
+      .def_property_readonly(
+          "ap_p",
+          [](const Iso9283Result& r) {
+            return column(r, [](const Iso9283Pose& p) { return p.ap_p; });
+          },
+          "(N,) AP_p, Eq. 10 (m)")
+      .def_property_readonly(
+          "ap_theta",
+          [](const Iso9283Result& r) {
+            return column(r, [](const Iso9283Pose& p) { return p.ap_theta; });
+          },
+          "(N,) AP_theta, Eq. 11, signed (rad)")
+      .def_property_readonly(
+          "l_bar",
+          [](const Iso9283Result& r) {
+            return column(r, [](const Iso9283Pose& p) { return p.l_bar; });
+          },
+          "(N,) mean distance to the barycentre (m)")
+      .def_property_readonly(
+          "s_l",
+          [](const Iso9283Result& r) {
+            return column(r, [](const Iso9283Pose& p) { return p.s_l; });
+          },
+          "(N,) its sample standard deviation (m)")
+      .def_property_readonly(
+          "rp_l",
+          [](const Iso9283Result& r) {
+            return column(r, [](const Iso9283Pose& p) { return p.rp_l; });
+          },
+          "(N,) RP_l = l_bar + 3 S_l (m)")
+      .def_property_readonly(
+          "s_theta",
+          [](const Iso9283Result& r) {
+            return column(r, [](const Iso9283Pose& p) { return p.s_theta; });
+          },
+          "(N,) sample std of theta (rad)")
+      .def_property_readonly(
+          "rp_theta",
+          [](const Iso9283Result& r) {
+            return column(r, [](const Iso9283Pose& p) { return p.rp_theta; });
+          },
+          "(N,) 3 S_theta: RP_theta is +-rp_theta (rad)")
+      .def_property_readonly(
+          "summary",
+          [](const Iso9283Result& r) {
+            py::dict d;
+            d["ap_p"] = stats_dict(r.ap_p);
+            d["ap_theta_abs"] = stats_dict(r.ap_theta_abs);
+            d["rp_l"] = stats_dict(r.rp_l);
+            d["rp_theta"] = stats_dict(r.rp_theta);
+            return d;
+          },
+          "Table 4: {'ap_p', 'ap_theta_abs', 'rp_l', 'rp_theta'} -> {'max', 'mean', 'min'} (m, "
+          "rad)")
       .def("poses_csv", &iso9283_poses_csv,
            "Per-pose statistics as CSV (pose,x_c,y_c,theta_c,x_bar,...,rp_theta; SI units).")
-      .def("to_json", [](const Iso9283Result& r, const std::string& name) {
-        return iso9283_json({{name, &r}});
-      }, py::arg("name") = "result", "Summary and per-pose statistics as JSON (SI units).")
+      .def(
+          "to_json",
+          [](const Iso9283Result& r, const std::string& name) {
+            return iso9283_json({{name, &r}});
+          },
+          py::arg("name") = "result", "Summary and per-pose statistics as JSON (SI units).")
       .def("__len__", [](const Iso9283Result& r) { return r.poses.size(); })
       .def("__repr__", [](const Iso9283Result& r) {
         return "Iso9283Result(" + std::to_string(r.poses.size()) + " poses, AP_p max " +
@@ -274,80 +343,96 @@ void wrap_accuracy(py::module_& m) {
                " um)";
       });
 
-  m.def("iso9283",
-        [](const py::object& commanded, const py::object& attained) {
-          const std::vector<Pose2<double>> c = pose_rows(commanded, "commanded");
-          const std::vector<std::vector<Pose2<double>>> a = attained_rows(attained);
-          return iso9283(c, a);
-        },
-        py::arg("commanded"), py::arg("attained"),
-        "ISO 9283 statistics: commanded (N, 3) poses, attained (N, R, 3) (or a list of N "
-        "(R_k, 3) arrays, R_k >= 2) in the same frame -> Iso9283Result. ValueError on mismatched "
-        "sizes, fewer than 2 attained poses or NaN.");
-  m.def("iso9283_table",
-        [](const py::object& rows) { return iso9283_table_markdown(named_rows(rows)); },
-        py::arg("rows"),
-        "Table 4 (AP_p um, |AP_theta| mrad: max, mean, min; RP) as Markdown, one row per "
-        "result: a dict {name: Iso9283Result}, a list of (name, result) pairs, or one result.");
-  m.def("iso9283_json",
-        [](const py::object& rows) { return iso9283_json(named_rows(rows)); }, py::arg("rows"),
-        "Like iso9283_table, as JSON (SI units).");
+  m.def(
+      "iso9283",
+      [](const py::object& commanded, const py::object& attained) {
+        const std::vector<Pose2<double>> c = pose_rows(commanded, "commanded");
+        const std::vector<std::vector<Pose2<double>>> a = attained_rows(attained);
+        return iso9283(c, a);
+      },
+      py::arg("commanded"), py::arg("attained"),
+      "ISO 9283 statistics: commanded (N, 3) poses, attained (N, R, 3) (or a list of N "
+      "(R_k, 3) arrays, R_k >= 2) in the same frame -> Iso9283Result. ValueError on mismatched "
+      "sizes, fewer than 2 attained poses or NaN.");
+  m.def(
+      "iso9283_table",
+      [](const py::object& rows) { return iso9283_table_markdown(named_rows(rows)); },
+      py::arg("rows"),
+      "Table 4 (AP_p um, |AP_theta| mrad: max, mean, min; RP) as Markdown, one row per "
+      "result: a dict {name: Iso9283Result}, a list of (name, result) pairs, or one result.");
+  m.def(
+      "iso9283_json", [](const py::object& rows) { return iso9283_json(named_rows(rows)); },
+      py::arg("rows"), "Like iso9283_table, as JSON (SI units).");
 
   py::class_<AccuracyEvaluation>(m, "AccuracyEvaluation",
                                  "A path commanded by a model and run on a virtual robot.")
-      .def_property_readonly("commanded", [](const AccuracyEvaluation& e) { return poses_matrix(e.commanded); },
-                             "(N, 3) commanded poses (m, m, rad)")
-      .def_property_readonly("q", [](const AccuracyEvaluation& e) -> py::object {
-        const py::dict d = command_dict(e.command, e.command.q.empty() ? 0 : static_cast<int>(e.command.q[0].size()));
-        return d["q"];  // a py::object owning the array, not an accessor into the temporary dict
-      }, "(N, n) commanded joints (m)")
-      .def_property_readonly("command", [](const AccuracyEvaluation& e) {
-        return command_dict(e.command, e.command.q.empty() ? 0 : static_cast<int>(e.command.q[0].size()));
-      }, "dict as returned by command_path")
-      .def_property_readonly("attained", [](const AccuracyEvaluation& e) { return attained_array(e.attained); },
-                             "(N, R, 3) attained platform poses ^W T_P, [pose, cycle]")
-      .def_property_readonly("iso", [](const AccuracyEvaluation& e) { return e.iso; },
-                             "the Iso9283Result (a copy)")
+      .def_property_readonly(
+          "commanded", [](const AccuracyEvaluation& e) { return poses_matrix(e.commanded); },
+          "(N, 3) commanded poses (m, m, rad)")
+      .def_property_readonly(
+          "q",
+          [](const AccuracyEvaluation& e) -> py::object {
+            const py::dict d = command_dict(
+                e.command, e.command.q.empty() ? 0 : static_cast<int>(e.command.q[0].size()));
+            return d["q"];  // a py::object owning the array, not an accessor into the temporary
+                            // dict
+          },
+          "(N, n) commanded joints (m)")
+      .def_property_readonly(
+          "command",
+          [](const AccuracyEvaluation& e) {
+            return command_dict(e.command,
+                                e.command.q.empty() ? 0 : static_cast<int>(e.command.q[0].size()));
+          },
+          "dict as returned by command_path")
+      .def_property_readonly(
+          "attained", [](const AccuracyEvaluation& e) { return attained_array(e.attained); },
+          "(N, R, 3) attained platform poses ^W T_P, [pose, cycle]")
+      .def_property_readonly(
+          "iso", [](const AccuracyEvaluation& e) { return e.iso; }, "the Iso9283Result (a copy)")
       .def("__len__", [](const AccuracyEvaluation& e) { return e.commanded.size(); });
 
-  m.def("evaluate_on_virtual_robot",
-        [](const RobotDescription& model, VirtualRobot& robot, const py::object& path, int repeat,
-           const std::string& frame, double strain_limit, const Eigen::Vector2d& force,
-           double moment, const std::optional<SolverOptions>& solver) {
-          AccuracyOptions o;
-          o.repeat = repeat;
-          o.frame = attained_frame(frame);
-          o.command = command_options(strain_limit, force, moment, solver, true);
-          const std::vector<Pose2<double>> poses = pose_rows(path, "path");
-          py::gil_scoped_release release;
-          return evaluate_on_virtual_robot(model.params, robot, poses, o);
-        },
-        py::arg("model"), py::arg("robot"), py::arg("path"), py::kw_only(), py::arg("repeat") = 30,
-        py::arg("frame") = "model", py::arg("strain_limit") = kDefaultStrainLimit,
-        py::arg("force") = Eigen::Vector2d(0, 0), py::arg("moment") = 0.0,
-        py::arg("options") = py::none(),
-        "Commands `path` ((N, 3) poses) with `model` (a Robot, nominal or identified), then runs "
-        "`repeat` cycles on the VirtualRobot `robot` (every cycle visits the poses in order). "
-        "frame: 'model' maps the camera measurements to W with the model's extrinsics (the "
-        "paper's way, gauge invariant), 'true' with the virtual robot's true ones. force/moment: "
-        "a known load the model commands with (the virtual robot applies its own). Returns an "
-        "AccuracyEvaluation (commanded, q, attained (N, R, 3), iso). Releases the GIL.");
+  m.def(
+      "evaluate_on_virtual_robot",
+      [](const RobotDescription& model, VirtualRobot& robot, const py::object& path, int repeat,
+         const std::string& frame, double strain_limit, const Eigen::Vector2d& force, double moment,
+         const std::optional<SolverOptions>& solver) {
+        AccuracyOptions o;
+        o.repeat = repeat;
+        o.frame = attained_frame(frame);
+        o.command = command_options(strain_limit, force, moment, solver, true);
+        const std::vector<Pose2<double>> poses = pose_rows(path, "path");
+        py::gil_scoped_release release;
+        return evaluate_on_virtual_robot(model.params, robot, poses, o);
+      },
+      py::arg("model"), py::arg("robot"), py::arg("path"), py::kw_only(), py::arg("repeat") = 30,
+      py::arg("frame") = "model", py::arg("strain_limit") = kDefaultStrainLimit,
+      py::arg("force") = Eigen::Vector2d(0, 0), py::arg("moment") = 0.0,
+      py::arg("options") = py::none(),
+      "Commands `path` ((N, 3) poses) with `model` (a Robot, nominal or identified), then runs "
+      "`repeat` cycles on the VirtualRobot `robot` (every cycle visits the poses in order). "
+      "frame: 'model' maps the camera measurements to W with the model's extrinsics (the "
+      "paper's way, gauge invariant), 'true' with the virtual robot's true ones. force/moment: "
+      "a known load the model commands with (the virtual robot applies its own). Returns an "
+      "AccuracyEvaluation (commanded, q, attained (N, R, 3), iso). Releases the GIL.");
 
-  m.def("load_measured_csv",
-        [](const std::string& path) {
-          const MeasuredPath mp = load_measured_csv(path);
-          return py::make_tuple(poses_matrix(mp.commanded), attained_array(mp.attained));
-        },
-        py::arg("path"),
-        "Measured poses CSV (pose,x_c,y_c,theta_c,x,y,theta) -> (commanded (N, 3), attained "
-        "(N, R, 3), or a list of (R_k, 3) arrays when the counts differ). ValueError naming the "
-        "file and line.");
-  m.def("measured_to_csv",
-        [](const py::object& commanded, const py::object& attained) {
-          return measured_to_csv(pose_rows(commanded, "commanded"), attained_rows(attained));
-        },
-        py::arg("commanded"), py::arg("attained"),
-        "The measured poses CSV text (the format load_measured_csv reads).");
+  m.def(
+      "load_measured_csv",
+      [](const std::string& path) {
+        const MeasuredPath mp = load_measured_csv(path);
+        return py::make_tuple(poses_matrix(mp.commanded), attained_array(mp.attained));
+      },
+      py::arg("path"),
+      "Measured poses CSV (pose,x_c,y_c,theta_c,x,y,theta) -> (commanded (N, 3), attained "
+      "(N, R, 3), or a list of (R_k, 3) arrays when the counts differ). ValueError naming the "
+      "file and line.");
+  m.def(
+      "measured_to_csv",
+      [](const py::object& commanded, const py::object& attained) {
+        return measured_to_csv(pose_rows(commanded, "commanded"), attained_rows(attained));
+      },
+      py::arg("commanded"), py::arg("attained"),
+      "The measured poses CSV text (the format load_measured_csv reads).");
 }
 
 }  // namespace pcr::python

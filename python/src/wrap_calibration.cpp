@@ -21,7 +21,8 @@ using InputMatrix = Eigen::Ref<const RowMatrix>;
 
 RowMatrix joints_matrix(const std::vector<JointVector>& rows, int n) {
   RowMatrix out(static_cast<Eigen::Index>(rows.size()), n);
-  for (std::size_t r = 0; r < rows.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = rows[r].transpose();
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    out.row(static_cast<Eigen::Index>(r)) = rows[r].transpose();
   return out;
 }
 
@@ -49,10 +50,11 @@ std::vector<JointVector> joint_rows(const InputMatrix& q, int n, const char* wha
 std::vector<CalibrationSample> samples(const InputMatrix& q, const InputMatrix& measured, int n) {
   const std::vector<JointVector> joints = joint_rows(q, n, "q");
   if (measured.cols() != 3 || measured.rows() != q.rows()) {
-    throw std::invalid_argument("measured: expected an (N, 3) array of pattern poses (m, m, rad) "
-                                "with N = " + std::to_string(q.rows()) + ", got (" +
-                                std::to_string(measured.rows()) + ", " +
-                                std::to_string(measured.cols()) + ")");
+    throw std::invalid_argument(
+        "measured: expected an (N, 3) array of pattern poses (m, m, rad) "
+        "with N = " +
+        std::to_string(q.rows()) + ", got (" + std::to_string(measured.rows()) + ", " +
+        std::to_string(measured.cols()) + ")");
   }
   if (!measured.allFinite()) throw std::invalid_argument("measured: non-finite value");
   std::vector<CalibrationSample> data;
@@ -103,7 +105,8 @@ std::vector<CalibrationStage> stages_from(const py::list& list) {
     stage.name = d.contains("name") ? d["name"].cast<std::string>()
                                     : "stage " + std::to_string(stages.size() + 1);
     if (!d.contains("free")) {
-      throw InputError("stages[" + std::to_string(stages.size()) + "].free: missing required field");
+      throw InputError("stages[" + std::to_string(stages.size()) +
+                       "].free: missing required field");
     }
     stage.free = d["free"].cast<std::vector<std::string>>();
     if (d.contains("bounds_scale")) stage.bounds_scale = d["bounds_scale"].cast<double>();
@@ -229,90 +232,94 @@ SolverOptions options_or_default(const std::optional<SolverOptions>& o, const So
 }  // namespace
 
 void wrap_calibration(py::module_& m) {
-  m.def("parameter_names",
-        [](int num_limbs) {
-          std::vector<std::string> names;
-          for (int k = 0; k < num_parameters(num_limbs); ++k) {
-            names.push_back(parameter_name(parameter_id(k, num_limbs)));
-          }
-          return names;
-        },
-        py::arg("num_limbs"),
-        "Names of the flat parameters (per limb E, d, l, A_x, A_y, alpha, B_x, B_y, beta, gamma, "
-        "then the six extrinsics), e.g. 'l[1]', 'camera_theta'.");
+  m.def(
+      "parameter_names",
+      [](int num_limbs) {
+        std::vector<std::string> names;
+        for (int k = 0; k < num_parameters(num_limbs); ++k) {
+          names.push_back(parameter_name(parameter_id(k, num_limbs)));
+        }
+        return names;
+      },
+      py::arg("num_limbs"),
+      "Names of the flat parameters (per limb E, d, l, A_x, A_y, alpha, B_x, B_y, beta, gamma, "
+      "then the six extrinsics), e.g. 'l[1]', 'camera_theta'.");
 
-  m.def("sensitivity_configurations",
-        [](const RobotDescription& robot, double step, const std::optional<Eigen::VectorXd>& centre) {
-          const JointVector c = centre ? JointVector(*centre) : JointVector();
-          return joints_matrix(sensitivity_configurations(robot.params, step, c),
-                               robot.params.num_limbs);
-        },
-        py::arg("robot"), py::arg("step") = 1e-3, py::arg("centre") = py::none(),
-        "The 3^n grid of joint values (step in m) around the stroke centre, minus the centre.");
+  m.def(
+      "sensitivity_configurations",
+      [](const RobotDescription& robot, double step, const std::optional<Eigen::VectorXd>& centre) {
+        const JointVector c = centre ? JointVector(*centre) : JointVector();
+        return joints_matrix(sensitivity_configurations(robot.params, step, c),
+                             robot.params.num_limbs);
+      },
+      py::arg("robot"), py::arg("step") = 1e-3, py::arg("centre") = py::none(),
+      "The 3^n grid of joint values (step in m) around the stroke centre, minus the centre.");
 
-  m.def("platform_parameter_jacobian",
-        [](const RobotDescription& robot, const Eigen::VectorXd& q, const Eigen::Vector2d& force,
-           double moment, const std::optional<SolverOptions>& options) -> py::object {
-          if (q.size() != robot.params.num_limbs || !q.allFinite()) {
-            throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
-                                        " finite joint values (m)");
-          }
-          Eigen::MatrixXd jacobian;
-          bool ok;
-          {
-            py::gil_scoped_release release;
-            ok = platform_parameter_jacobian(robot.params, JointVector(q), &jacobian,
-                                             make_load(force, moment),
-                                             options_or_default(options, SolverOptions()));
-          }
-          if (!ok) return py::none();
-          return py::cast(jacobian);
-        },
-        py::arg("robot"), py::arg("q"), py::kw_only(), py::arg("force") = Eigen::Vector2d(0, 0),
-        py::arg("moment") = 0.0, py::arg("options") = py::none(),
-        "d(^W T_P)/d(limb parameters) at q: a (3, 10 n) array (rows x, y, theta; columns in "
-        "parameter_names order), exact (implicit function theorem); None when FK fails.");
+  m.def(
+      "platform_parameter_jacobian",
+      [](const RobotDescription& robot, const Eigen::VectorXd& q, const Eigen::Vector2d& force,
+         double moment, const std::optional<SolverOptions>& options) -> py::object {
+        if (q.size() != robot.params.num_limbs || !q.allFinite()) {
+          throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
+                                      " finite joint values (m)");
+        }
+        Eigen::MatrixXd jacobian;
+        bool ok;
+        {
+          py::gil_scoped_release release;
+          ok = platform_parameter_jacobian(robot.params, JointVector(q), &jacobian,
+                                           make_load(force, moment),
+                                           options_or_default(options, SolverOptions()));
+        }
+        if (!ok) return py::none();
+        return py::cast(jacobian);
+      },
+      py::arg("robot"), py::arg("q"), py::kw_only(), py::arg("force") = Eigen::Vector2d(0, 0),
+      py::arg("moment") = 0.0, py::arg("options") = py::none(),
+      "d(^W T_P)/d(limb parameters) at q: a (3, 10 n) array (rows x, y, theta; columns in "
+      "parameter_names order), exact (implicit function theorem); None when FK fails.");
 
-  m.def("sensitivity",
-        [](const RobotDescription& robot, double step, const std::optional<Eigen::VectorXd>& centre,
-           const Eigen::Vector2d& force, double moment, const std::optional<SolverOptions>& solver) {
-          SensitivityOptions options;
-          options.step = step;
-          if (centre) options.centre = JointVector(*centre);
-          options.load = make_load(force, moment);
-          options.solver = options_or_default(solver, SolverOptions());
-          SensitivityReport report;
-          {
-            py::gil_scoped_release release;
-            report = sensitivity_analysis(robot, options);
-          }
-          py::list rows;
-          for (const SensitivityRow& r : report.rows) {
-            py::dict d;
-            d["kind"] = r.kind;
-            d["dx"] = r.dx;
-            d["dy"] = r.dy;
-            d["dtheta"] = r.dtheta;
-            d["half_width"] = r.half_width;
-            d["position_error"] = r.position_error;
-            d["orientation_error"] = r.orientation_error;
-            rows.append(d);
-          }
+  m.def(
+      "sensitivity",
+      [](const RobotDescription& robot, double step, const std::optional<Eigen::VectorXd>& centre,
+         const Eigen::Vector2d& force, double moment, const std::optional<SolverOptions>& solver) {
+        SensitivityOptions options;
+        options.step = step;
+        if (centre) options.centre = JointVector(*centre);
+        options.load = make_load(force, moment);
+        options.solver = options_or_default(solver, SolverOptions());
+        SensitivityReport report;
+        {
+          py::gil_scoped_release release;
+          report = sensitivity_analysis(robot, options);
+        }
+        py::list rows;
+        for (const SensitivityRow& r : report.rows) {
           py::dict d;
-          d["step"] = report.step;
-          d["configurations"] = joints_matrix(report.configurations, robot.params.num_limbs);
-          d["rows"] = rows;
-          d["ranking"] = report.ranking;
-          d["table"] = sensitivity_table_text(report);
-          return d;
-        },
-        py::arg("robot"), py::kw_only(), py::arg("step") = 1e-3, py::arg("centre") = py::none(),
-        py::arg("force") = Eigen::Vector2d(0, 0), py::arg("moment") = 0.0,
-        py::arg("options") = py::none(),
-        "The paper's Table 2 for `robot`: a dict with 'rows' (kind, dx, dy, dtheta: max |d pose / "
-        "d p| in SI units; half_width; position_error m; orientation_error rad), 'ranking' "
-        "(indices into rows, most influential first), 'configurations' and 'table' (text). "
-        "RuntimeError when FK fails at a configuration.");
+          d["kind"] = r.kind;
+          d["dx"] = r.dx;
+          d["dy"] = r.dy;
+          d["dtheta"] = r.dtheta;
+          d["half_width"] = r.half_width;
+          d["position_error"] = r.position_error;
+          d["orientation_error"] = r.orientation_error;
+          rows.append(d);
+        }
+        py::dict d;
+        d["step"] = report.step;
+        d["configurations"] = joints_matrix(report.configurations, robot.params.num_limbs);
+        d["rows"] = rows;
+        d["ranking"] = report.ranking;
+        d["table"] = sensitivity_table_text(report);
+        return d;
+      },
+      py::arg("robot"), py::kw_only(), py::arg("step") = 1e-3, py::arg("centre") = py::none(),
+      py::arg("force") = Eigen::Vector2d(0, 0), py::arg("moment") = 0.0,
+      py::arg("options") = py::none(),
+      "The paper's Table 2 for `robot`: a dict with 'rows' (kind, dx, dy, dtheta: max |d pose / "
+      "d p| in SI units; half_width; position_error m; orientation_error rad), 'ranking' "
+      "(indices into rows, most influential first), 'configurations' and 'table' (text). "
+      "RuntimeError when FK fails at a configuration.");
 
   py::class_<VirtualRobot>(m, "VirtualRobot",
                            "A simulated robot: a truth drawn from the nominal description inside "
@@ -346,180 +353,193 @@ void wrap_calibration(py::module_& m) {
            "noise_position (m) and noise_angle (rad) are standard deviations; misalignments adds "
            "U(-h, h) (rad) to beta and gamma; unequal_diameters U(-h, h) (m) to each d; force "
            "(fx, fy) in N with moment (N m) applies a constant external load on the platform.")
-      .def_property_readonly("nominal", [](const VirtualRobot& v) { return v.nominal(); },
-                             "the nominal description (a copy)")
-      .def_property_readonly("truth", [](const VirtualRobot& v) { return v.truth(); },
-                             "the true description (a copy)")
-      .def_property_readonly("load",
-                             [](const VirtualRobot& v) {
-                               return py::make_tuple(Eigen::Vector2d(v.load().force), v.load().moment);
-                             },
-                             "the applied load: (force (fx, fy) N, moment N m)")
+      .def_property_readonly(
+          "nominal", [](const VirtualRobot& v) { return v.nominal(); },
+          "the nominal description (a copy)")
+      .def_property_readonly(
+          "truth", [](const VirtualRobot& v) { return v.truth(); }, "the true description (a copy)")
+      .def_property_readonly(
+          "load",
+          [](const VirtualRobot& v) {
+            return py::make_tuple(Eigen::Vector2d(v.load().force), v.load().moment);
+          },
+          "the applied load: (force (fx, fy) N, moment N m)")
       .def("measure", &virtual_measure, py::arg("q"),
            "Moves to q (m) and measures ^Se T_M. One configuration -> dict(ok, measured, exact, "
            "platform (Pose), status); an (N, n) array -> dict of arrays (N, 3), NaN where ok is "
            "False. Warm-started from the previous measurement. Releases the GIL.");
 
-  m.def("read_dataset",
-        [](const std::string& path, int num_joints) {
-          const Dataset d = read_dataset(path, num_joints);
-          return py::make_tuple(joints_matrix(d.q, d.num_joints), poses_matrix(d.poses));
-        },
-        py::arg("path"), py::arg("num_joints") = -1,
-        "Reads a calibration dataset CSV (q1..qn,x,y,theta) -> (q (N, n) m, measured (N, 3) "
-        "m, m, rad). ValueError naming the file, line and column.");
-  m.def("write_dataset",
-        [](const std::string& path, const InputMatrix& q, const InputMatrix& measured) {
-          Dataset d;
-          d.num_joints = static_cast<int>(q.cols());
-          for (const CalibrationSample& s : samples(q, measured, d.num_joints)) d.add(s.q, s.measured);
-          write_dataset(d, path);
-        },
-        py::arg("path"), py::arg("q"), py::arg("measured"),
-        "Writes a dataset CSV atomically (full precision).");
-  m.def("read_configurations",
-        [](const std::string& path, int num_joints) {
-          const std::vector<JointVector> rows = read_configurations(path, num_joints);
-          const int n = rows.empty() ? std::max(num_joints, 0) : static_cast<int>(rows[0].size());
-          return joints_matrix(rows, n);
-        },
-        py::arg("path"), py::arg("num_joints") = -1,
-        "Reads joint configurations (q1..qn, m) -> (N, n) array.");
-  m.def("write_configurations",
-        [](const std::string& path, const InputMatrix& q) {
-          write_configurations(joint_rows(q, static_cast<int>(q.cols()), "q"), path);
-        },
-        py::arg("path"), py::arg("q"), "Writes joint configurations (m) atomically.");
+  m.def(
+      "read_dataset",
+      [](const std::string& path, int num_joints) {
+        const Dataset d = read_dataset(path, num_joints);
+        return py::make_tuple(joints_matrix(d.q, d.num_joints), poses_matrix(d.poses));
+      },
+      py::arg("path"), py::arg("num_joints") = -1,
+      "Reads a calibration dataset CSV (q1..qn,x,y,theta) -> (q (N, n) m, measured (N, 3) "
+      "m, m, rad). ValueError naming the file, line and column.");
+  m.def(
+      "write_dataset",
+      [](const std::string& path, const InputMatrix& q, const InputMatrix& measured) {
+        Dataset d;
+        d.num_joints = static_cast<int>(q.cols());
+        for (const CalibrationSample& s : samples(q, measured, d.num_joints))
+          d.add(s.q, s.measured);
+        write_dataset(d, path);
+      },
+      py::arg("path"), py::arg("q"), py::arg("measured"),
+      "Writes a dataset CSV atomically (full precision).");
+  m.def(
+      "read_configurations",
+      [](const std::string& path, int num_joints) {
+        const std::vector<JointVector> rows = read_configurations(path, num_joints);
+        const int n = rows.empty() ? std::max(num_joints, 0) : static_cast<int>(rows[0].size());
+        return joints_matrix(rows, n);
+      },
+      py::arg("path"), py::arg("num_joints") = -1,
+      "Reads joint configurations (q1..qn, m) -> (N, n) array.");
+  m.def(
+      "write_configurations",
+      [](const std::string& path, const InputMatrix& q) {
+        write_configurations(joint_rows(q, static_cast<int>(q.cols()), "q"), path);
+      },
+      py::arg("path"), py::arg("q"), "Writes joint configurations (m) atomically.");
 
-  m.def("admissible_configuration",
-        [](const RobotDescription& robot, const Eigen::VectorXd& q, double strain_limit) {
-          if (q.size() != robot.params.num_limbs) {
-            throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
-                                        " joint values (m)");
-          }
+  m.def(
+      "admissible_configuration",
+      [](const RobotDescription& robot, const Eigen::VectorXd& q, double strain_limit) {
+        if (q.size() != robot.params.num_limbs) {
+          throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
+                                      " joint values (m)");
+        }
+        py::gil_scoped_release release;
+        return admissible_configuration(robot.params, JointVector(q), strain_limit,
+                                        sampling_solver_options());
+      },
+      py::arg("robot"), py::arg("q"), py::arg("strain_limit") = 0.01,
+      "True when FK from home converges at q (m) with max bending strain <= strain_limit.");
+
+  m.def(
+      "poisson_disc_sample",
+      [](const RobotDescription& robot, int count, std::uint64_t seed, double min_distance,
+         const std::optional<Eigen::VectorXd>& box_min,
+         const std::optional<Eigen::VectorXd>& box_max, double strain_limit, int attempts,
+         const Eigen::Vector2d& force, double moment) {
+        SamplingOptions o;
+        o.count = count;
+        o.seed = seed;
+        o.min_distance = min_distance;
+        if (box_min) o.box_min = JointVector(*box_min);
+        if (box_max) o.box_max = JointVector(*box_max);
+        o.strain_limit = strain_limit;
+        o.attempts = attempts;
+        o.load = make_load(force, moment);
+        SamplingResult r;
+        {
           py::gil_scoped_release release;
-          return admissible_configuration(robot.params, JointVector(q), strain_limit,
-                                          sampling_solver_options());
-        },
-        py::arg("robot"), py::arg("q"), py::arg("strain_limit") = 0.01,
-        "True when FK from home converges at q (m) with max bending strain <= strain_limit.");
+          r = poisson_disc_sample(robot.params, o);
+        }
+        py::dict d;
+        d["configurations"] = joints_matrix(r.configurations, robot.params.num_limbs);
+        d["min_distance"] = r.min_distance;
+        d["box_min"] = Eigen::VectorXd(r.box_min);
+        d["box_max"] = Eigen::VectorXd(r.box_max);
+        d["candidates"] = r.candidates;
+        d["rejected_fk"] = r.rejected_fk;
+        d["rejected_strain"] = r.rejected_strain;
+        d["complete"] = r.complete;
+        return d;
+      },
+      py::arg("robot"), py::kw_only(), py::arg("count") = kDefaultCalibrationCount,
+      py::arg("seed") = 1, py::arg("min_distance") = 0.0, py::arg("box_min") = py::none(),
+      py::arg("box_max") = py::none(), py::arg("strain_limit") = 0.01, py::arg("attempts") = 30,
+      py::arg("force") = Eigen::Vector2d(0, 0), py::arg("moment") = 0.0,
+      "Poisson-disc sample of `count` reachable joint configurations (Bridson), every pair at "
+      "least min_distance apart (m; 0 = chosen from count). Returns a dict: configurations "
+      "(count, n), min_distance, box_min, box_max, candidates, rejected_fk, rejected_strain, "
+      "complete. Releases the GIL.");
 
-  m.def("poisson_disc_sample",
-        [](const RobotDescription& robot, int count, std::uint64_t seed, double min_distance,
-           const std::optional<Eigen::VectorXd>& box_min,
-           const std::optional<Eigen::VectorXd>& box_max, double strain_limit, int attempts,
-           const Eigen::Vector2d& force, double moment) {
-          SamplingOptions o;
-          o.count = count;
-          o.seed = seed;
-          o.min_distance = min_distance;
-          if (box_min) o.box_min = JointVector(*box_min);
-          if (box_max) o.box_max = JointVector(*box_max);
-          o.strain_limit = strain_limit;
-          o.attempts = attempts;
-          o.load = make_load(force, moment);
-          SamplingResult r;
-          {
-            py::gil_scoped_release release;
-            r = poisson_disc_sample(robot.params, o);
-          }
-          py::dict d;
-          d["configurations"] = joints_matrix(r.configurations, robot.params.num_limbs);
-          d["min_distance"] = r.min_distance;
-          d["box_min"] = Eigen::VectorXd(r.box_min);
-          d["box_max"] = Eigen::VectorXd(r.box_max);
-          d["candidates"] = r.candidates;
-          d["rejected_fk"] = r.rejected_fk;
-          d["rejected_strain"] = r.rejected_strain;
-          d["complete"] = r.complete;
-          return d;
-        },
-        py::arg("robot"), py::kw_only(), py::arg("count") = kDefaultCalibrationCount,
-        py::arg("seed") = 1, py::arg("min_distance") = 0.0, py::arg("box_min") = py::none(),
-        py::arg("box_max") = py::none(), py::arg("strain_limit") = 0.01, py::arg("attempts") = 30,
-        py::arg("force") = Eigen::Vector2d(0, 0), py::arg("moment") = 0.0,
-        "Poisson-disc sample of `count` reachable joint configurations (Bridson), every pair at "
-        "least min_distance apart (m; 0 = chosen from count). Returns a dict: configurations "
-        "(count, n), min_distance, box_min, box_max, candidates, rejected_fk, rejected_strain, "
-        "complete. Releases the GIL.");
+  m.def(
+      "default_stages", [] { return stages_list(default_stages()); },
+      "The paper's three calibration stages, as a list of dicts (name, free, bounds_scale).");
+  m.def(
+      "load_calibration_stages",
+      [](const std::string& path) { return stages_list(load_calibration_stages(path)); },
+      py::arg("path"), "Reads a stages JSON file (ValueError naming the file, field, value).");
 
-  m.def("default_stages", [] { return stages_list(default_stages()); },
-        "The paper's three calibration stages, as a list of dicts (name, free, bounds_scale).");
-  m.def("load_calibration_stages",
-        [](const std::string& path) { return stages_list(load_calibration_stages(path)); },
-        py::arg("path"), "Reads a stages JSON file (ValueError naming the file, field, value).");
+  m.def(
+      "pose_errors",
+      [](const RobotDescription& robot, const InputMatrix& q, const InputMatrix& measured) {
+        const std::vector<CalibrationSample> data = samples(q, measured, robot.params.num_limbs);
+        PoseErrorStats stats;
+        {
+          py::gil_scoped_release release;
+          stats = pose_errors(robot.params, data);
+        }
+        return stats_dict(stats);
+      },
+      py::arg("robot"), py::arg("q"), py::arg("measured"),
+      "The paper's Table 3 statistics of `robot` on (q (N, n) m, measured ^Se T_M (N, 3)): "
+      "dict of max_p, mean_p, min_p (m, Eq. 8), max_theta, mean_theta, min_theta (rad, Eq. 9), "
+      "count, failed.");
 
-  m.def("pose_errors",
-        [](const RobotDescription& robot, const InputMatrix& q, const InputMatrix& measured) {
-          const std::vector<CalibrationSample> data = samples(q, measured, robot.params.num_limbs);
-          PoseErrorStats stats;
-          {
-            py::gil_scoped_release release;
-            stats = pose_errors(robot.params, data);
-          }
-          return stats_dict(stats);
-        },
-        py::arg("robot"), py::arg("q"), py::arg("measured"),
-        "The paper's Table 3 statistics of `robot` on (q (N, n) m, measured ^Se T_M (N, 3)): "
-        "dict of max_p, mean_p, min_p (m, Eq. 8), max_theta, mean_theta, min_theta (rad, Eq. 9), "
-        "count, failed.");
-
-  m.def("calibrate",
-        [](const RobotDescription& nominal, const InputMatrix& q, const InputMatrix& measured,
-           const py::object& stages, double orientation_weight, double residual_scale,
-           const std::string& derivatives, int max_iterations, bool fix_gauge,
-           double gauge_prior_weight, bool compute_covariance, const py::object& progress) {
-          CalibrationOptions o;
-          if (py::isinstance<py::str>(stages)) {
-            o.stages = load_calibration_stages(stages.cast<std::string>());
-          } else if (!stages.is_none()) {
-            o.stages = stages_from(stages.cast<py::list>());
-          }
-          o.orientation_weight = orientation_weight;
-          o.residual_scale = residual_scale;
-          o.derivatives = derivative_mode(derivatives);
-          o.max_iterations = max_iterations;
-          o.fix_gauge = fix_gauge;
-          o.gauge_prior_weight = gauge_prior_weight;
-          o.compute_covariance = compute_covariance;
-          // A Python exception in `progress` must not unwind through Ceres: it is kept, later
-          // lines are dropped, and it is raised once calibrate() has returned.
-          auto progress_error = std::make_shared<std::unique_ptr<py::error_already_set>>();
-          if (!progress.is_none()) {
-            o.progress = [progress, progress_error](const std::string& line) {
-              py::gil_scoped_acquire acquire;
-              if (*progress_error) return;
-              try {
-                progress(line);
-              } catch (py::error_already_set& e) {
-                *progress_error = std::make_unique<py::error_already_set>(std::move(e));
-              }
-            };
-          }
-          const std::vector<CalibrationSample> data = samples(q, measured, nominal.params.num_limbs);
-          CalibrationResult result;
-          {
-            py::gil_scoped_release release;
-            result = calibrate(nominal, data, o);
-          }
-          if (*progress_error) throw std::move(**progress_error);
-          RobotDescription identified = nominal;  // uncertainty section kept from the nominal
-          identified.params = result.identified;
-          return py::make_tuple(identified, report_dict(result));
-        },
-        py::arg("nominal"), py::arg("q"), py::arg("measured"), py::kw_only(),
-        py::arg("stages") = py::none(), py::arg("orientation_weight") = kDefaultOrientationWeight,
-        py::arg("residual_scale") = kDefaultResidualScale, py::arg("derivatives") = "implicit",
-        py::arg("max_iterations") = 100, py::arg("fix_gauge") = true,
-        py::arg("gauge_prior_weight") = 1e-3, py::arg("compute_covariance") = true,
-        py::arg("progress") = py::none(),
-        "Staged, bounded identification (the paper's Section 5) of `nominal` from q (N, n) (m) "
-        "and the measured pattern poses ^Se T_M (N, 3) (m, m, rad). stages: None (the paper's "
-        "three), a list of dicts (name, free, bounds_scale) or a stages JSON path. "
-        "orientation_weight: w of Eq. 6 (m/rad); residual_scale (m). derivatives: 'implicit', "
-        "'numeric' or 'autodiff'. progress: optional callable(str). Returns (identified Robot, "
-        "report dict: stages, parameters, gauge, free_count, jacobian_rank, singular_values, "
-        "residual_variance, covariance_ok). Releases the GIL.");
+  m.def(
+      "calibrate",
+      [](const RobotDescription& nominal, const InputMatrix& q, const InputMatrix& measured,
+         const py::object& stages, double orientation_weight, double residual_scale,
+         const std::string& derivatives, int max_iterations, bool fix_gauge,
+         double gauge_prior_weight, bool compute_covariance, const py::object& progress) {
+        CalibrationOptions o;
+        if (py::isinstance<py::str>(stages)) {
+          o.stages = load_calibration_stages(stages.cast<std::string>());
+        } else if (!stages.is_none()) {
+          o.stages = stages_from(stages.cast<py::list>());
+        }
+        o.orientation_weight = orientation_weight;
+        o.residual_scale = residual_scale;
+        o.derivatives = derivative_mode(derivatives);
+        o.max_iterations = max_iterations;
+        o.fix_gauge = fix_gauge;
+        o.gauge_prior_weight = gauge_prior_weight;
+        o.compute_covariance = compute_covariance;
+        // A Python exception in `progress` must not unwind through Ceres: it is kept, later
+        // lines are dropped, and it is raised once calibrate() has returned.
+        auto progress_error = std::make_shared<std::unique_ptr<py::error_already_set>>();
+        if (!progress.is_none()) {
+          o.progress = [progress, progress_error](const std::string& line) {
+            py::gil_scoped_acquire acquire;
+            if (*progress_error) return;
+            try {
+              progress(line);
+            } catch (py::error_already_set& e) {
+              *progress_error = std::make_unique<py::error_already_set>(std::move(e));
+            }
+          };
+        }
+        const std::vector<CalibrationSample> data = samples(q, measured, nominal.params.num_limbs);
+        CalibrationResult result;
+        {
+          py::gil_scoped_release release;
+          result = calibrate(nominal, data, o);
+        }
+        if (*progress_error) throw std::move(**progress_error);
+        RobotDescription identified = nominal;  // uncertainty section kept from the nominal
+        identified.params = result.identified;
+        return py::make_tuple(identified, report_dict(result));
+      },
+      py::arg("nominal"), py::arg("q"), py::arg("measured"), py::kw_only(),
+      py::arg("stages") = py::none(), py::arg("orientation_weight") = kDefaultOrientationWeight,
+      py::arg("residual_scale") = kDefaultResidualScale, py::arg("derivatives") = "implicit",
+      py::arg("max_iterations") = 100, py::arg("fix_gauge") = true,
+      py::arg("gauge_prior_weight") = 1e-3, py::arg("compute_covariance") = true,
+      py::arg("progress") = py::none(),
+      "Staged, bounded identification (the paper's Section 5) of `nominal` from q (N, n) (m) "
+      "and the measured pattern poses ^Se T_M (N, 3) (m, m, rad). stages: None (the paper's "
+      "three), a list of dicts (name, free, bounds_scale) or a stages JSON path. "
+      "orientation_weight: w of Eq. 6 (m/rad); residual_scale (m). derivatives: 'implicit', "
+      "'numeric' or 'autodiff'. progress: optional callable(str). Returns (identified Robot, "
+      "report dict: stages, parameters, gauge, free_count, jacobian_rank, singular_values, "
+      "residual_variance, covariance_ok). Releases the GIL.");
 }
 
 }  // namespace pcr::python

@@ -1,8 +1,8 @@
 // Robot.forward / Robot.inverse / Robot.home, pcr.SolverOptions, pcr.Solution, pcr.BatchResult.
-#include <type_traits>
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <type_traits>
 
 #include "bindings.hpp"
 #include "solve.hpp"
@@ -35,10 +35,11 @@ py::list rod_shapes(const RobotParams<double>& robot, const JointVector& q,
   const int n = robot.num_limbs;
   std::vector<RowMatrix> shapes(static_cast<std::size_t>(n), RowMatrix(rod_steps + 1, 4));
   std::vector<int> rows(static_cast<std::size_t>(n), 0);
-  visit_rod_shapes(robot, q, wrenches, rod_steps, [&](int limb, double s, const RodState<double>& st) {
-    const auto i = static_cast<std::size_t>(limb);
-    shapes[i].row(rows[i]++) << s, st.x, st.y, st.theta;
-  });
+  visit_rod_shapes(robot, q, wrenches, rod_steps,
+                   [&](int limb, double s, const RodState<double>& st) {
+                     const auto i = static_cast<std::size_t>(limb);
+                     shapes[i].row(rows[i]++) << s, st.x, st.y, st.theta;
+                   });
   py::list out;
   for (const RowMatrix& shape : shapes) out.append(py::cast(shape));
   return out;
@@ -57,7 +58,8 @@ Solution to_python(const RobotParams<double>& robot, const S& s, bool usable, bo
   if (input_q != nullptr) out.q = *input_q;
   out.pose = usable ? s.pose : Pose2<double>{nan, nan, nan};
   out.wrenches = s.wrenches;
-  for (int i = 0; i < robot.num_limbs && !usable; ++i) out.wrenches[i] = Wrench<double>{nan, nan, nan};
+  for (int i = 0; i < robot.num_limbs && !usable; ++i)
+    out.wrenches[i] = Wrench<double>{nan, nan, nan};
   if (!usable) out.summary.max_strain = nan;
   if (usable && shapes) out.shapes = rod_shapes(robot, s.q, s.wrenches, s.summary.rod_steps);
   out.jacobian = s.jacobian;
@@ -86,8 +88,10 @@ InverseSolution as_inverse(const Solution& s) {
 }
 
 /// Array-like -> float64 C-contiguous array of 1 or 2 dimensions with `columns` columns.
-py::array_t<double, py::array::c_style | py::array::forcecast> input_array(
-    const py::object& object, int columns, const char* what, const char* unit) {
+py::array_t<double, py::array::c_style | py::array::forcecast> input_array(const py::object& object,
+                                                                           int columns,
+                                                                           const char* what,
+                                                                           const char* unit) {
   using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
   Array a;
   try {
@@ -101,7 +105,8 @@ py::array_t<double, py::array::c_style | py::array::forcecast> input_array(
     std::string got;
     if (a) {
       got = "shape (";
-      for (py::ssize_t d = 0; d < a.ndim(); ++d) got += (d ? ", " : "") + std::to_string(a.shape(d));
+      for (py::ssize_t d = 0; d < a.ndim(); ++d)
+        got += (d ? ", " : "") + std::to_string(a.shape(d));
       got += a.ndim() == 1 ? ",)" : ")";
     } else {
       got = py::repr(object).cast<std::string>();
@@ -144,11 +149,10 @@ BatchResult allocate_batch(py::ssize_t rows, int n, BatchBuffers& buffers) {
   b.residual = py::array_t<double>(rows);
   b.max_strain = py::array_t<double>(rows);
   b.rod_steps = py::array_t<int>(rows);
-  buffers = BatchBuffers{b.q.mutable_data(),         b.pose.mutable_data(),
-                         b.wrenches.mutable_data(),  b.converged.mutable_data(),
-                         b.status_code.mutable_data(), b.iterations.mutable_data(),
-                         b.residual.mutable_data(),  b.max_strain.mutable_data(),
-                         b.rod_steps.mutable_data()};
+  buffers = BatchBuffers{
+      b.q.mutable_data(),         b.pose.mutable_data(),        b.wrenches.mutable_data(),
+      b.converged.mutable_data(), b.status_code.mutable_data(), b.iterations.mutable_data(),
+      b.residual.mutable_data(),  b.max_strain.mutable_data(),  b.rod_steps.mutable_data()};
   return b;
 }
 
@@ -271,7 +275,8 @@ void wrap_kinematics(py::module_& m) {
                      "target of the estimated error of solved angles when rod_steps = 0 (rad)")
       .def_readwrite("min_rod_steps", &SolverOptions::min_rod_steps)
       .def_readwrite("max_rod_steps", &SolverOptions::max_rod_steps)
-      .def_readwrite("max_iterations", &SolverOptions::max_iterations, "Newton iterations per solve")
+      .def_readwrite("max_iterations", &SolverOptions::max_iterations,
+                     "Newton iterations per solve")
       .def_readwrite("tolerance", &SolverOptions::tolerance,
                      "max-norm of the scaled residual (lengths / l, forces / (EI / l^2))")
       .def_readwrite("max_line_search", &SolverOptions::max_line_search)
@@ -284,35 +289,46 @@ void wrap_kinematics(py::module_& m) {
   py::class_<Solution>(m, "Solution",
                        "One solved configuration. When the solve failed (converged is False; for "
                        "IK also out_of_range is a valid equilibrium) q/pose/wrenches are NaN.")
-      .def_property_readonly("q", [](const Solution& s) -> Eigen::VectorXd { return s.q; },
-                             "joint values (m)")
-      .def_property_readonly("pose", [](const Solution& s) { return s.pose; },
-                             "platform pose ^W T_P (m, m, rad)")
-      .def_property_readonly("wrenches", [](const Solution& s) {
-        RowMatrix w(s.num_limbs, 3);
-        for (int i = 0; i < s.num_limbs; ++i) w.row(i) << s.wrenches[i].nx, s.wrenches[i].ny, s.wrenches[i].m;
-        return w;
-      }, "(n, 3) proximal wrench of each rod: nx, ny (N), m (N m)")
+      .def_property_readonly(
+          "q", [](const Solution& s) -> Eigen::VectorXd { return s.q; }, "joint values (m)")
+      .def_property_readonly(
+          "pose", [](const Solution& s) { return s.pose; }, "platform pose ^W T_P (m, m, rad)")
+      .def_property_readonly(
+          "wrenches",
+          [](const Solution& s) {
+            RowMatrix w(s.num_limbs, 3);
+            for (int i = 0; i < s.num_limbs; ++i)
+              w.row(i) << s.wrenches[i].nx, s.wrenches[i].ny, s.wrenches[i].m;
+            return w;
+          },
+          "(n, 3) proximal wrench of each rod: nx, ny (N), m (N m)")
       .def_property_readonly("converged", [](const Solution& s) { return s.summary.converged(); })
-      .def_property_readonly("status", [](const Solution& s) { return std::string(to_string(s.summary.status)); },
-                             "converged, singular, bifurcation, max_iterations, non_finite, out_of_range, "
-                             "unsupported, invalid_input")
+      .def_property_readonly(
+          "status", [](const Solution& s) { return std::string(to_string(s.summary.status)); },
+          "converged, singular, bifurcation, max_iterations, non_finite, out_of_range, "
+          "unsupported, invalid_input")
       .def_property_readonly("status_code", [](const Solution& s) { return s.summary.status; })
-      .def_property_readonly("iterations", [](const Solution& s) { return s.summary.iterations; },
-                             "Newton iterations (warm attempt and cold retry included)")
-      .def_property_readonly("residual", [](const Solution& s) { return s.summary.final_residual_norm; },
-                             "final max-norm of the scaled shooting residual")
-      .def_property_readonly("max_strain", [](const Solution& s) { return s.summary.max_strain; },
-                             "largest bending strain |kappa| d / 2 over the rods")
-      .def_property_readonly("rod_steps", [](const Solution& s) { return s.summary.rod_steps; },
-                             "RK4 steps per rod of this solution")
-      .def_property_readonly("position_error_estimate",
-                             [](const Solution& s) { return s.summary.position_error_estimate; },
-                             "estimated discretisation error of the solved lengths (m)")
-      .def_property_readonly("angle_error_estimate",
-                             [](const Solution& s) { return s.summary.angle_error_estimate; },
-                             "estimated discretisation error of the solved angles (rad)")
-      .def_property_readonly("continuation_steps", [](const Solution& s) { return s.summary.continuation_steps; })
+      .def_property_readonly(
+          "iterations", [](const Solution& s) { return s.summary.iterations; },
+          "Newton iterations (warm attempt and cold retry included)")
+      .def_property_readonly(
+          "residual", [](const Solution& s) { return s.summary.final_residual_norm; },
+          "final max-norm of the scaled shooting residual")
+      .def_property_readonly(
+          "max_strain", [](const Solution& s) { return s.summary.max_strain; },
+          "largest bending strain |kappa| d / 2 over the rods")
+      .def_property_readonly(
+          "rod_steps", [](const Solution& s) { return s.summary.rod_steps; },
+          "RK4 steps per rod of this solution")
+      .def_property_readonly(
+          "position_error_estimate",
+          [](const Solution& s) { return s.summary.position_error_estimate; },
+          "estimated discretisation error of the solved lengths (m)")
+      .def_property_readonly(
+          "angle_error_estimate", [](const Solution& s) { return s.summary.angle_error_estimate; },
+          "estimated discretisation error of the solved angles (rad)")
+      .def_property_readonly("continuation_steps",
+                             [](const Solution& s) { return s.summary.continuation_steps; })
       .def_readonly("shapes", &Solution::shapes,
                     "None, or (with shapes=True) one (steps + 1, 4) array per rod: s, x, y (m), "
                     "theta (rad) along the rod, in W")
@@ -354,20 +370,20 @@ void wrap_kinematics(py::module_& m) {
            "array -> BatchResult, warm-started along the rows like `pcr ik`. Joints outside "
            "q_range give status out_of_range (converged False, q kept). With 2 limbs theta is "
            "solved for. Releases the GIL.")
-      .def("home",
-           [](const RobotDescription& r, bool shapes, const Eigen::Vector2d& force, double moment,
-              const std::optional<SolverOptions>& options) {
-             const PlatformLoad<double> load = make_load(force, moment);
-             ForwardSolution s;
-             {
-               py::gil_scoped_release release;
-               s = home_solution(r.params, options_or_default(options), load);
-             }
-             return to_python(r.params, s, s.summary.converged(), shapes);
-           },
-           py::kw_only(), py::arg("shapes") = false, py::arg("force") = Eigen::Vector2d(0, 0),
-           py::arg("moment") = 0.0, py::arg("options") = py::none(),
-           "The home solution q = 0 (m).");
+      .def(
+          "home",
+          [](const RobotDescription& r, bool shapes, const Eigen::Vector2d& force, double moment,
+             const std::optional<SolverOptions>& options) {
+            const PlatformLoad<double> load = make_load(force, moment);
+            ForwardSolution s;
+            {
+              py::gil_scoped_release release;
+              s = home_solution(r.params, options_or_default(options), load);
+            }
+            return to_python(r.params, s, s.summary.converged(), shapes);
+          },
+          py::kw_only(), py::arg("shapes") = false, py::arg("force") = Eigen::Vector2d(0, 0),
+          py::arg("moment") = 0.0, py::arg("options") = py::none(), "The home solution q = 0 (m).");
 }
 
 }  // namespace pcr::python

@@ -34,8 +34,8 @@ std::string pose_repr(const Pose2<double>& p) {
 py::list limb_list(RobotDescription& robot, const py::object& owner) {
   py::list limbs;
   for (int i = 0; i < robot.params.num_limbs; ++i) {
-    limbs.append(py::cast(&robot.params.limb(i), py::return_value_policy::reference_internal,
-                          owner));
+    limbs.append(
+        py::cast(&robot.params.limb(i), py::return_value_policy::reference_internal, owner));
   }
   return limbs;
 }
@@ -56,27 +56,32 @@ void set_limbs(RobotDescription& robot, const std::vector<LimbParams<double>>& l
 void wrap_robot(py::module_& m) {
   py::class_<Pose2<double>>(m, "Pose",
                             "A planar pose ^A T_B: x, y (m) and theta (rad) of frame B in frame A.")
-      .def(py::init([](double x, double y, double theta) { return Pose2<double>{x, y, theta}; }),
+      .def(py::init([](double x, double y, double theta) {
+             return Pose2<double>{x, y, theta};
+           }),
            py::arg("x") = 0.0, py::arg("y") = 0.0, py::arg("theta") = 0.0)
       .def_readwrite("x", &Pose2<double>::x, "m")
       .def_readwrite("y", &Pose2<double>::y, "m")
       .def_readwrite("theta", &Pose2<double>::theta, "rad")
-      .def("to_array", [](const Pose2<double>& p) { return Eigen::Vector3d(p.x, p.y, p.theta); },
-           "[x, y, theta] as a NumPy array (m, m, rad).")
+      .def(
+          "to_array", [](const Pose2<double>& p) { return Eigen::Vector3d(p.x, p.y, p.theta); },
+          "[x, y, theta] as a NumPy array (m, m, rad).")
       .def("__mul__", &Pose2<double>::operator*, py::arg("other"), "Composition ^A T_B * ^B T_C.")
       .def("inverse", &Pose2<double>::inverse, "^B T_A.")
       .def("__repr__", &pose_repr)
-      .def("__eq__", [](const Pose2<double>& a, const Pose2<double>& b) {
-        return a.x == b.x && a.y == b.y && a.theta == b.theta;
-      })
+      .def("__eq__",
+           [](const Pose2<double>& a, const Pose2<double>& b) {
+             return a.x == b.x && a.y == b.y && a.theta == b.theta;
+           })
       .def(py::pickle(
           [](const Pose2<double>& p) { return py::make_tuple(p.x, p.y, p.theta); },
           [](const py::tuple& t) {
             return Pose2<double>{t[0].cast<double>(), t[1].cast<double>(), t[2].cast<double>()};
           }))
       .def("__copy__", [](const Pose2<double>& p) { return p; })
-      .def("__deepcopy__", [](const Pose2<double>& p, const py::dict&) { return p; },
-           py::arg("memo"));
+      .def(
+          "__deepcopy__", [](const Pose2<double>& p, const py::dict&) { return p; },
+          py::arg("memo"));
 
   py::class_<LimbParams<double>>(m, "Limb",
                                  "One limb (rod + actuator), notation of Mauze et al. 2021 Fig. 3.")
@@ -108,8 +113,9 @@ void wrap_robot(py::module_& m) {
       .def_property_readonly("EI", &LimbParams<double>::bending_stiffness,
                              "bending stiffness E pi d^4 / 64 (N m^2)")
       .def("__copy__", [](const LimbParams<double>& l) { return l; })
-      .def("__deepcopy__", [](const LimbParams<double>& l, const py::dict&) { return l; },
-           py::arg("memo"))
+      .def(
+          "__deepcopy__", [](const LimbParams<double>& l, const py::dict&) { return l; },
+          py::arg("memo"))
       .def("__repr__", [](const LimbParams<double>& l) {
         std::ostringstream s;
         s.precision(9);
@@ -120,18 +126,20 @@ void wrap_robot(py::module_& m) {
         return s.str();
       });
 
-  py::class_<Extrinsics<double>>(m, "Extrinsics",
-                                 "Measurement extrinsics (Eq. 5): ^W T_P = camera * ^Se T_M * pattern.")
+  py::class_<Extrinsics<double>>(
+      m, "Extrinsics", "Measurement extrinsics (Eq. 5): ^W T_P = camera * ^Se T_M * pattern.")
       .def(py::init<>())
       .def_readwrite("camera", &Extrinsics<double>::camera, "^W T_Se: the camera frame in W")
-      .def_readwrite("pattern", &Extrinsics<double>::pattern, "^M T_P: the platform in the pattern frame")
+      .def_readwrite("pattern", &Extrinsics<double>::pattern,
+                     "^M T_P: the platform in the pattern frame")
       .def("platform_from_measurement", &Extrinsics<double>::platform_from_measurement,
            py::arg("camera_T_pattern"), "^W T_P from a measured pattern pose ^Se T_M.")
       .def("measurement_from_platform", &Extrinsics<double>::measurement_from_platform,
            py::arg("world_T_platform"), "^Se T_M that the camera sees for a platform pose ^W T_P.")
       .def("__copy__", [](const Extrinsics<double>& e) { return e; })
-      .def("__deepcopy__", [](const Extrinsics<double>& e, const py::dict&) { return e; },
-           py::arg("memo"));
+      .def(
+          "__deepcopy__", [](const Extrinsics<double>& e, const py::dict&) { return e; },
+          py::arg("memo"));
 
   py::class_<LimbUncertainty>(m, "LimbUncertainty",
                               "Half-widths of one limb's uncertainty intervals (SI units, rad).")
@@ -151,8 +159,9 @@ void wrap_robot(py::module_& m) {
       .def_readwrite("d", &LimbUncertainty::diameter, "m")
       .def_readwrite("E", &LimbUncertainty::young_modulus, "Pa")
       .def("__copy__", [](const LimbUncertainty& u) { return u; })
-      .def("__deepcopy__", [](const LimbUncertainty& u, const py::dict&) { return u; },
-           py::arg("memo"));
+      .def(
+          "__deepcopy__", [](const LimbUncertainty& u, const py::dict&) { return u; },
+          py::arg("memo"));
 
   py::class_<RobotUncertainty>(m, "Uncertainty",
                                "Uncertainty half-widths: `global_` (top level), `limbs` (resolved "
@@ -179,8 +188,9 @@ void wrap_robot(py::module_& m) {
           [](RobotUncertainty& u, const Eigen::Vector3d& v) { u.pattern = v; },
           py::return_value_policy::reference_internal, "on extrinsics.pattern (m, m, rad)")
       .def("__copy__", [](const RobotUncertainty& u) { return u; })
-      .def("__deepcopy__", [](const RobotUncertainty& u, const py::dict&) { return u; },
-           py::arg("memo"));
+      .def(
+          "__deepcopy__", [](const RobotUncertainty& u, const py::dict&) { return u; },
+          py::arg("memo"));
 
   py::class_<RobotDescription>(m, "Robot",
                                "A planar parallel continuum robot: the pcr-robot JSON description "
@@ -192,13 +202,16 @@ void wrap_robot(py::module_& m) {
                   "Reads a pcr-robot JSON file (ValueError naming the file, field and value).")
       .def_static("from_json", &parse_robot, py::arg("text"), py::arg("source") = "<string>",
                   "Parses pcr-robot JSON text; `source` names it in error messages.")
-      .def("save", [](const RobotDescription& r, const std::string& path) { save_robot(r, path); },
-           py::arg("path"), "Validates and writes the description atomically (temp file + rename).")
+      .def(
+          "save", [](const RobotDescription& r, const std::string& path) { save_robot(r, path); },
+          py::arg("path"), "Validates and writes the description atomically (temp file + rename).")
       .def("to_json", &robot_to_json, "The canonical JSON text (full precision).")
-      .def("copy", [](const RobotDescription& r) { return r; }, "A deep copy.")
+      .def(
+          "copy", [](const RobotDescription& r) { return r; }, "A deep copy.")
       .def("__copy__", [](const RobotDescription& r) { return r; })
-      .def("__deepcopy__", [](const RobotDescription& r, const py::dict&) { return r; },
-           py::arg("memo"))
+      .def(
+          "__deepcopy__", [](const RobotDescription& r, const py::dict&) { return r; },
+          py::arg("memo"))
       .def(py::pickle([](const RobotDescription& r) { return robot_to_json(r); },
                       [](const std::string& text) { return parse_robot(text, "<pickle>"); }))
       .def_readwrite("name", &RobotDescription::name)
@@ -209,7 +222,8 @@ void wrap_robot(py::module_& m) {
             for (int i = 0; i < r.params.num_limbs; ++i) r.params.limb(i).young_modulus = e;
           },
           "the global Young's modulus (Pa); setting it sets every limb's E too")
-      .def_property_readonly("num_limbs", [](const RobotDescription& r) { return r.params.num_limbs; })
+      .def_property_readonly("num_limbs",
+                             [](const RobotDescription& r) { return r.params.num_limbs; })
       .def_property(
           "limbs", [](py::object self) { return limb_list(self.cast<RobotDescription&>(), self); },
           &set_limbs,
@@ -227,7 +241,9 @@ void wrap_robot(py::module_& m) {
             if (!r.uncertainty) return py::none();
             return py::cast(&*r.uncertainty, py::return_value_policy::reference_internal, self);
           },
-          [](RobotDescription& r, std::optional<RobotUncertainty> u) { r.uncertainty = std::move(u); },
+          [](RobotDescription& r, std::optional<RobotUncertainty> u) {
+            r.uncertainty = std::move(u);
+          },
           "uncertainty half-widths, or None (every parameter known exactly)")
       .def("__repr__", [](const RobotDescription& r) {
         return "<pcr.Robot '" + r.name + "' with " + std::to_string(r.params.num_limbs) + " limbs>";

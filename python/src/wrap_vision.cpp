@@ -19,7 +19,8 @@ using namespace pcr::vision;
 using FloatImage = py::array_t<float, py::array::c_style | py::array::forcecast>;
 
 py::array_t<float> to_array(const GrayImage& image) {
-  py::array_t<float> out({static_cast<py::ssize_t>(image.height), static_cast<py::ssize_t>(image.width)});
+  py::array_t<float> out(
+      {static_cast<py::ssize_t>(image.height), static_cast<py::ssize_t>(image.width)});
   std::copy(image.pixels.begin(), image.pixels.end(), out.mutable_data());
   return out;
 }
@@ -129,11 +130,12 @@ void wrap_vision(py::module_& m) {
       .def_readwrite("height", &CameraModel::height, "px")
       .def_readwrite("K", &CameraModel::K, "3x3 intrinsic matrix (px)")
       .def_readwrite("distortion", &CameraModel::distortion, "k1 k2 p1 p2 [k3 [k4 k5 k6]]")
-      .def("project",
-           [](const CameraModel& c, const Eigen::Vector3d& p) { return c.project(p); },
-           py::arg("point_camera"), "A camera-frame point (m) -> pixel (u, v).")
-      .def("save", [](const CameraModel& c, const std::string& path) { save_camera(c, path); },
-           py::arg("path"), "Writes OpenCV YAML (camera_matrix, distortion_coefficients, ...).")
+      .def(
+          "project", [](const CameraModel& c, const Eigen::Vector3d& p) { return c.project(p); },
+          py::arg("point_camera"), "A camera-frame point (m) -> pixel (u, v).")
+      .def(
+          "save", [](const CameraModel& c, const std::string& path) { save_camera(c, path); },
+          py::arg("path"), "Writes OpenCV YAML (camera_matrix, distortion_coefficients, ...).")
       .def("__repr__", [](const CameraModel& c) {
         return "Camera(" + std::to_string(c.width) + " x " + std::to_string(c.height) +
                " px, f = " + std::to_string(c.focal_px()) + " px)";
@@ -145,172 +147,194 @@ void wrap_vision(py::module_& m) {
                           "Where each rod mount's tag is and how its clamp sits on it (the "
                           "pcr-mounts JSON format).")
       .def_property_readonly("num_limbs", &MountLayout::num_limbs)
-      .def_property_readonly("mounts", [](const MountLayout& l) {
-        py::list out;
-        for (const Mount& mt : l.mounts) {
-          py::dict d;
-          d["name"] = mt.name;
-          d["role"] = role_name(mt.role);
-          d["limb"] = mt.limb;
-          d["family"] = mt.family;
-          d["id"] = mt.id;
-          d["tag_size"] = mt.tag_size;
-          d["clamp_offset"] = mt.clamp_offset;
-          d["clamp_offset_uncertainty"] = mt.clamp_offset_uncertainty;
-          d["rod_angle"] = mt.rod_angle;
-          d["rod_angle_uncertainty"] = mt.rod_angle_uncertainty;
-          out.append(d);
-        }
-        return out;
-      }, "list of dicts (a copy): name, role, limb, family, id, tag_size (m), clamp_offset (m), "
-         "clamp_offset_uncertainty, rod_angle (rad), rod_angle_uncertainty")
-      .def("without_uncertainty", [](const MountLayout& l) {
-        MountLayout out = l;
-        for (Mount& mt : out.mounts) {
-          mt.clamp_offset_uncertainty.setZero();
-          mt.rod_angle_uncertainty = 0;
-        }
-        return out;
-      }, "A copy whose offsets are exact (zero half-widths).")
+      .def_property_readonly(
+          "mounts",
+          [](const MountLayout& l) {
+            py::list out;
+            for (const Mount& mt : l.mounts) {
+              py::dict d;
+              d["name"] = mt.name;
+              d["role"] = role_name(mt.role);
+              d["limb"] = mt.limb;
+              d["family"] = mt.family;
+              d["id"] = mt.id;
+              d["tag_size"] = mt.tag_size;
+              d["clamp_offset"] = mt.clamp_offset;
+              d["clamp_offset_uncertainty"] = mt.clamp_offset_uncertainty;
+              d["rod_angle"] = mt.rod_angle;
+              d["rod_angle_uncertainty"] = mt.rod_angle_uncertainty;
+              out.append(d);
+            }
+            return out;
+          },
+          "list of dicts (a copy): name, role, limb, family, id, tag_size (m), clamp_offset (m), "
+          "clamp_offset_uncertainty, rod_angle (rad), rod_angle_uncertainty")
+      .def(
+          "without_uncertainty",
+          [](const MountLayout& l) {
+            MountLayout out = l;
+            for (Mount& mt : out.mounts) {
+              mt.clamp_offset_uncertainty.setZero();
+              mt.rod_angle_uncertainty = 0;
+            }
+            return out;
+          },
+          "A copy whose offsets are exact (zero half-widths).")
       .def_static("from_json", &parse_mounts, py::arg("text"), py::arg("source") = "<string>")
       .def("__len__", [](const MountLayout& l) { return l.mounts.size(); });
   m.def("load_mounts", &load_mounts, py::arg("path"),
         "Reads a pcr-mounts JSON file. ValueError naming the file, field and value.");
-  m.def("default_mounts", &default_mounts, "The default robot's layout (data/mounts-femto-3pf.json).");
+  m.def("default_mounts", &default_mounts,
+        "The default robot's layout (data/mounts-femto-3pf.json).");
 
-  m.def("read_image",
-        [](const std::string& path) { return to_array(read_image(path)); }, py::arg("path"),
-        "Reads an 8/16-bit grey or colour image -> float32 (H, W) in [0, 1]. ValueError naming "
-        "the file when it cannot be read or is blank.");
-  m.def("write_png",
-        [](const std::string& path, const py::object& image, int bits) {
-          if (bits != 8 && bits != 16) {
-            throw std::invalid_argument("bits: expected 8 or 16, got " + std::to_string(bits));
-          }
-          write_png(from_array(image, "image"), path, bits);
-        },
-        py::arg("path"), py::arg("image"), py::arg("bits") = 8,
-        "Writes a (H, W) array in [0, 1] as an 8- or 16-bit grey PNG (temp file, then renamed).");
+  m.def(
+      "read_image", [](const std::string& path) { return to_array(read_image(path)); },
+      py::arg("path"),
+      "Reads an 8/16-bit grey or colour image -> float32 (H, W) in [0, 1]. ValueError naming "
+      "the file when it cannot be read or is blank.");
+  m.def(
+      "write_png",
+      [](const std::string& path, const py::object& image, int bits) {
+        if (bits != 8 && bits != 16) {
+          throw std::invalid_argument("bits: expected 8 or 16, got " + std::to_string(bits));
+        }
+        write_png(from_array(image, "image"), path, bits);
+      },
+      py::arg("path"), py::arg("image"), py::arg("bits") = 8,
+      "Writes a (H, W) array in [0, 1] as an 8- or 16-bit grey PNG (temp file, then renamed).");
 
-  m.def("mount_tags",
-        [](const RobotDescription& robot, const MountLayout& layout, const py::object& platform,
-           const std::optional<std::vector<double>>& q) {
-          const std::vector<RenderTag> tags =
-              mount_tags(layout, robot.params, to_pose(platform, "platform"), q.value_or(std::vector<double>{}));
-          py::list out;
-          for (const RenderTag& t : tags) {
-            py::dict d;
-            d["family"] = t.family;
-            d["id"] = t.id;
-            d["size"] = t.size_m;
-            d["pose"] = Eigen::Vector3d(t.pose.x, t.pose.y, t.pose.theta);
-            out.append(d);
-          }
-          return out;
-        },
-        py::arg("robot"), py::arg("mounts"), py::arg("platform") = Eigen::Vector3d(0, 0, 0),
-        py::arg("q") = py::none(),
-        "The layout's tags placed on the robot (plane frame = W): a list of dicts family, id, "
-        "size (m), pose (x, y, theta of the tag in W).");
+  m.def(
+      "mount_tags",
+      [](const RobotDescription& robot, const MountLayout& layout, const py::object& platform,
+         const std::optional<std::vector<double>>& q) {
+        const std::vector<RenderTag> tags = mount_tags(
+            layout, robot.params, to_pose(platform, "platform"), q.value_or(std::vector<double>{}));
+        py::list out;
+        for (const RenderTag& t : tags) {
+          py::dict d;
+          d["family"] = t.family;
+          d["id"] = t.id;
+          d["size"] = t.size_m;
+          d["pose"] = Eigen::Vector3d(t.pose.x, t.pose.y, t.pose.theta);
+          out.append(d);
+        }
+        return out;
+      },
+      py::arg("robot"), py::arg("mounts"), py::arg("platform") = Eigen::Vector3d(0, 0, 0),
+      py::arg("q") = py::none(),
+      "The layout's tags placed on the robot (plane frame = W): a list of dicts family, id, "
+      "size (m), pose (x, y, theta of the tag in W).");
 
-  m.def("render_robot",
-        [](const RobotDescription& robot, const MountLayout& layout,
-           const std::optional<CameraModel>& camera, double height, double tilt_x, double tilt_y,
-           const std::optional<std::vector<double>>& q, const py::object& platform, bool rods,
-           int supersampling, double blur, double noise, double gradient, unsigned seed) {
-          if (q && static_cast<int>(q->size()) != robot.params.num_limbs) {
-            throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
-                                        " values (m), got " + std::to_string(q->size()));
-          }
-          Scene scene = camera_scene(camera, height, tilt_x, tilt_y);
-          scene.tags = mount_tags(layout, robot.params, to_pose(platform, "platform"),
-                                  q.value_or(std::vector<double>{}),
-                                  rods ? &scene.segments : nullptr);
-          return render(scene, supersampling, blur, noise, gradient, seed);
-        },
-        py::arg("robot"), py::arg("mounts"), py::kw_only(), py::arg("camera") = py::none(),
-        py::arg("height") = 0.5, py::arg("tilt_x") = 0.0, py::arg("tilt_y") = 0.0,
-        py::arg("q") = py::none(), py::arg("platform") = Eigen::Vector3d(0, 0, 0),
-        py::arg("rods") = true, py::arg("supersampling") = 4, py::arg("blur") = 0.0,
-        py::arg("noise") = 0.0, py::arg("gradient") = 0.0, py::arg("seed") = 1u,
-        "A synthetic image (float32 (H, W) in [0, 1]) of the robot's mount tags, as `pcr "
-        "render`: camera (default 4000 x 4000 px, f = 8000 px) `height` m above the work plane, "
-        "tilted by tilt_x, tilt_y (rad); proximal tags at A_i + q_i, distal tags on the platform "
-        "at `platform` (^W T_P). blur (px), noise (fraction of full scale), gradient "
-        "(illumination change). Releases the GIL.");
+  m.def(
+      "render_robot",
+      [](const RobotDescription& robot, const MountLayout& layout,
+         const std::optional<CameraModel>& camera, double height, double tilt_x, double tilt_y,
+         const std::optional<std::vector<double>>& q, const py::object& platform, bool rods,
+         int supersampling, double blur, double noise, double gradient, unsigned seed) {
+        if (q && static_cast<int>(q->size()) != robot.params.num_limbs) {
+          throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
+                                      " values (m), got " + std::to_string(q->size()));
+        }
+        Scene scene = camera_scene(camera, height, tilt_x, tilt_y);
+        scene.tags =
+            mount_tags(layout, robot.params, to_pose(platform, "platform"),
+                       q.value_or(std::vector<double>{}), rods ? &scene.segments : nullptr);
+        return render(scene, supersampling, blur, noise, gradient, seed);
+      },
+      py::arg("robot"), py::arg("mounts"), py::kw_only(), py::arg("camera") = py::none(),
+      py::arg("height") = 0.5, py::arg("tilt_x") = 0.0, py::arg("tilt_y") = 0.0,
+      py::arg("q") = py::none(), py::arg("platform") = Eigen::Vector3d(0, 0, 0),
+      py::arg("rods") = true, py::arg("supersampling") = 4, py::arg("blur") = 0.0,
+      py::arg("noise") = 0.0, py::arg("gradient") = 0.0, py::arg("seed") = 1u,
+      "A synthetic image (float32 (H, W) in [0, 1]) of the robot's mount tags, as `pcr "
+      "render`: camera (default 4000 x 4000 px, f = 8000 px) `height` m above the work plane, "
+      "tilted by tilt_x, tilt_y (rad); proximal tags at A_i + q_i, distal tags on the platform "
+      "at `platform` (^W T_P). blur (px), noise (fraction of full scale), gradient "
+      "(illumination change). Releases the GIL.");
 
-  m.def("render_chessboard",
-        [](const std::optional<CameraModel>& camera, int cols, int rows, double square,
-           const py::object& board_pose, double height, double tilt_x, double tilt_y,
-           int supersampling, double blur, double noise, double gradient, unsigned seed) {
-          if (cols < 2 || rows < 2 || !(square > 0)) {
-            throw std::invalid_argument("chessboard: expected at least 2 x 2 inner corners and "
-                                        "square > 0 m, got " + std::to_string(cols) + " x " +
-                                        std::to_string(rows) + ", " + std::to_string(square));
-          }
-          Scene scene = camera_scene(camera, height, tilt_x, tilt_y);
-          scene.chessboard =
-              RenderChessboard::centred(cols, rows, square, to_pose(board_pose, "board_pose"));
-          return render(scene, supersampling, blur, noise, gradient, seed);
-        },
-        py::kw_only(), py::arg("camera") = py::none(), py::arg("cols") = 9, py::arg("rows") = 6,
-        py::arg("square") = 0.005, py::arg("board_pose") = Eigen::Vector3d(0, 0, 0),
-        py::arg("height") = 0.5, py::arg("tilt_x") = 0.0, py::arg("tilt_y") = 0.0,
-        py::arg("supersampling") = 4, py::arg("blur") = 0.0, py::arg("noise") = 0.0,
-        py::arg("gradient") = 0.0, py::arg("seed") = 1u,
-        "A synthetic image of a chessboard (cols x rows inner corners, `square` m) lying in the "
-        "work plane with its centre at board_pose (x, y, theta), as `pcr render --chessboard`; "
-        "the camera and the options as render_robot. For calibrate_camera.");
+  m.def(
+      "render_chessboard",
+      [](const std::optional<CameraModel>& camera, int cols, int rows, double square,
+         const py::object& board_pose, double height, double tilt_x, double tilt_y,
+         int supersampling, double blur, double noise, double gradient, unsigned seed) {
+        if (cols < 2 || rows < 2 || !(square > 0)) {
+          throw std::invalid_argument(
+              "chessboard: expected at least 2 x 2 inner corners and "
+              "square > 0 m, got " +
+              std::to_string(cols) + " x " + std::to_string(rows) + ", " + std::to_string(square));
+        }
+        Scene scene = camera_scene(camera, height, tilt_x, tilt_y);
+        scene.chessboard =
+            RenderChessboard::centred(cols, rows, square, to_pose(board_pose, "board_pose"));
+        return render(scene, supersampling, blur, noise, gradient, seed);
+      },
+      py::kw_only(), py::arg("camera") = py::none(), py::arg("cols") = 9, py::arg("rows") = 6,
+      py::arg("square") = 0.005, py::arg("board_pose") = Eigen::Vector3d(0, 0, 0),
+      py::arg("height") = 0.5, py::arg("tilt_x") = 0.0, py::arg("tilt_y") = 0.0,
+      py::arg("supersampling") = 4, py::arg("blur") = 0.0, py::arg("noise") = 0.0,
+      py::arg("gradient") = 0.0, py::arg("seed") = 1u,
+      "A synthetic image of a chessboard (cols x rows inner corners, `square` m) lying in the "
+      "work plane with its centre at board_pose (x, y, theta), as `pcr render --chessboard`; "
+      "the camera and the options as render_robot. For calibrate_camera.");
 
   py::class_<RobotMeasurement>(m, "RobotMeasurement",
                                "A, alpha, B, beta of each limb measured from one image, in the "
                                "design's W and P (rigid registration), with half-widths.")
-      .def_property_readonly("limbs", [](const RobotMeasurement& r) {
-        py::list out;
-        for (const LimbMeasurement& l : r.limbs) out.append(limb_dict(l));
-        return out;
-      }, "list of dicts: A, A_halfwidth (m), alpha, alpha_halfwidth (rad), B, B_halfwidth, beta, "
-         "beta_halfwidth, gamma/gamma_halfwidth (None without a sweep), and the *_plane values")
-      .def_property_readonly("corner_rms_px", [](const RobotMeasurement& r) { return r.fit.corner_rms_px; })
-      .def_property_readonly("corner_sigma_px", [](const RobotMeasurement& r) { return r.fit.corner_sigma_px; })
+      .def_property_readonly(
+          "limbs",
+          [](const RobotMeasurement& r) {
+            py::list out;
+            for (const LimbMeasurement& l : r.limbs) out.append(limb_dict(l));
+            return out;
+          },
+          "list of dicts: A, A_halfwidth (m), alpha, alpha_halfwidth (rad), B, B_halfwidth, beta, "
+          "beta_halfwidth, gamma/gamma_halfwidth (None without a sweep), and the *_plane values")
+      .def_property_readonly("corner_rms_px",
+                             [](const RobotMeasurement& r) { return r.fit.corner_rms_px; })
+      .def_property_readonly("corner_sigma_px",
+                             [](const RobotMeasurement& r) { return r.fit.corner_sigma_px; })
       .def_readonly("world_in_plane", &RobotMeasurement::world_in_plane)
       .def_readonly("platform_in_plane", &RobotMeasurement::platform_in_plane)
       .def_readonly("registration_rms_A", &RobotMeasurement::registration_rms_A, "m")
       .def_readonly("registration_rms_B", &RobotMeasurement::registration_rms_B, "m")
-      .def_property_readonly("markers", [](const RobotMeasurement& r) {
-        py::list out;
-        for (const MarkerPose& mk : r.fit.markers) {
-          py::dict d;
-          d["family"] = mk.family;
-          d["id"] = mk.id;
-          d["pose"] = Eigen::Vector3d(mk.pose.x, mk.pose.y, mk.pose.theta);
-          d["covariance"] = mk.covariance;
-          out.append(d);
-        }
-        return out;
-      }, "fitted tag poses in the plane frame (dicts family, id, pose, covariance)");
+      .def_property_readonly(
+          "markers",
+          [](const RobotMeasurement& r) {
+            py::list out;
+            for (const MarkerPose& mk : r.fit.markers) {
+              py::dict d;
+              d["family"] = mk.family;
+              d["id"] = mk.id;
+              d["pose"] = Eigen::Vector3d(mk.pose.x, mk.pose.y, mk.pose.theta);
+              d["covariance"] = mk.covariance;
+              out.append(d);
+            }
+            return out;
+          },
+          "fitted tag poses in the plane frame (dicts family, id, pose, covariance)");
 
-  m.def("measure_robot",
-        [](const py::object& image, const MountLayout& layout, const CameraModel& camera,
-           const RobotDescription& design, const std::string& source, double coverage_factor,
-           const std::string& family, double min_margin, int max_hamming) {
-          const GrayImage gray = from_array(image, source);
-          check_image_size(camera, gray.width, gray.height, "camera", source);
-          MeasureOptions o;
-          o.coverage_factor = coverage_factor;
-          o.detector.family = family;
-          o.detector.min_decision_margin = min_margin;
-          o.detector.max_hamming = max_hamming;
-          py::gil_scoped_release release;
-          return measure_robot(gray, source, layout, camera, design.params, o);
-        },
-        py::arg("image"), py::arg("mounts"), py::arg("camera"), py::arg("design"), py::kw_only(),
-        py::arg("source") = "<image>", py::arg("coverage_factor") = 3.0,
-        py::arg("family") = "tag36h11", py::arg("min_margin") = 30.0, py::arg("max_hamming") = 0,
-        "Detects the mount tags in `image` ((H, W) array in [0, 1]), fits their poses and the "
-        "plane, and registers the clamps onto `design` -> RobotMeasurement. `source` names the "
-        "image in error messages (ValueError for a missing marker, a size mismatch). Releases "
-        "the GIL.");
+  m.def(
+      "measure_robot",
+      [](const py::object& image, const MountLayout& layout, const CameraModel& camera,
+         const RobotDescription& design, const std::string& source, double coverage_factor,
+         const std::string& family, double min_margin, int max_hamming) {
+        const GrayImage gray = from_array(image, source);
+        check_image_size(camera, gray.width, gray.height, "camera", source);
+        MeasureOptions o;
+        o.coverage_factor = coverage_factor;
+        o.detector.family = family;
+        o.detector.min_decision_margin = min_margin;
+        o.detector.max_hamming = max_hamming;
+        py::gil_scoped_release release;
+        return measure_robot(gray, source, layout, camera, design.params, o);
+      },
+      py::arg("image"), py::arg("mounts"), py::arg("camera"), py::arg("design"), py::kw_only(),
+      py::arg("source") = "<image>", py::arg("coverage_factor") = 3.0,
+      py::arg("family") = "tag36h11", py::arg("min_margin") = 30.0, py::arg("max_hamming") = 0,
+      "Detects the mount tags in `image` ((H, W) array in [0, 1]), fits their poses and the "
+      "plane, and registers the clamps onto `design` -> RobotMeasurement. `source` names the "
+      "image in error messages (ValueError for a missing marker, a size mismatch). Releases "
+      "the GIL.");
   py::class_<SweepResult>(m, "SweepResult",
                           "One actuator's direction from its proximal tag over a sweep of images.")
       .def_readonly("gamma", &SweepResult::gamma, "actuator misalignment: line angle - alpha (rad)")
@@ -318,63 +342,68 @@ void wrap_vision(py::module_& m) {
       .def_readonly("direction_plane", &SweepResult::direction_plane,
                     "angle of the fitted line in the plane frame (rad)")
       .def_readonly("direction_sigma", &SweepResult::direction_sigma, "rad")
-      .def_property_readonly("centres", [](const SweepResult& r) {
-        Eigen::MatrixX2d out(r.centres.size(), 2);
-        for (std::size_t k = 0; k < r.centres.size(); ++k) out.row(k) = r.centres[k].transpose();
-        return out;
-      }, "(N, 2) tag centres in the plane frame (m), one per image")
-      .def_readonly("line_rms", &SweepResult::line_rms, "rms distance of the centres to the line (m)");
+      .def_property_readonly(
+          "centres",
+          [](const SweepResult& r) {
+            Eigen::MatrixX2d out(r.centres.size(), 2);
+            for (std::size_t k = 0; k < r.centres.size(); ++k)
+              out.row(k) = r.centres[k].transpose();
+            return out;
+          },
+          "(N, 2) tag centres in the plane frame (m), one per image")
+      .def_readonly("line_rms", &SweepResult::line_rms,
+                    "rms distance of the centres to the line (m)");
 
-  m.def("measure_sweep",
-        [](const std::vector<py::object>& images, int limb, const MountLayout& layout,
-           const CameraModel& camera, RobotMeasurement& home,
-           const std::optional<std::vector<std::string>>& sources, double coverage_factor) {
-          if (sources && sources->size() != images.size()) {
-            throw std::invalid_argument("sources: expected " + std::to_string(images.size()) +
-                                        " names (one per image), got " +
-                                        std::to_string(sources->size()));
-          }
-          std::vector<GrayImage> grays;
-          std::vector<std::string> names;
-          for (std::size_t k = 0; k < images.size(); ++k) {
-            names.push_back(sources ? (*sources)[k] : "<sweep image " + std::to_string(k) + ">");
-            grays.push_back(from_array(images[k], names.back()));
-            check_image_size(camera, grays.back().width, grays.back().height, "camera",
-                             names.back());
-          }
-          MeasureOptions o;
-          o.coverage_factor = coverage_factor;
-          py::gil_scoped_release release;
-          return measure_sweep(grays, names, limb, layout, camera, home, o);
-        },
-        py::arg("images"), py::arg("limb"), py::arg("mounts"), py::arg("camera"),
-        py::arg("home"), py::kw_only(), py::arg("sources") = py::none(),
-        py::arg("coverage_factor") = 3.0,
-        "Actuator direction of `limb` from `images` (in stroke order) of its proximal tag as the "
-        "actuator moves, the work plane held where `home` (a RobotMeasurement) found it: a total "
-        "least-squares line through the tag centres -> SweepResult. Also stores gamma and its "
-        "half-width in home.limbs[limb], which measured_description() then uses. Releases the "
-        "GIL.");
+  m.def(
+      "measure_sweep",
+      [](const std::vector<py::object>& images, int limb, const MountLayout& layout,
+         const CameraModel& camera, RobotMeasurement& home,
+         const std::optional<std::vector<std::string>>& sources, double coverage_factor) {
+        if (sources && sources->size() != images.size()) {
+          throw std::invalid_argument("sources: expected " + std::to_string(images.size()) +
+                                      " names (one per image), got " +
+                                      std::to_string(sources->size()));
+        }
+        std::vector<GrayImage> grays;
+        std::vector<std::string> names;
+        for (std::size_t k = 0; k < images.size(); ++k) {
+          names.push_back(sources ? (*sources)[k] : "<sweep image " + std::to_string(k) + ">");
+          grays.push_back(from_array(images[k], names.back()));
+          check_image_size(camera, grays.back().width, grays.back().height, "camera", names.back());
+        }
+        MeasureOptions o;
+        o.coverage_factor = coverage_factor;
+        py::gil_scoped_release release;
+        return measure_sweep(grays, names, limb, layout, camera, home, o);
+      },
+      py::arg("images"), py::arg("limb"), py::arg("mounts"), py::arg("camera"), py::arg("home"),
+      py::kw_only(), py::arg("sources") = py::none(), py::arg("coverage_factor") = 3.0,
+      "Actuator direction of `limb` from `images` (in stroke order) of its proximal tag as the "
+      "actuator moves, the work plane held where `home` (a RobotMeasurement) found it: a total "
+      "least-squares line through the tag centres -> SweepResult. Also stores gamma and its "
+      "half-width in home.limbs[limb], which measured_description() then uses. Releases the "
+      "GIL.");
 
   py::class_<CalibrationResult>(m, "CameraCalibration", "cv::calibrateCamera over chessboards.")
       .def_readonly("camera", &CalibrationResult::camera)
       .def_readonly("rms_px", &CalibrationResult::rms_px, "reprojection error (px)")
       .def_readonly("used", &CalibrationResult::used, "images whose board was found")
       .def_readonly("rejected", &CalibrationResult::rejected, "images without a board");
-  m.def("calibrate_camera",
-        [](const std::vector<std::string>& paths, int cols, int rows, double square) {
-          ChessboardSpec board;
-          board.cols = cols;
-          board.rows = rows;
-          board.square_m = square;
-          py::gil_scoped_release release;
-          return calibrate_camera(paths, board);
-        },
-        py::arg("images"), py::kw_only(), py::arg("cols") = 9, py::arg("rows") = 6,
-        py::arg("square") = 0.005,
-        "Camera intrinsics and distortion from image files of a chessboard with cols x rows "
-        "inner corners and `square` (m) squares, as `pcr camera` -> CameraCalibration (at least "
-        "3 images with a board; ValueError naming the files otherwise). Releases the GIL.");
+  m.def(
+      "calibrate_camera",
+      [](const std::vector<std::string>& paths, int cols, int rows, double square) {
+        ChessboardSpec board;
+        board.cols = cols;
+        board.rows = rows;
+        board.square_m = square;
+        py::gil_scoped_release release;
+        return calibrate_camera(paths, board);
+      },
+      py::arg("images"), py::kw_only(), py::arg("cols") = 9, py::arg("rows") = 6,
+      py::arg("square") = 0.005,
+      "Camera intrinsics and distortion from image files of a chessboard with cols x rows "
+      "inner corners and `square` (m) squares, as `pcr camera` -> CameraCalibration (at least "
+      "3 images with a board; ValueError naming the files otherwise). Releases the GIL.");
 
   m.def("measured_description", &measured_description, py::arg("design"), py::arg("measurement"),
         "`design` with the measured A, alpha, B, beta (gamma when swept) and an uncertainty "

@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
-
-#include <nlohmann/json.hpp>
 
 #include "pcr/csv_io.hpp"
 
@@ -110,7 +109,8 @@ PathCommand command_path(const RobotParams<double>& model, const std::vector<Pos
           msg << "bending strain " << s.max_strain << " exceeds the limit "
               << options.step.strain_limit;
           break;
-        case PathPoseStatus::kOk: break;
+        case PathPoseStatus::kOk:
+          break;
       }
       throw InputError(msg.str());
     }
@@ -139,7 +139,8 @@ Iso9283Result iso9283(const std::vector<Pose2<double>>& commanded,
       throw InputError("iso9283: pose " + std::to_string(k) + " has " + std::to_string(a.size()) +
                        " attained poses (at least 2 needed, ISO 9283 asks for 30)");
     }
-    if (!finite(c)) throw InputError("iso9283: commanded pose " + std::to_string(k) + " is not finite");
+    if (!finite(c))
+      throw InputError("iso9283: commanded pose " + std::to_string(k) + " is not finite");
     const double n = static_cast<double>(a.size());
     Iso9283Pose p;
     p.commanded = c;
@@ -187,8 +188,7 @@ Iso9283Result iso9283(const std::vector<Pose2<double>>& commanded,
   return result;
 }
 
-AccuracyEvaluation evaluate_on_virtual_robot(const RobotParams<double>& model,
-                                             VirtualRobot& robot,
+AccuracyEvaluation evaluate_on_virtual_robot(const RobotParams<double>& model, VirtualRobot& robot,
                                              const std::vector<Pose2<double>>& path,
                                              const AccuracyOptions& options) {
   if (options.repeat < 2) {
@@ -196,9 +196,8 @@ AccuracyEvaluation evaluate_on_virtual_robot(const RobotParams<double>& model,
                      std::to_string(options.repeat));
   }
   if (robot.truth().params.num_limbs != model.num_limbs) {
-    throw InputError("evaluate_on_virtual_robot: the model has " +
-                     std::to_string(model.num_limbs) + " limbs, the virtual robot " +
-                     std::to_string(robot.truth().params.num_limbs));
+    throw InputError("evaluate_on_virtual_robot: the model has " + std::to_string(model.num_limbs) +
+                     " limbs, the virtual robot " + std::to_string(robot.truth().params.num_limbs));
   }
   AccuracyEvaluation out;
   out.command = command_path(model, path, options.command);
@@ -216,7 +215,8 @@ AccuracyEvaluation evaluate_on_virtual_robot(const RobotParams<double>& model,
         throw std::runtime_error("virtual robot: cycle " + std::to_string(cycle) + ", pose " +
                                  std::to_string(k) + " " + format_pose(path[k]) +
                                  ": the true robot has no equilibrium at the commanded joints "
-                                 "(solver status " + to_string(m.summary.status) + ")");
+                                 "(solver status " +
+                                 to_string(m.summary.status) + ")");
       }
       out.attained[k].push_back(map.platform_from_measurement(m.measured));
     }
@@ -309,18 +309,17 @@ std::string iso9283_table_markdown(
 }
 
 std::string iso9283_poses_csv(const Iso9283Result& result) {
-  std::string out = csv_line({"pose", "x_c", "y_c", "theta_c", "x_bar", "y_bar", "theta_bar",
-                              "cycles", "ap_x", "ap_y", "ap_p", "ap_theta", "l_bar", "s_l",
-                              "rp_l", "s_theta", "rp_theta"});
+  std::string out =
+      csv_line({"pose", "x_c", "y_c", "theta_c", "x_bar", "y_bar", "theta_bar", "cycles", "ap_x",
+                "ap_y", "ap_p", "ap_theta", "l_bar", "s_l", "rp_l", "s_theta", "rp_theta"});
   for (std::size_t k = 0; k < result.poses.size(); ++k) {
     const Iso9283Pose& p = result.poses[k];
-    out += csv_line({std::to_string(k), format_double(p.commanded.x),
-                     format_double(p.commanded.y), format_double(p.commanded.theta),
-                     format_double(p.barycentre.x), format_double(p.barycentre.y),
-                     format_double(p.barycentre.theta), std::to_string(p.cycles),
-                     format_double(p.ap_x), format_double(p.ap_y), format_double(p.ap_p),
-                     format_double(p.ap_theta), format_double(p.l_bar), format_double(p.s_l),
-                     format_double(p.rp_l), format_double(p.s_theta),
+    out += csv_line({std::to_string(k), format_double(p.commanded.x), format_double(p.commanded.y),
+                     format_double(p.commanded.theta), format_double(p.barycentre.x),
+                     format_double(p.barycentre.y), format_double(p.barycentre.theta),
+                     std::to_string(p.cycles), format_double(p.ap_x), format_double(p.ap_y),
+                     format_double(p.ap_p), format_double(p.ap_theta), format_double(p.l_bar),
+                     format_double(p.s_l), format_double(p.rp_l), format_double(p.s_theta),
                      format_double(p.rp_theta)});
   }
   return out;
@@ -335,14 +334,14 @@ std::string iso9283_json(const std::vector<std::pair<std::string, const Iso9283R
   for (const auto& [name, r] : rows) {
     ordered_json poses = ordered_json::array();
     for (const Iso9283Pose& p : r->poses) {
-      poses.push_back(ordered_json{
-          {"commanded", {p.commanded.x, p.commanded.y, p.commanded.theta}},
-          {"barycentre", {p.barycentre.x, p.barycentre.y, p.barycentre.theta}},
-          {"cycles", p.cycles},
-          {"ap_p", p.ap_p},
-          {"ap_theta", p.ap_theta},
-          {"rp_l", p.rp_l},
-          {"rp_theta", p.rp_theta}});
+      poses.push_back(
+          ordered_json{{"commanded", {p.commanded.x, p.commanded.y, p.commanded.theta}},
+                       {"barycentre", {p.barycentre.x, p.barycentre.y, p.barycentre.theta}},
+                       {"cycles", p.cycles},
+                       {"ap_p", p.ap_p},
+                       {"ap_theta", p.ap_theta},
+                       {"rp_l", p.rp_l},
+                       {"rp_theta", p.rp_theta}});
     }
     paths.push_back(ordered_json{{"path", name},
                                  {"units", "m, rad"},

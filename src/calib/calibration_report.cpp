@@ -4,9 +4,8 @@
 
 #include <cmath>
 #include <cstdio>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 namespace pcr {
 namespace {
@@ -23,9 +22,10 @@ ordered_json stats_json(const PoseErrorStats& s) {
 
 std::string stats_line(const char* label, const PoseErrorStats& s) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "%-34s %9.4f %9.4f %9.4f | %9.5f %9.5f %9.5f  (%d configurations%s)\n",
-                label, s.max_p * 1e6, s.mean_p * 1e6, s.min_p * 1e6, s.max_theta * 1e3,
-                s.mean_theta * 1e3, s.min_theta * 1e3, s.count,
+  std::snprintf(buf, sizeof buf,
+                "%-34s %9.4f %9.4f %9.4f | %9.5f %9.5f %9.5f  (%d configurations%s)\n", label,
+                s.max_p * 1e6, s.mean_p * 1e6, s.min_p * 1e6, s.max_theta * 1e3, s.mean_theta * 1e3,
+                s.min_theta * 1e3, s.count,
                 s.failed ? (", " + std::to_string(s.failed) + " FK failures").c_str() : "");
   return buf;
 }
@@ -69,7 +69,8 @@ std::string calibration_table_text(const CalibrationTable& table) {
       "Table 3                            e_p (um): max      mean       min | e_theta (mrad): max"
       "      mean       min\n";
   out += stats_line("nominal model, calibration set", table.nominal_calibration);
-  if (table.has_validation) out += stats_line("nominal model, validation set", table.nominal_validation);
+  if (table.has_validation)
+    out += stats_line("nominal model, validation set", table.nominal_validation);
   out += stats_line("identified model, calibration set", table.identified_calibration);
   if (table.has_validation) {
     out += stats_line("identified model, validation set", table.identified_validation);
@@ -78,7 +79,8 @@ std::string calibration_table_text(const CalibrationTable& table) {
   return out;
 }
 
-std::string calibration_report_text(const CalibrationResult& result, const CalibrationTable& table) {
+std::string calibration_report_text(const CalibrationResult& result,
+                                    const CalibrationTable& table) {
   std::ostringstream out;
   out << calibration_table_text(table) << "\nstages:\n";
   for (const StageReport& s : result.stages) {
@@ -94,9 +96,8 @@ std::string calibration_report_text(const CalibrationResult& result, const Calib
   for (const ParameterEstimate& p : result.parameters) {
     if (p.free) {
       char buf[256];
-      std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  std %.3e%s%s\n",
-                    p.name.c_str(), p.value, p.nominal, p.std_dev,
-                    p.gauge_reference ? "  (gauge reference)" : "",
+      std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  std %.3e%s%s\n", p.name.c_str(),
+                    p.value, p.nominal, p.std_dev, p.gauge_reference ? "  (gauge reference)" : "",
                     p.at_bound ? "  AT BOUND" : "");
       out << buf;
     }
@@ -121,9 +122,11 @@ std::string calibration_report_text(const CalibrationResult& result, const Calib
   return out.str();
 }
 
-std::string calibration_report_json(const CalibrationResult& result, const CalibrationTable& table) {
-  ordered_json table3{{"nominal_model_calibration_set", stats_json(table.nominal_calibration)},
-                      {"identified_model_calibration_set", stats_json(table.identified_calibration)}};
+std::string calibration_report_json(const CalibrationResult& result,
+                                    const CalibrationTable& table) {
+  ordered_json table3{
+      {"nominal_model_calibration_set", stats_json(table.nominal_calibration)},
+      {"identified_model_calibration_set", stats_json(table.identified_calibration)}};
   if (table.has_validation) {
     table3["nominal_model_validation_set"] = stats_json(table.nominal_validation);
     table3["identified_model_validation_set"] = stats_json(table.identified_validation);

@@ -2,6 +2,13 @@
 
 #include "pcr/calib/calibrator.hpp"
 
+#include <ceres/ceres.h>
+#include <ceres/covariance.h>
+#include <ceres/manifold.h>
+#include <ceres/normal_prior.h>
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,13 +16,6 @@
 #include <memory>
 #include <set>
 #include <sstream>
-
-#include <Eigen/QR>
-#include <Eigen/SVD>
-#include <ceres/ceres.h>
-#include <ceres/covariance.h>
-#include <ceres/manifold.h>
-#include <ceres/normal_prior.h>
 
 namespace pcr {
 namespace {
@@ -38,18 +38,30 @@ std::vector<int> indices_of_kind(const std::string& kind, int n) {
     for (int k = 3; k < 6; ++k) out.push_back(extrinsics + k);
   }
   if (!out.empty()) return out;
-  if (kind == "E") limb_kinds = {ParameterKind::kYoungModulus};
-  else if (kind == "d") limb_kinds = {ParameterKind::kDiameter};
-  else if (kind == "l") limb_kinds = {ParameterKind::kLength};
-  else if (kind == "A") limb_kinds = {ParameterKind::kAx, ParameterKind::kAy};
-  else if (kind == "A_x") limb_kinds = {ParameterKind::kAx};
-  else if (kind == "A_y") limb_kinds = {ParameterKind::kAy};
-  else if (kind == "alpha") limb_kinds = {ParameterKind::kAlpha};
-  else if (kind == "B") limb_kinds = {ParameterKind::kBx, ParameterKind::kBy};
-  else if (kind == "B_x") limb_kinds = {ParameterKind::kBx};
-  else if (kind == "B_y") limb_kinds = {ParameterKind::kBy};
-  else if (kind == "beta") limb_kinds = {ParameterKind::kBeta};
-  else if (kind == "gamma") limb_kinds = {ParameterKind::kGamma};
+  if (kind == "E")
+    limb_kinds = {ParameterKind::kYoungModulus};
+  else if (kind == "d")
+    limb_kinds = {ParameterKind::kDiameter};
+  else if (kind == "l")
+    limb_kinds = {ParameterKind::kLength};
+  else if (kind == "A")
+    limb_kinds = {ParameterKind::kAx, ParameterKind::kAy};
+  else if (kind == "A_x")
+    limb_kinds = {ParameterKind::kAx};
+  else if (kind == "A_y")
+    limb_kinds = {ParameterKind::kAy};
+  else if (kind == "alpha")
+    limb_kinds = {ParameterKind::kAlpha};
+  else if (kind == "B")
+    limb_kinds = {ParameterKind::kBx, ParameterKind::kBy};
+  else if (kind == "B_x")
+    limb_kinds = {ParameterKind::kBx};
+  else if (kind == "B_y")
+    limb_kinds = {ParameterKind::kBy};
+  else if (kind == "beta")
+    limb_kinds = {ParameterKind::kBeta};
+  else if (kind == "gamma")
+    limb_kinds = {ParameterKind::kGamma};
   for (int i = 0; i < n; ++i) {
     for (ParameterKind pk : limb_kinds) out.push_back(parameter_index(ParameterId{pk, i}, n));
   }
@@ -57,8 +69,8 @@ std::vector<int> indices_of_kind(const std::string& kind, int n) {
 }
 
 bool known_kind(const std::string& kind) {
-  static const char* const kKinds[] = {"E",     "d",     "l",     "A",      "A_x",    "A_y",
-                                       "alpha", "B",     "B_x",   "B_y",    "beta",   "gamma",
+  static const char* const kKinds[] = {"E",      "d",       "l",          "A",   "A_x",  "A_y",
+                                       "alpha",  "B",       "B_x",        "B_y", "beta", "gamma",
                                        "camera", "pattern", "extrinsics", "all"};
   for (const char* k : kKinds) {
     if (kind == k) return true;
@@ -138,9 +150,14 @@ class Identification {
  public:
   Identification(const RobotDescription& nominal, const std::vector<CalibrationSample>& data,
                  const CalibrationOptions& options)
-      : nominal_(nominal.params), data_(data), options_(options), n_(nominal.params.num_limbs),
-        count_(num_parameters(n_)), values_(static_cast<std::size_t>(count_)),
-        nominal_values_(static_cast<std::size_t>(count_)), caches_(data.size()) {
+      : nominal_(nominal.params),
+        data_(data),
+        options_(options),
+        n_(nominal.params.num_limbs),
+        count_(num_parameters(n_)),
+        values_(static_cast<std::size_t>(count_)),
+        nominal_values_(static_cast<std::size_t>(count_)),
+        caches_(data.size()) {
     half_widths_ = parameter_half_widths(*nominal.uncertainty, n_);
     get_parameters(nominal_, nominal_values_.data());
     values_ = nominal_values_;
@@ -260,8 +277,7 @@ class Identification {
       report.iterations += static_cast<int>(summary.iterations.size()) - 1;
       add_counters(summary, &report);
     }
-    report.time_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     for (const FkCache& c : caches_) {
       report.fk_solves += c.evaluations;
       report.fk_warm_start_failures += c.warm_start_failures;
@@ -360,9 +376,9 @@ class Identification {
     for (int k : held) constant.insert(k);
     if (static_cast<int>(constant.size()) == count_) return false;
     if (!constant.empty()) {
-      problem.SetManifold(values_.data(),
-                          new ceres::SubsetManifold(
-                              count_, std::vector<int>(constant.begin(), constant.end())));
+      problem.SetManifold(
+          values_.data(),
+          new ceres::SubsetManifold(count_, std::vector<int>(constant.begin(), constant.end())));
     }
     ceres::Covariance::Options co;
     co.algorithm_type = ceres::DENSE_SVD;
@@ -419,7 +435,9 @@ class Identification {
 std::vector<Generator> gauge_generators(const RobotParams<double>& robot) {
   const int n = robot.num_limbs;
   const int count = num_parameters(n);
-  auto idx = [n](ParameterKind kind, int limb) { return parameter_index(ParameterId{kind, limb}, n); };
+  auto idx = [n](ParameterKind kind, int limb) {
+    return parameter_index(ParameterId{kind, limb}, n);
+  };
   auto blank = [count]() { return std::vector<double>(static_cast<std::size_t>(count), 0.0); };
   std::vector<Generator> out;
   const Pose2<double>& camera = robot.extrinsics.camera;
@@ -427,7 +445,8 @@ std::vector<Generator> gauge_generators(const RobotParams<double>& robot) {
   for (int axis = 0; axis < 2; ++axis) {
     Generator g{std::string("proximal clamps + camera: translation ") + (axis ? "y" : "x"),
                 std::string(axis ? "A_y[*] + camera_y" : "A_x[*] + camera_x"), blank()};
-    for (int i = 0; i < n; ++i) g.direction[idx(axis ? ParameterKind::kAy : ParameterKind::kAx, i)] = 1;
+    for (int i = 0; i < n; ++i)
+      g.direction[idx(axis ? ParameterKind::kAy : ParameterKind::kAx, i)] = 1;
     g.direction[idx(axis ? ParameterKind::kCameraY : ParameterKind::kCameraX, -1)] = 1;
     out.push_back(g);
   }
@@ -445,10 +464,12 @@ std::vector<Generator> gauge_generators(const RobotParams<double>& robot) {
     out.push_back(g);
   }
   for (int axis = 0; axis < 2; ++axis) {
-    Generator g{std::string("distal clamps + pattern: translation ") + (axis ? "y" : "x"),
-                std::string(axis ? "B_y[*] - R(pattern_theta) e_y" : "B_x[*] - R(pattern_theta) e_x"),
-                blank()};
-    for (int i = 0; i < n; ++i) g.direction[idx(axis ? ParameterKind::kBy : ParameterKind::kBx, i)] = 1;
+    Generator g{
+        std::string("distal clamps + pattern: translation ") + (axis ? "y" : "x"),
+        std::string(axis ? "B_y[*] - R(pattern_theta) e_y" : "B_x[*] - R(pattern_theta) e_x"),
+        blank()};
+    for (int i = 0; i < n; ++i)
+      g.direction[idx(axis ? ParameterKind::kBy : ParameterKind::kBx, i)] = 1;
     const Vector2<double> e = axis ? Vector2<double>(0, 1) : Vector2<double>(1, 0);
     const Vector2<double> d = -pattern.rotate(e);
     g.direction[idx(ParameterKind::kPatternX, -1)] = d.x();
@@ -468,7 +489,8 @@ std::vector<Generator> gauge_generators(const RobotParams<double>& robot) {
   }
   {
     Generator g{"bending stiffness: common scale", "d[*] scaled together", blank()};
-    for (int i = 0; i < n; ++i) g.direction[idx(ParameterKind::kDiameter, i)] = robot.limb(i).diameter;
+    for (int i = 0; i < n; ++i)
+      g.direction[idx(ParameterKind::kDiameter, i)] = robot.limb(i).diameter;
     out.push_back(g);
   }
   return out;
@@ -508,16 +530,36 @@ std::vector<double> parameter_half_widths(const RobotUncertainty& u, int num_lim
                                      ? u.limbs[static_cast<std::size_t>(id.limb)]
                                      : u.global;
       switch (id.kind) {
-        case ParameterKind::kYoungModulus: v = l.young_modulus; break;
-        case ParameterKind::kDiameter: v = l.diameter; break;
-        case ParameterKind::kLength: v = l.length; break;
-        case ParameterKind::kAx: v = l.A.x(); break;
-        case ParameterKind::kAy: v = l.A.y(); break;
-        case ParameterKind::kAlpha: v = l.alpha; break;
-        case ParameterKind::kBx: v = l.B.x(); break;
-        case ParameterKind::kBy: v = l.B.y(); break;
-        case ParameterKind::kBeta: v = l.beta; break;
-        default: v = l.gamma; break;
+        case ParameterKind::kYoungModulus:
+          v = l.young_modulus;
+          break;
+        case ParameterKind::kDiameter:
+          v = l.diameter;
+          break;
+        case ParameterKind::kLength:
+          v = l.length;
+          break;
+        case ParameterKind::kAx:
+          v = l.A.x();
+          break;
+        case ParameterKind::kAy:
+          v = l.A.y();
+          break;
+        case ParameterKind::kAlpha:
+          v = l.alpha;
+          break;
+        case ParameterKind::kBx:
+          v = l.B.x();
+          break;
+        case ParameterKind::kBy:
+          v = l.B.y();
+          break;
+        case ParameterKind::kBeta:
+          v = l.beta;
+          break;
+        default:
+          v = l.gamma;
+          break;
       }
     } else {
       const int e = static_cast<int>(id.kind) - static_cast<int>(ParameterKind::kCameraX);
@@ -529,14 +571,13 @@ std::vector<double> parameter_half_widths(const RobotUncertainty& u, int num_lim
 
 RobotParams<double> fix_gauge(const RobotParams<double>& params,
                               const RobotParams<double>& reference, bool proximal_translation,
-                              bool proximal_rotation, bool distal_translation,
-                              bool distal_rotation, bool stiffness) {
+                              bool proximal_rotation, bool distal_translation, bool distal_rotation,
+                              bool stiffness) {
   RobotParams<double> out = params;
   const int n = params.num_limbs;
   if (proximal_translation) {
     // G maps limb 0's estimated proximal clamp frame onto its reference one.
-    const double rot =
-        proximal_rotation ? reference.limb(0).alpha - params.limb(0).alpha : 0.0;
+    const double rot = proximal_rotation ? reference.limb(0).alpha - params.limb(0).alpha : 0.0;
     const Pose2<double> r{0, 0, rot};
     const Vector2<double> t = reference.limb(0).A - r.rotate(params.limb(0).A);
     const Pose2<double> G{t.x(), t.y(), rot};
@@ -620,11 +661,13 @@ CalibrationResult calibrate(const RobotDescription& nominal,
                             const CalibrationOptions& options) {
   const std::string source = "calibration of \"" + nominal.name + "\"";
   if (!nominal.uncertainty) {
-    throw InputError(source + ": the nominal description has no \"uncertainty\" section; the "
-                              "bounds of the identification (Eq. 7) come from it");
+    throw InputError(source +
+                     ": the nominal description has no \"uncertainty\" section; the "
+                     "bounds of the identification (Eq. 7) come from it");
   }
   const int n = nominal.params.num_limbs;
-  if (n < 2 || n > kMaxLimbs) throw InputError(source + ": invalid limb count " + std::to_string(n));
+  if (n < 2 || n > kMaxLimbs)
+    throw InputError(source + ": invalid limb count " + std::to_string(n));
   if (data.empty()) throw InputError(source + ": no calibration configuration");
   for (std::size_t j = 0; j < data.size(); ++j) {
     if (data[j].q.size() != n) {
@@ -739,7 +782,8 @@ CalibrationResult calibrate(const RobotDescription& nominal,
       Eigen::VectorXd scaled(static_cast<Eigen::Index>(free.size()));
       for (std::size_t c = 0; c < free.size(); ++c) {
         const std::size_t k = static_cast<std::size_t>(free[c]);
-        scaled(static_cast<Eigen::Index>(c)) = final_generators[g].direction[k] / id.half_widths()[k];
+        scaled(static_cast<Eigen::Index>(c)) =
+            final_generators[g].direction[k] / id.half_widths()[k];
       }
       d.relative_gain = (d.present && smax > 0 && scaled.norm() > 0)
                             ? (Js * scaled).norm() / (smax * scaled.norm())
@@ -759,7 +803,8 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     result.covariance_ok = true;
     for (int k : free) {
       ParameterEstimate& p = result.parameters[static_cast<std::size_t>(k)];
-      p.std_dev = p.gauge_reference ? 0.0 : std::sqrt(std::max(0.0, cov(k, k) * result.residual_variance));
+      p.std_dev =
+          p.gauge_reference ? 0.0 : std::sqrt(std::max(0.0, cov(k, k) * result.residual_variance));
     }
   } else {
     for (int k : free) {

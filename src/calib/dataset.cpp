@@ -34,8 +34,9 @@ std::string slurp(std::istream& in) {
 int infer_joints(const CsvTable& table, int extra, const std::string& source) {
   if (table.has_header) {
     const int k = count_joint_columns(table.columns);
-    if (k < 1) throw InputError(source + ": header has no q1 column (expected q1,...,qn" +
-                                (extra ? std::string(",x,y,theta)") : std::string(")")));
+    if (k < 1)
+      throw InputError(source + ": header has no q1 column (expected q1,...,qn" +
+                       (extra ? std::string(",x,y,theta)") : std::string(")")));
     return k;
   }
   if (table.rows.empty()) throw InputError(source + ": no data rows and no header");

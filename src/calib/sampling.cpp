@@ -37,9 +37,9 @@ Box sampling_box(const RobotParams<double>& robot, const SamplingOptions& option
   }
   if (options.box_min.size() != 0 || options.box_max.size() != 0) {
     if (options.box_min.size() != n || options.box_max.size() != n) {
-      throw InputError("sampling box: expected " + std::to_string(n) + " lower and upper bounds, got " +
-                       std::to_string(options.box_min.size()) + " and " +
-                       std::to_string(options.box_max.size()));
+      throw InputError("sampling box: expected " + std::to_string(n) +
+                       " lower and upper bounds, got " + std::to_string(options.box_min.size()) +
+                       " and " + std::to_string(options.box_max.size()));
     }
     box.lo = options.box_min;
     box.hi = options.box_max;
@@ -157,12 +157,15 @@ bool admissible_configuration(const RobotParams<double>& robot, const JointVecto
   return ok;
 }
 
-SamplingResult poisson_disc_sample(const RobotParams<double>& robot, const SamplingOptions& options) {
+SamplingResult poisson_disc_sample(const RobotParams<double>& robot,
+                                   const SamplingOptions& options) {
   if (robot.num_limbs < 1 || robot.num_limbs > kMaxLimbs) {
-    throw InputError("poisson_disc_sample: invalid number of limbs " + std::to_string(robot.num_limbs));
+    throw InputError("poisson_disc_sample: invalid number of limbs " +
+                     std::to_string(robot.num_limbs));
   }
   if (options.count < 1) {
-    throw InputError("poisson_disc_sample: count must be >= 1, got " + std::to_string(options.count));
+    throw InputError("poisson_disc_sample: count must be >= 1, got " +
+                     std::to_string(options.count));
   }
   if (options.attempts < 1) {
     throw InputError("poisson_disc_sample: attempts must be >= 1, got " +

@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
-
-#include <nlohmann/json.hpp>
 
 #include "pcr/calib/jet_traits.hpp"
 #include "pcr/csv_io.hpp"
@@ -35,17 +34,28 @@ const RowSpec kRows[] = {
 
 double half_width(const LimbUncertainty& u, ParameterKind kind) {
   switch (kind) {
-    case ParameterKind::kYoungModulus: return u.young_modulus;
-    case ParameterKind::kDiameter: return u.diameter;
-    case ParameterKind::kLength: return u.length;
-    case ParameterKind::kAx: return u.A.x();
-    case ParameterKind::kAy: return u.A.y();
-    case ParameterKind::kAlpha: return u.alpha;
-    case ParameterKind::kBx: return u.B.x();
-    case ParameterKind::kBy: return u.B.y();
-    case ParameterKind::kBeta: return u.beta;
-    case ParameterKind::kGamma: return u.gamma;
-    default: return 0.0;
+    case ParameterKind::kYoungModulus:
+      return u.young_modulus;
+    case ParameterKind::kDiameter:
+      return u.diameter;
+    case ParameterKind::kLength:
+      return u.length;
+    case ParameterKind::kAx:
+      return u.A.x();
+    case ParameterKind::kAy:
+      return u.A.y();
+    case ParameterKind::kAlpha:
+      return u.alpha;
+    case ParameterKind::kBx:
+      return u.B.x();
+    case ParameterKind::kBy:
+      return u.B.y();
+    case ParameterKind::kBeta:
+      return u.beta;
+    case ParameterKind::kGamma:
+      return u.gamma;
+    default:
+      return 0.0;
   }
 }
 
@@ -69,8 +79,8 @@ std::vector<JointVector> sensitivity_configurations(const RobotParams<double>& r
   if (centre.size() == 0) {
     for (int i = 0; i < n; ++i) c(i) = 0.5 * (robot.limb(i).q_min + robot.limb(i).q_max);
   } else if (centre.size() != n) {
-    throw InputError("sensitivity: centre has " + std::to_string(centre.size()) + " joints, robot has " +
-                     std::to_string(n));
+    throw InputError("sensitivity: centre has " + std::to_string(centre.size()) +
+                     " joints, robot has " + std::to_string(n));
   } else {
     c = centre;
   }
@@ -128,7 +138,8 @@ SensitivityReport sensitivity_analysis(const RobotDescription& description,
 
   RobotUncertainty u;
   if (description.uncertainty) u = *description.uncertainty;
-  if (u.limbs.size() != static_cast<std::size_t>(n)) u.limbs.assign(static_cast<std::size_t>(n), u.global);
+  if (u.limbs.size() != static_cast<std::size_t>(n))
+    u.limbs.assign(static_cast<std::size_t>(n), u.global);
 
   for (const RowSpec& spec : kRows) {
     SensitivityRow row;
@@ -137,7 +148,8 @@ SensitivityReport sensitivity_analysis(const RobotDescription& description,
       row.half_width = half_width(u.global, spec.kind);
     } else {
       for (int i = 0; i < n; ++i) {
-        row.half_width = std::max(row.half_width, half_width(u.limbs[static_cast<std::size_t>(i)], spec.kind));
+        row.half_width =
+            std::max(row.half_width, half_width(u.limbs[static_cast<std::size_t>(i)], spec.kind));
       }
     }
     report.rows.push_back(row);

@@ -1,10 +1,9 @@
 // The calibration stages file (documented in the README): {"stages": [...]} or the bare list.
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "pcr/calib/calibrator.hpp"
 
@@ -45,7 +44,7 @@ std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
     if (e.contains("bounds_scale")) {
       if (!e["bounds_scale"].is_number()) {
         throw InputError(where + ".bounds_scale: expected a number, got " +
-                              e["bounds_scale"].dump());
+                         e["bounds_scale"].dump());
       }
       stage.bounds_scale = e["bounds_scale"].get<double>();
     }

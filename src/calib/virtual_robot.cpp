@@ -53,7 +53,8 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
 
   RobotUncertainty u;
   if (nominal.uncertainty) u = *nominal.uncertainty;
-  if (u.limbs.size() != static_cast<std::size_t>(n)) u.limbs.assign(static_cast<std::size_t>(n), u.global);
+  if (u.limbs.size() != static_cast<std::size_t>(n))
+    u.limbs.assign(static_cast<std::size_t>(n), u.global);
 
   RobotParams<double>& p = truth_.params;
   // One material and one wire: E and d are drawn once for all limbs (relative to limb 0's

@@ -5,10 +5,9 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
-
-#include <nlohmann/json.hpp>
 
 #include "pcr/csv_io.hpp"
 
@@ -150,8 +149,10 @@ class Reader {
       const Json& limbs = object["limbs"];
       const std::string lpath = join(path, "limbs");
       if (!limbs.is_array() || limbs.size() != static_cast<std::size_t>(num_limbs)) {
-        fail(lpath, "expected an array of " + std::to_string(num_limbs) +
-                        " objects (one per limb; {} for no override)", limbs);
+        fail(lpath,
+             "expected an array of " + std::to_string(num_limbs) +
+                 " objects (one per limb; {} for no override)",
+             limbs);
       }
       for (std::size_t i = 0; i < limbs.size(); ++i) {
         check_object(limbs[i], index(lpath, i),
@@ -166,8 +167,10 @@ class Reader {
     check_object(root, "", {"pcr_robot", "name", "E", "limbs", "extrinsics", "uncertainty"});
     const Json& version = required(root, "", "pcr_robot");
     if (!version.is_number_integer() || version.get<long long>() != kFormatVersion) {
-      fail("pcr_robot", "unsupported format version (this build reads version " +
-                            std::to_string(kFormatVersion) + ")", version);
+      fail("pcr_robot",
+           "unsupported format version (this build reads version " +
+               std::to_string(kFormatVersion) + ")",
+           version);
     }
     RobotDescription out;
     const Json& name = required(root, "", "name");
@@ -194,8 +197,7 @@ class Reader {
       limb.beta = number(required(l, path, "beta"), join(path, "beta"));
       limb.length = positive(required(l, path, "l"), join(path, "l"));
       limb.diameter = positive(required(l, path, "d"), join(path, "d"));
-      limb.young_modulus =
-          l.contains("E") ? positive(l["E"], join(path, "E")) : out.young_modulus;
+      limb.young_modulus = l.contains("E") ? positive(l["E"], join(path, "E")) : out.young_modulus;
       const Json& range = required(l, path, "q_range");
       const Eigen::Vector2d q = vector<2>(range, join(path, "q_range"));
       if (q(0) > q(1)) fail(join(path, "q_range"), "min > max", range);
@@ -243,8 +245,7 @@ std::size_t find_number_literal(const std::string& text, const std::string& toke
     return std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'e' || c == 'E' ||
            c == '+' || c == '-';
   };
-  for (std::size_t at = text.find(token); at != std::string::npos;
-       at = text.find(token, at + 1)) {
+  for (std::size_t at = text.find(token); at != std::string::npos; at = text.find(token, at + 1)) {
     std::size_t before = at;
     while (before > 0 && std::isspace(static_cast<unsigned char>(text[before - 1]))) --before;
     const bool left = before > 0 && (text[before - 1] == ':' || text[before - 1] == ',' ||

@@ -2,6 +2,13 @@
 
 #include "pcr/reference.hpp"
 
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -9,14 +16,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
-
-#include <Eigen/LU>
-
-#include <cvode/cvode.h>
-#include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
 
 namespace pcr {
 namespace {
@@ -179,8 +178,8 @@ RodState<double> integrate(const RodState<double>& start, double ei, double leng
     // CV_ONE_STEP bypasses CVodeSetMaxNumSteps (it bounds one CV_NORMAL call): count here.
     if (++steps > options.max_steps) {
       error = "more than max_steps = " + std::to_string(options.max_steps) +
-              " internal steps before s = " + std::to_string(length) + " m, at s = " +
-              std::to_string(s) + " m";
+              " internal steps before s = " + std::to_string(length) +
+              " m, at s = " + std::to_string(s) + " m";
       fail("CVode", CV_TOO_MUCH_WORK);
     }
     // One internal step at a time: max |m| is tracked at every step and the samples come from
@@ -202,8 +201,7 @@ RodState<double> integrate(const RodState<double>& start, double ei, double leng
 }  // namespace
 
 RodState<double> integrate_rod_reference(const RodState<double>& start, double ei, double length,
-                                         const ReferenceOptions& options,
-                                         double* max_abs_moment) {
+                                         const ReferenceOptions& options, double* max_abs_moment) {
   return integrate(start, ei, length, options, {}, nullptr, max_abs_moment);
 }
 
@@ -250,8 +248,8 @@ double shooting_residual_reference(const RobotParams<double>& robot,
   return shooting_residual_from_tips(robot, point, load, scale, tips, residual);
 }
 
-ForwardSolution forward_kinematics_reference(const RobotParams<double>& robot,
-                                             const JointVector& q, const ForwardSolution& start,
+ForwardSolution forward_kinematics_reference(const RobotParams<double>& robot, const JointVector& q,
+                                             const ForwardSolution& start,
                                              const ReferenceOptions& options,
                                              const PlatformLoad<double>& load) {
   const int n = robot.num_limbs;

@@ -1,14 +1,13 @@
 #include "pcr/vision/camera.hpp"
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
-#include <sstream>
-
-#include <Eigen/Dense>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/image.hpp"
@@ -21,7 +20,8 @@ namespace {
 Eigen::Vector2d distort(const Eigen::VectorXd& d, const Eigen::Vector2d& p) {
   const auto c = [&](int i) { return i < d.size() ? d[i] : 0.0; };
   const double x = p.x(), y = p.y(), r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
-  const double radial = (1 + c(0) * r2 + c(1) * r4 + c(4) * r6) / (1 + c(5) * r2 + c(6) * r4 + c(7) * r6);
+  const double radial =
+      (1 + c(0) * r2 + c(1) * r4 + c(4) * r6) / (1 + c(5) * r2 + c(6) * r4 + c(7) * r6);
   return {x * radial + 2 * c(2) * x * y + c(3) * (r2 + 2 * x * x),
           y * radial + c(2) * (r2 + 2 * y * y) + 2 * c(3) * x * y};
 }
@@ -45,8 +45,12 @@ Eigen::Vector2d CameraModel::normalize(const Eigen::Vector2d& pixel) const {
     if (r.norm() < 1e-15) break;
     constexpr double h = 1e-7;
     Eigen::Matrix2d J;
-    J.col(0) = (distort(distortion, p + Eigen::Vector2d(h, 0)) - distort(distortion, p - Eigen::Vector2d(h, 0))) / (2 * h);
-    J.col(1) = (distort(distortion, p + Eigen::Vector2d(0, h)) - distort(distortion, p - Eigen::Vector2d(0, h))) / (2 * h);
+    J.col(0) = (distort(distortion, p + Eigen::Vector2d(h, 0)) -
+                distort(distortion, p - Eigen::Vector2d(h, 0))) /
+               (2 * h);
+    J.col(1) = (distort(distortion, p + Eigen::Vector2d(0, h)) -
+                distort(distortion, p - Eigen::Vector2d(0, h))) /
+               (2 * h);
     p -= J.partialPivLu().solve(r);
   }
   return p;
@@ -84,10 +88,12 @@ CameraModel load_camera(const std::string& path) {
   };
   const auto read_int = [&](const char* key) {
     cv::FileNode node = need(key);
-    if (!node.isInt() && !node.isReal()) throw InputError(path + ": field '" + key + "' is not a number");
+    if (!node.isInt() && !node.isReal())
+      throw InputError(path + ": field '" + key + "' is not a number");
     const double v = static_cast<double>(node);
     if (!(v >= 1 && v <= 100000) || v != std::floor(v)) {
-      throw InputError(path + ": field '" + key + "' = " + std::to_string(v) + " is not a valid size in px");
+      throw InputError(path + ": field '" + key + "' = " + std::to_string(v) +
+                       " is not a valid size in px");
     }
     return static_cast<int>(v);
   };
@@ -98,7 +104,8 @@ CameraModel load_camera(const std::string& path) {
     need("camera_matrix") >> K;
     need("distortion_coefficients") >> D;
   } catch (const cv::Exception& e) {
-    throw InputError(path + ": camera_matrix or distortion_coefficients is not a matrix (" + e.what() + ")");
+    throw InputError(path + ": camera_matrix or distortion_coefficients is not a matrix (" +
+                     e.what() + ")");
   }
   if (K.rows != 3 || K.cols != 3) {
     throw InputError(path + ": field 'camera_matrix' must be 3x3, got " + std::to_string(K.rows) +
@@ -109,7 +116,8 @@ CameraModel load_camera(const std::string& path) {
     for (int c = 0; c < 3; ++c) camera.K(r, c) = K.at<double>(r, c);
   const int n = static_cast<int>(D.total());
   if (!(n == 0 || n == 4 || n == 5 || n == 8)) {
-    throw InputError(path + ": field 'distortion_coefficients' must hold 0, 4, 5 or 8 values, got " +
+    throw InputError(path +
+                     ": field 'distortion_coefficients' must hold 0, 4, 5 or 8 values, got " +
                      std::to_string(n));
   }
   D.convertTo(D, CV_64F);
@@ -118,14 +126,18 @@ CameraModel load_camera(const std::string& path) {
   if (!camera.K.allFinite() || !camera.distortion.allFinite()) {
     throw InputError(path + ": non-finite value in camera_matrix or distortion_coefficients");
   }
-  if (!(camera.K(0, 0) > 0) || !(camera.K(1, 1) > 0) || camera.K(1, 0) != 0 || camera.K(2, 0) != 0 ||
-      camera.K(2, 1) != 0 || camera.K(2, 2) != 1) {
-    throw InputError(path + ": field 'camera_matrix' is not an intrinsic matrix [fx s cx; 0 fy cy; 0 0 1] with fx, fy > 0");
+  if (!(camera.K(0, 0) > 0) || !(camera.K(1, 1) > 0) || camera.K(1, 0) != 0 ||
+      camera.K(2, 0) != 0 || camera.K(2, 1) != 0 || camera.K(2, 2) != 1) {
+    throw InputError(path +
+                     ": field 'camera_matrix' is not an intrinsic matrix [fx s cx; 0 fy cy; 0 0 1] "
+                     "with fx, fy > 0");
   }
-  if (camera.K(0, 2) < 0 || camera.K(0, 2) > camera.width || camera.K(1, 2) < 0 || camera.K(1, 2) > camera.height) {
-    throw InputError(path + ": principal point (" + std::to_string(camera.K(0, 2)) + ", " +
-                     std::to_string(camera.K(1, 2)) + ") lies outside the image_width x image_height = " +
-                     std::to_string(camera.width) + " x " + std::to_string(camera.height) + " image");
+  if (camera.K(0, 2) < 0 || camera.K(0, 2) > camera.width || camera.K(1, 2) < 0 ||
+      camera.K(1, 2) > camera.height) {
+    throw InputError(
+        path + ": principal point (" + std::to_string(camera.K(0, 2)) + ", " +
+        std::to_string(camera.K(1, 2)) + ") lies outside the image_width x image_height = " +
+        std::to_string(camera.width) + " x " + std::to_string(camera.height) + " image");
   }
   return camera;
 }
@@ -152,9 +164,10 @@ void save_camera(const CameraModel& camera, const std::string& path, double rms_
 void check_image_size(const CameraModel& camera, int width, int height,
                       const std::string& camera_source, const std::string& image_source) {
   if (width != camera.width || height != camera.height) {
-    throw InputError(image_source + ": image is " + std::to_string(width) + " x " + std::to_string(height) +
-                     " px but the camera file " + camera_source + " describes image_width x image_height = " +
-                     std::to_string(camera.width) + " x " + std::to_string(camera.height));
+    throw InputError(image_source + ": image is " + std::to_string(width) + " x " +
+                     std::to_string(height) + " px but the camera file " + camera_source +
+                     " describes image_width x image_height = " + std::to_string(camera.width) +
+                     " x " + std::to_string(camera.height));
   }
 }
 
@@ -169,7 +182,8 @@ CalibrationResult calibrate_camera(const std::vector<std::string>& image_paths,
   std::vector<cv::Point3f> board_points;
   for (int r = 0; r < board.rows; ++r)
     for (int c = 0; c < board.cols; ++c)
-      board_points.emplace_back(static_cast<float>(c * board.square_m), static_cast<float>(r * board.square_m), 0.f);
+      board_points.emplace_back(static_cast<float>(c * board.square_m),
+                                static_cast<float>(r * board.square_m), 0.f);
   cv::Size size;
   for (const std::string& path : image_paths) {
     const GrayImage image = read_image(path);
@@ -209,7 +223,8 @@ CalibrationResult calibrate_camera(const std::vector<std::string>& image_paths,
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) result.camera.K(r, c) = K.at<double>(r, c);
   result.camera.distortion = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(D.total()));
-  for (int i = 0; i < static_cast<int>(D.total()); ++i) result.camera.distortion[i] = D.ptr<double>()[i];
+  for (int i = 0; i < static_cast<int>(D.total()); ++i)
+    result.camera.distortion[i] = D.ptr<double>()[i];
   return result;
 }
 

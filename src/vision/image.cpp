@@ -1,7 +1,6 @@
 #include "pcr/vision/image.hpp"
 
 #include <cstdio>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -18,10 +17,17 @@ GrayImage read_image(const std::string& path) {
   if (raw.channels() == 4) cv::cvtColor(raw, gray, cv::COLOR_BGRA2GRAY);
   double scale = 1.0;
   switch (gray.depth()) {
-    case CV_8U: scale = 1.0 / 255.0; break;
-    case CV_16U: scale = 1.0 / 65535.0; break;
-    case CV_32F: scale = 1.0; break;
-    default: throw InputError(path + ": unsupported pixel depth");
+    case CV_8U:
+      scale = 1.0 / 255.0;
+      break;
+    case CV_16U:
+      scale = 1.0 / 65535.0;
+      break;
+    case CV_32F:
+      scale = 1.0;
+      break;
+    default:
+      throw InputError(path + ": unsupported pixel depth");
   }
   cv::Mat f;
   gray.convertTo(f, CV_32F, scale);

@@ -1,14 +1,13 @@
 #include "pcr/vision/measure.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <set>
-#include <stdexcept>
-
-#include <Eigen/Dense>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <set>
+#include <stdexcept>
 
 namespace pcr::vision {
 
@@ -22,13 +21,14 @@ Eigen::Matrix3d exp_so3(const Eigen::Vector3d& w) {
 
 std::array<Eigen::Vector2d, 4> tag_points(double size) {
   const double h = 0.5 * size;
-  return {Eigen::Vector2d(-h, -h), Eigen::Vector2d(h, -h), Eigen::Vector2d(h, h), Eigen::Vector2d(-h, h)};
+  return {Eigen::Vector2d(-h, -h), Eigen::Vector2d(h, -h), Eigen::Vector2d(h, h),
+          Eigen::Vector2d(-h, h)};
 }
 
 // Residuals (pixels) of every corner for plane (R, t) and marker states x (3 per marker).
-Eigen::VectorXd corner_residuals(const std::vector<TagDetection>& dets, const std::vector<double>& sizes,
-                                 const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
-                                 const Eigen::VectorXd& x, double f) {
+Eigen::VectorXd corner_residuals(const std::vector<TagDetection>& dets,
+                                 const std::vector<double>& sizes, const Eigen::Matrix3d& R,
+                                 const Eigen::Vector3d& t, const Eigen::VectorXd& x, double f) {
   Eigen::VectorXd r(8 * dets.size());
   for (std::size_t j = 0; j < dets.size(); ++j) {
     const Pose2<double> pose{x[3 * j], x[3 * j + 1], x[3 * j + 2]};
@@ -36,18 +36,23 @@ Eigen::VectorXd corner_residuals(const std::vector<TagDetection>& dets, const st
     for (int k = 0; k < 4; ++k) {
       const Eigen::Vector2d p = pose.transform(pts[k]);
       const Eigen::Vector3d c = R.col(0) * p.x() + R.col(1) * p.y() + t;
-      r.segment<2>(8 * j + 2 * k) = f * (Eigen::Vector2d(c.x() / c.z(), c.y() / c.z()) - dets[j].corners_normalized[k]);
+      r.segment<2>(8 * j + 2 * k) =
+          f * (Eigen::Vector2d(c.x() / c.z(), c.y() / c.z()) - dets[j].corners_normalized[k]);
     }
   }
   return r;
 }
 
-double wrap_near(double angle, double reference) { return reference + wrap_angle(angle - reference); }
+double wrap_near(double angle, double reference) {
+  return reference + wrap_angle(angle - reference);
+}
 
 }  // namespace
 
-Pose2<double> rigid_fit(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
-  if (from.size() != to.size() || from.size() < 2) throw std::invalid_argument("rigid_fit: need >= 2 pairs");
+Pose2<double> rigid_fit(const std::vector<Eigen::Vector2d>& from,
+                        const std::vector<Eigen::Vector2d>& to) {
+  if (from.size() != to.size() || from.size() < 2)
+    throw std::invalid_argument("rigid_fit: need >= 2 pairs");
   Eigen::Vector2d mf = Eigen::Vector2d::Zero(), mt = Eigen::Vector2d::Zero();
   for (std::size_t i = 0; i < from.size(); ++i) {
     mf += from[i];
@@ -72,7 +77,8 @@ PlaneFit fit_planar_markers(const std::vector<TagDetection>& dets, const std::ve
                             const CameraModel& camera, const std::optional<PlanePose>& known_plane,
                             const PoseOptions& options) {
   if (dets.empty()) throw std::runtime_error("fit_planar_markers: no markers");
-  if (sizes.size() != dets.size()) throw std::invalid_argument("fit_planar_markers: one size per detection");
+  if (sizes.size() != dets.size())
+    throw std::invalid_argument("fit_planar_markers: one size per detection");
   const int n = static_cast<int>(dets.size());
   const double f = camera.focal_px();
 
@@ -84,9 +90,11 @@ PlaneFit fit_planar_markers(const std::vector<TagDetection>& dets, const std::ve
     // IPPE_SQUARE's order: (-h, h), (h, h), (h, -h), (-h, -h) = our corners 3, 2, 1, 0.
     std::vector<cv::Point3d> obj{{-h, h, 0}, {h, h, 0}, {h, -h, 0}, {-h, -h, 0}};
     std::vector<cv::Point2d> img;
-    for (int k : {3, 2, 1, 0}) img.emplace_back(dets[j].corners_normalized[k].x(), dets[j].corners_normalized[k].y());
+    for (int k : {3, 2, 1, 0})
+      img.emplace_back(dets[j].corners_normalized[k].x(), dets[j].corners_normalized[k].y());
     cv::Mat rvec, tvec;
-    cv::solvePnP(obj, img, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, false, cv::SOLVEPNP_IPPE_SQUARE);
+    cv::solvePnP(obj, img, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, false,
+                 cv::SOLVEPNP_IPPE_SQUARE);
     cv::Mat Rm;
     cv::Rodrigues(rvec, Rm);
     for (int r = 0; r < 3; ++r) {
@@ -125,7 +133,8 @@ PlaneFit fit_planar_markers(const std::vector<TagDetection>& dets, const std::ve
   const int m = 8 * n, p = 3 * n + np;
   Eigen::MatrixXd J(m, p);
   Eigen::VectorXd r;
-  const auto evaluate = [&](const Eigen::VectorXd& delta, const PlanePose& base, const Eigen::VectorXd& xs) {
+  const auto evaluate = [&](const Eigen::VectorXd& delta, const PlanePose& base,
+                            const Eigen::VectorXd& xs) {
     Eigen::Matrix3d R = base.rotation;
     Eigen::Vector3d t = base.translation;
     if (np) {
@@ -163,7 +172,8 @@ PlaneFit fit_planar_markers(const std::vector<TagDetection>& dets, const std::ve
   fit.plane = plane;
   fit.corner_rms_px = std::sqrt(r.squaredNorm() / m);
   const double sigma_hat = m > p ? std::sqrt(r.squaredNorm() / (m - p)) : 0.0;
-  fit.corner_sigma_px = std::max(sigma_hat * options.corner_sigma_scale, options.corner_sigma_floor_px);
+  fit.corner_sigma_px =
+      std::max(sigma_hat * options.corner_sigma_scale, options.corner_sigma_floor_px);
   const Eigen::MatrixXd cov = fit.corner_sigma_px * fit.corner_sigma_px *
                               (J.transpose() * J).ldlt().solve(Eigen::MatrixXd::Identity(p, p));
   fit.covariance = cov.bottomRightCorner(3 * n, 3 * n);
@@ -178,11 +188,13 @@ PlaneFit fit_planar_markers(const std::vector<TagDetection>& dets, const std::ve
   return fit;
 }
 
-std::vector<TagDetection> match_mounts(const std::vector<TagDetection>& detections, const MountLayout& layout,
-                                       const GrayImage& image, const std::string& source) {
+std::vector<TagDetection> match_mounts(const std::vector<TagDetection>& detections,
+                                       const MountLayout& layout, const GrayImage& image,
+                                       const std::string& source) {
   std::vector<TagDetection> out;
   for (const Mount& mount : layout.mounts) {
-    const std::string who = "mount " + mount.name + " (" + mount.family + " id " + std::to_string(mount.id) + ")";
+    const std::string who =
+        "mount " + mount.name + " (" + mount.family + " id " + std::to_string(mount.id) + ")";
     std::vector<const TagDetection*> hits;
     for (const TagDetection& d : detections)
       if (d.family == mount.family && d.id == mount.id) hits.push_back(&d);
@@ -194,16 +206,19 @@ std::vector<TagDetection> match_mounts(const std::vector<TagDetection>& detectio
                        "); is it hidden, cut by the image border, or of another family?");
     }
     if (hits.size() > 1) {
-      throw InputError(source + ": tag id " + std::to_string(mount.id) + " (" + mount.family + ") appears " +
-                       std::to_string(hits.size()) + " times in the image; " + who + " is ambiguous");
+      throw InputError(source + ": tag id " + std::to_string(mount.id) + " (" + mount.family +
+                       ") appears " + std::to_string(hits.size()) + " times in the image; " + who +
+                       " is ambiguous");
     }
     // The tag's white quiet zone (one cell) must lie inside the image too.
     const TagDetection& d = *hits.front();
-    const double side = 0.25 * ((d.corners[1] - d.corners[0]).norm() + (d.corners[2] - d.corners[1]).norm() +
-                                (d.corners[3] - d.corners[2]).norm() + (d.corners[0] - d.corners[3]).norm());
+    const double side =
+        0.25 * ((d.corners[1] - d.corners[0]).norm() + (d.corners[2] - d.corners[1]).norm() +
+                (d.corners[3] - d.corners[2]).norm() + (d.corners[0] - d.corners[3]).norm());
     const double margin = side / 8.0 + 1.0;
     for (const Eigen::Vector2d& c : d.corners) {
-      if (c.x() < margin || c.y() < margin || c.x() > image.width - 1 - margin || c.y() > image.height - 1 - margin) {
+      if (c.x() < margin || c.y() < margin || c.x() > image.width - 1 - margin ||
+          c.y() > image.height - 1 - margin) {
         throw InputError(source + ": " + who + " is cut by the image border (corner at " +
                          std::to_string(c.x()) + ", " + std::to_string(c.y()) + " px)");
       }
@@ -216,7 +231,8 @@ std::vector<TagDetection> match_mounts(const std::vector<TagDetection>& detectio
 namespace {
 
 std::vector<TagDetection> detect_layout_families(const GrayImage& image, const MountLayout& layout,
-                                                 const CameraModel& camera, const DetectorOptions& base) {
+                                                 const CameraModel& camera,
+                                                 const DetectorOptions& base) {
   std::set<std::string> families;
   for (const Mount& m : layout.mounts) families.insert(m.family);
   std::vector<TagDetection> all;
@@ -260,8 +276,8 @@ Eigen::VectorXd clamp_outputs(const MountLayout& layout, const RobotParams<doubl
   Eigen::VectorXd out(6 * n);
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector2d a = Tw.transform(A[i]), b = Tp.transform(B[i]);
-    out.segment<6>(6 * i) << a.x(), a.y(), wrap_near(alpha[i] + Tw.theta, design.limb(i).alpha), b.x(), b.y(),
-        wrap_near(beta[i] + Tp.theta, design.limb(i).beta);
+    out.segment<6>(6 * i) << a.x(), a.y(), wrap_near(alpha[i] + Tw.theta, design.limb(i).alpha),
+        b.x(), b.y(), wrap_near(beta[i] + Tp.theta, design.limb(i).beta);
     if (limbs) {
       LimbMeasurement& l = (*limbs)[i];
       l.A_plane = A[i];
@@ -275,19 +291,19 @@ Eigen::VectorXd clamp_outputs(const MountLayout& layout, const RobotParams<doubl
 
 }  // namespace
 
-RobotMeasurement measure_robot(const GrayImage& image, const std::string& source, const MountLayout& layout,
-                               const CameraModel& camera, const RobotParams<double>& design,
-                               const MeasureOptions& options) {
+RobotMeasurement measure_robot(const GrayImage& image, const std::string& source,
+                               const MountLayout& layout, const CameraModel& camera,
+                               const RobotParams<double>& design, const MeasureOptions& options) {
   const int n = layout.num_limbs();
   if (n != design.num_limbs) {
-    throw InputError("the mount layout describes " + std::to_string(n) + " limbs but the design has " +
-                     std::to_string(design.num_limbs));
+    throw InputError("the mount layout describes " + std::to_string(n) +
+                     " limbs but the design has " + std::to_string(design.num_limbs));
   }
   if (n < 2) throw InputError("the mount layout needs at least 2 limbs to define W and P");
   check_image_size(camera, image.width, image.height, "(camera)", source);
   RobotMeasurement result;
-  result.detections = match_mounts(detect_layout_families(image, layout, camera, options.detector), layout,
-                                   image, source);
+  result.detections = match_mounts(detect_layout_families(image, layout, camera, options.detector),
+                                   layout, image, source);
   std::vector<double> sizes;
   for (const Mount& mnt : layout.mounts) sizes.push_back(mnt.tag_size);
   result.fit = fit_planar_markers(result.detections, sizes, camera, std::nullopt, options.pose);
@@ -314,13 +330,15 @@ RobotMeasurement measure_robot(const GrayImage& image, const std::string& source
       (of_markers ? mp : op)[c] += h;
       (of_markers ? mm : om)[c] -= h;
       J.col(c) = (clamp_outputs(layout, design, mp, op, nullptr, nullptr, nullptr) -
-                  clamp_outputs(layout, design, mm, om, nullptr, nullptr, nullptr)) / (2 * h);
+                  clamp_outputs(layout, design, mm, om, nullptr, nullptr, nullptr)) /
+                 (2 * h);
     }
     return J;
   };
   const Eigen::MatrixXd Jm = jac(true), Jo = jac(false);
   const Eigen::VectorXd var = (Jm * result.fit.covariance * Jm.transpose()).diagonal();
-  const Eigen::VectorXd half = options.coverage_factor * var.cwiseMax(0).cwiseSqrt() + Jo.cwiseAbs() * oh;
+  const Eigen::VectorXd half =
+      options.coverage_factor * var.cwiseMax(0).cwiseSqrt() + Jo.cwiseAbs() * oh;
   for (int i = 0; i < n; ++i) {
     LimbMeasurement& l = result.limbs[i];
     l.A = y.segment<2>(6 * i);
@@ -343,12 +361,14 @@ RobotMeasurement measure_robot(const GrayImage& image, const std::string& source
   return result;
 }
 
-SweepResult measure_sweep(const std::vector<GrayImage>& images, const std::vector<std::string>& sources, int limb,
-                          const MountLayout& layout, const CameraModel& camera, RobotMeasurement& home,
-                          const MeasureOptions& options) {
+SweepResult measure_sweep(const std::vector<GrayImage>& images,
+                          const std::vector<std::string>& sources, int limb,
+                          const MountLayout& layout, const CameraModel& camera,
+                          RobotMeasurement& home, const MeasureOptions& options) {
   const int idx = layout.find(limb, MountRole::kProximal);
   if (idx < 0 || limb >= static_cast<int>(home.limbs.size())) {
-    throw InputError("sweep: limb " + std::to_string(limb) + " has no proximal mount in the layout");
+    throw InputError("sweep: limb " + std::to_string(limb) +
+                     " has no proximal mount in the layout");
   }
   if (images.size() < 3) {
     throw InputError("sweep of limb " + std::to_string(limb) + ": need at least 3 images, got " +
@@ -364,8 +384,10 @@ SweepResult measure_sweep(const std::vector<GrayImage>& images, const std::vecto
     check_image_size(camera, images[s].width, images[s].height, "(camera)", sources[s]);
     DetectorOptions opt = options.detector;
     opt.family = mount.family;
-    const auto dets = match_mounts(detect_tags(images[s], opt, &camera), single, images[s], sources[s]);
-    const PlaneFit fit = fit_planar_markers(dets, {mount.tag_size}, camera, home.fit.plane, options.pose);
+    const auto dets =
+        match_mounts(detect_tags(images[s], opt, &camera), single, images[s], sources[s]);
+    const PlaneFit fit =
+        fit_planar_markers(dets, {mount.tag_size}, camera, home.fit.plane, options.pose);
     result.centres.emplace_back(fit.markers[0].pose.x, fit.markers[0].pose.y);
     covs.push_back(fit.markers[0].covariance.topLeftCorner<2, 2>());
   }
@@ -387,7 +409,8 @@ SweepResult measure_sweep(const std::vector<GrayImage>& images, const std::vecto
     res += d.dot(normal) * d.dot(normal);
     var_perp += normal.dot(covs[i] * normal);
   }
-  if (ss <= 0) throw InputError("sweep of limb " + std::to_string(limb) + ": the marker did not move");
+  if (ss <= 0)
+    throw InputError("sweep of limb " + std::to_string(limb) + ": the marker did not move");
   result.line_rms = std::sqrt(res / n);
   // The perpendicular scatter: the larger of the residuals' and the markers' own covariance.
   const double sigma_perp = std::sqrt(std::max(res / std::max(1, n - 2), var_perp / n));
@@ -396,18 +419,21 @@ SweepResult measure_sweep(const std::vector<GrayImage>& images, const std::vecto
   LimbMeasurement& l = home.limbs[limb];
   const double sigma_theta = std::sqrt(std::max(0.0, home.fit.markers[idx].covariance(2, 2)));
   result.gamma = wrap_angle(result.direction_plane - l.alpha_plane);
-  result.gamma_halfwidth = options.coverage_factor * std::hypot(result.direction_sigma, sigma_theta) +
-                           mount.rod_angle_uncertainty;
+  result.gamma_halfwidth =
+      options.coverage_factor * std::hypot(result.direction_sigma, sigma_theta) +
+      mount.rod_angle_uncertainty;
   l.gamma = result.gamma;
   l.gamma_halfwidth = result.gamma_halfwidth;
   return result;
 }
 
-RobotDescription measured_description(const RobotDescription& design, const RobotMeasurement& measurement) {
+RobotDescription measured_description(const RobotDescription& design,
+                                      const RobotMeasurement& measurement) {
   RobotDescription out = design;
   const int n = design.params.num_limbs;
   RobotUncertainty unc = design.uncertainty ? *design.uncertainty : *default_robot().uncertainty;
-  if (static_cast<int>(unc.limbs.size()) != n) unc.limbs.assign(static_cast<std::size_t>(n), unc.global);
+  if (static_cast<int>(unc.limbs.size()) != n)
+    unc.limbs.assign(static_cast<std::size_t>(n), unc.global);
   for (int i = 0; i < n && i < static_cast<int>(measurement.limbs.size()); ++i) {
     const LimbMeasurement& l = measurement.limbs[i];
     LimbParams<double>& p = out.params.limb(i);
@@ -432,7 +458,6 @@ RobotDescription measured_description(const RobotDescription& design, const Robo
 }  // namespace pcr::vision
 
 #include <cstdio>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -452,23 +477,27 @@ void write_annotated(const GrayImage& image, const RobotMeasurement& m, const Mo
     const TagDetection& d = m.detections[i];
     for (int k = 0; k < 4; ++k) {
       cv::line(bgr, cv::Point2d(d.corners[k].x(), d.corners[k].y()),
-               cv::Point2d(d.corners[(k + 1) % 4].x(), d.corners[(k + 1) % 4].y()), {0, 200, 0}, thick);
+               cv::Point2d(d.corners[(k + 1) % 4].x(), d.corners[(k + 1) % 4].y()), {0, 200, 0},
+               thick);
     }
     const Eigen::Vector2d c = 0.25 * (d.corners[0] + d.corners[1] + d.corners[2] + d.corners[3]);
-    cv::putText(bgr, layout.mounts[i].name + " id " + std::to_string(d.id), cv::Point2d(c.x(), c.y()),
-                cv::FONT_HERSHEY_SIMPLEX, 0.6 * thick, {0, 160, 0}, thick);
+    cv::putText(bgr, layout.mounts[i].name + " id " + std::to_string(d.id),
+                cv::Point2d(c.x(), c.y()), cv::FONT_HERSHEY_SIMPLEX, 0.6 * thick, {0, 160, 0},
+                thick);
   }
   for (const LimbMeasurement& l : m.limbs) {
     for (int end = 0; end < 2; ++end) {
       const Eigen::Vector2d p = end ? l.B_plane : l.A_plane;
       const double a = end ? l.beta_plane : l.alpha_plane;
       cv::circle(bgr, px(p), 4 * thick, {0, 0, 255}, thick);
-      cv::line(bgr, px(p), px(p + 0.005 * Eigen::Vector2d(std::cos(a), std::sin(a))), {255, 0, 0}, thick);
+      cv::line(bgr, px(p), px(p + 0.005 * Eigen::Vector2d(std::cos(a), std::sin(a))), {255, 0, 0},
+               thick);
     }
   }
   const std::string tmp = path + ".tmp.png";
   if (!cv::imwrite(tmp, bgr)) throw std::runtime_error(path + ": cannot write the annotated image");
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error(path + ": cannot rename " + tmp);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0)
+    throw std::runtime_error(path + ": cannot rename " + tmp);
 }
 
 }  // namespace pcr::vision

@@ -3,10 +3,9 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
-
-#include <nlohmann/json.hpp>
 
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/tags.hpp"
@@ -88,12 +87,15 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
       r.fail(where + ".role", "expected \"proximal\" or \"distal\", got \"" + role + "\"");
     }
     const double limb = r.number(j, "limb", where);
-    if (limb < 0 || limb >= 6 || limb != std::floor(limb)) r.fail(where + ".limb", "expected 0..5, got " + j["limb"].dump());
+    if (limb < 0 || limb >= 6 || limb != std::floor(limb))
+      r.fail(where + ".limb", "expected 0..5, got " + j["limb"].dump());
     m.limb = static_cast<int>(limb);
     m.family = j.value("family", family);
-    if (!is_known_family(m.family)) r.fail(where + ".family", "unknown tag family \"" + m.family + "\"");
+    if (!is_known_family(m.family))
+      r.fail(where + ".family", "unknown tag family \"" + m.family + "\"");
     const double id = r.number(j, "id", where);
-    if (id < 0 || id != std::floor(id)) r.fail(where + ".id", "expected a non-negative integer, got " + j["id"].dump());
+    if (id < 0 || id != std::floor(id))
+      r.fail(where + ".id", "expected a non-negative integer, got " + j["id"].dump());
     m.id = static_cast<int>(id);
     int total = 0, wab = 0;
     try {
@@ -105,7 +107,8 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
       r.fail(where + ".id", "duplicated tag id " + std::to_string(m.id) + " (" + m.family + ")");
     }
     m.tag_size = j.contains("tag_size") ? r.number(j, "tag_size", where) : size;
-    if (!(m.tag_size > 0)) r.fail(where + ".tag_size", "must be positive (m), got " + std::to_string(m.tag_size));
+    if (!(m.tag_size > 0))
+      r.fail(where + ".tag_size", "must be positive (m), got " + std::to_string(m.tag_size));
     m.clamp_offset = r.pair(j, "clamp_offset", where);
     m.clamp_offset_uncertainty = r.pair(j, "clamp_offset_uncertainty", where);
     m.rod_angle = r.number(j, "rod_angle", where);
@@ -122,8 +125,8 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
       for (const Mount& m : layout.mounts) count += (m.limb == limb && m.role == role);
       const std::string name = role == MountRole::kProximal ? "proximal" : "distal";
       if (count != 1) {
-        r.fail("mounts", "limb " + std::to_string(limb) + " has " + std::to_string(count) + " " + name +
-                             " mounts, expected exactly 1");
+        r.fail("mounts", "limb " + std::to_string(limb) + " has " + std::to_string(count) + " " +
+                             name + " mounts, expected exactly 1");
       }
     }
   }

@@ -1,12 +1,11 @@
 #include "pcr/vision/render.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <random>
-
-#include <Eigen/Dense>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/tags.hpp"
@@ -38,7 +37,8 @@ struct Painter {
       if (q.x() >= -2 && q.x() < b.cols + 2 && q.y() >= -2 && q.y() < b.rows + 2) {
         value = opt.white;
         const int i = static_cast<int>(std::floor(q.x())), j = static_cast<int>(std::floor(q.y()));
-        if (i >= -1 && i <= b.cols - 1 && j >= -1 && j <= b.rows - 1 && ((i + j) & 1) == 0) value = opt.black;
+        if (i >= -1 && i <= b.cols - 1 && j >= -1 && j <= b.rows - 1 && ((i + j) & 1) == 0)
+          value = opt.black;
       }
     }
     for (const RenderCircle& c : scene.circles) {
@@ -56,9 +56,10 @@ struct Painter {
       const double lx = c * d.x() + s * d.y(), ly = -s * d.x() + c * d.y();
       const double gx = lx / t.cell + 0.5 * t.total, gy = 0.5 * t.total - ly / t.cell;
       if (gx >= 0 && gx < t.total && gy >= 0 && gy < t.total) {
-        value = t.bits[static_cast<std::size_t>(static_cast<int>(gy) * t.total + static_cast<int>(gx))]
-                    ? opt.white
-                    : opt.black;
+        value =
+            t.bits[static_cast<std::size_t>(static_cast<int>(gy) * t.total + static_cast<int>(gx))]
+                ? opt.white
+                : opt.black;
       }
     }
     return value;
@@ -90,8 +91,8 @@ cv::Rect pixel_box(const Scene& scene, const std::vector<Eigen::Vector2d>& polyg
 }
 
 std::vector<Eigen::Vector2d> square(const Pose2<double>& pose, double half) {
-  return {pose.transform({-half, -half}), pose.transform({half, -half}), pose.transform({half, half}),
-          pose.transform({-half, half})};
+  return {pose.transform({-half, -half}), pose.transform({half, -half}),
+          pose.transform({half, half}), pose.transform({-half, half})};
 }
 
 }  // namespace
@@ -129,19 +130,23 @@ GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
   for (const RenderCircle& c : scene.circles) {
     // Boxes around short arcs only, so the disc's interior is not supersampled.
     constexpr int kArcs = 72;
-    const double h = M_PI / kArcs, r0 = std::max(0.0, c.radius_m - c.width_m), r1 = (c.radius_m + c.width_m) / std::cos(h);
+    const double h = M_PI / kArcs, r0 = std::max(0.0, c.radius_m - c.width_m),
+                 r1 = (c.radius_m + c.width_m) / std::cos(h);
     for (int k = 0; k < kArcs; ++k) {
-      const Eigen::Vector2d u0(std::cos(2 * h * k), std::sin(2 * h * k)), u1(std::cos(2 * h * (k + 1)), std::sin(2 * h * (k + 1)));
-      boxes.push_back(pixel_box(scene, {c.centre + r0 * u0, c.centre + r1 * u0, c.centre + r1 * u1, c.centre + r0 * u1}));
+      const Eigen::Vector2d u0(std::cos(2 * h * k), std::sin(2 * h * k)),
+          u1(std::cos(2 * h * (k + 1)), std::sin(2 * h * (k + 1)));
+      boxes.push_back(pixel_box(
+          scene, {c.centre + r0 * u0, c.centre + r1 * u0, c.centre + r1 * u1, c.centre + r0 * u1}));
     }
   }
   if (scene.chessboard) {
     const RenderChessboard& b = *scene.chessboard;
     const Pose2<double>& P = b.pose;
     const double q = b.square_m;
-    boxes.push_back(pixel_box(scene, {P.transform({-2 * q, -2 * q}), P.transform({(b.cols + 2) * q, -2 * q}),
-                                      P.transform({(b.cols + 2) * q, (b.rows + 2) * q}),
-                                      P.transform({-2 * q, (b.rows + 2) * q})}));
+    boxes.push_back(
+        pixel_box(scene, {P.transform({-2 * q, -2 * q}), P.transform({(b.cols + 2) * q, -2 * q}),
+                          P.transform({(b.cols + 2) * q, (b.rows + 2) * q}),
+                          P.transform({-2 * q, (b.rows + 2) * q})}));
   }
 
   // Plane point from normalised coordinates: the inverse of [r1 r2 t].
@@ -161,7 +166,8 @@ GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
     std::vector<Eigen::Vector2d> grid(static_cast<std::size_t>(gw * gh));
     for (int j = 0; j < gh; ++j)
       for (int i = 0; i < gw; ++i)
-        grid[j * gw + i] = cam.normalize(Eigen::Vector2d(box.x - 0.5 + i * kGrid, box.y - 0.5 + j * kGrid));
+        grid[j * gw + i] =
+            cam.normalize(Eigen::Vector2d(box.x - 0.5 + i * kGrid, box.y - 0.5 + j * kGrid));
     for (int v = box.y; v < box.y + box.height; ++v) {
       for (int u = box.x; u < box.x + box.width; ++u) {
         const std::size_t idx = static_cast<std::size_t>(v) * cam.width + u;
@@ -170,11 +176,14 @@ GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
         double sum = 0;
         for (int b = 0; b < s; ++b) {
           for (int a = 0; a < s; ++a) {
-            const double gx = (u - box.x + (a + 0.5) / s) / kGrid, gy = (v - box.y + (b + 0.5) / s) / kGrid;
-            const int i = std::min(static_cast<int>(gx), gw - 2), j = std::min(static_cast<int>(gy), gh - 2);
+            const double gx = (u - box.x + (a + 0.5) / s) / kGrid,
+                         gy = (v - box.y + (b + 0.5) / s) / kGrid;
+            const int i = std::min(static_cast<int>(gx), gw - 2),
+                      j = std::min(static_cast<int>(gy), gh - 2);
             const double fx = gx - i, fy = gy - j;
-            const Eigen::Vector2d xn = (1 - fy) * ((1 - fx) * grid[j * gw + i] + fx * grid[j * gw + i + 1]) +
-                                       fy * ((1 - fx) * grid[(j + 1) * gw + i] + fx * grid[(j + 1) * gw + i + 1]);
+            const Eigen::Vector2d xn =
+                (1 - fy) * ((1 - fx) * grid[j * gw + i] + fx * grid[j * gw + i + 1]) +
+                fy * ((1 - fx) * grid[(j + 1) * gw + i] + fx * grid[(j + 1) * gw + i + 1]);
             const Eigen::Vector3d q = Hinv * Eigen::Vector3d(xn.x(), xn.y(), 1.0);
             sum += painter.shade(Eigen::Vector2d(q.x() / q.z(), q.y() / q.z()));
           }
@@ -221,7 +230,9 @@ std::vector<RenderTag> mount_tags(const MountLayout& layout, const RobotParams<d
     B[i] = platform.transform(l.B);
   }
   for (const Mount& m : layout.mounts) {
-    if (m.limb >= n) throw InputError("mount " + m.name + ": limb " + std::to_string(m.limb) + " is not in the robot");
+    if (m.limb >= n)
+      throw InputError("mount " + m.name + ": limb " + std::to_string(m.limb) +
+                       " is not in the robot");
     const LimbParams<double>& l = robot.limb(m.limb);
     const bool proximal = m.role == MountRole::kProximal;
     const Eigen::Vector2d clamp = proximal ? A[m.limb] : B[m.limb];

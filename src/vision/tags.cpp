@@ -1,10 +1,9 @@
 #include "pcr/vision/tags.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <memory>
-
-#include <Eigen/Dense>
 
 extern "C" {
 #include <apriltag.h>
@@ -169,9 +168,10 @@ std::vector<bool> tag_bitmap(const std::string& family, int id, int* total_width
 std::vector<TagDetection> detect_tags(const GrayImage& image, const DetectorOptions& options,
                                       const CameraModel* camera) {
   FamilyPtr fam = make_family(options.family);
-  std::unique_ptr<apriltag_detector_t, void (*)(apriltag_detector_t*)> td(apriltag_detector_create(),
-                                                                          apriltag_detector_destroy);
-  apriltag_detector_add_family_bits(td.get(), fam.get(), std::max(0, std::min(options.max_hamming, 3)));
+  std::unique_ptr<apriltag_detector_t, void (*)(apriltag_detector_t*)> td(
+      apriltag_detector_create(), apriltag_detector_destroy);
+  apriltag_detector_add_family_bits(td.get(), fam.get(),
+                                    std::max(0, std::min(options.max_hamming, 3)));
   td->quad_decimate = static_cast<float>(options.quad_decimate);
   td->quad_sigma = static_cast<float>(options.quad_sigma);
   td->nthreads = std::max(1, options.threads);
@@ -194,26 +194,30 @@ std::vector<TagDetection> detect_tags(const GrayImage& image, const DetectorOpti
   for (int i = 0; i < zarray_size(found); ++i) {
     apriltag_detection_t* det = nullptr;
     zarray_get(found, i, &det);
-    if (det->hamming > options.max_hamming || det->decision_margin < options.min_decision_margin) continue;
+    if (det->hamming > options.max_hamming || det->decision_margin < options.min_decision_margin)
+      continue;
     TagDetection d;
     d.family = options.family;
     d.id = det->id;
     d.hamming = det->hamming;
     d.decision_margin = det->decision_margin;
-    // AprilTag puts pixel centres at +0.5; p[0..3] are the tag points (-1,1), (1,1), (1,-1), (-1,-1)
-    // with the tag's y pointing down its bitmap, i.e. our bottom-left, bottom-right, top-right,
-    // top-left.
-    for (int k = 0; k < 4; ++k) d.corners[k] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
+    // AprilTag puts pixel centres at +0.5; p[0..3] are the tag points (-1,1), (1,1), (1,-1),
+    // (-1,-1) with the tag's y pointing down its bitmap, i.e. our bottom-left, bottom-right,
+    // top-right, top-left.
+    for (int k = 0; k < 4; ++k)
+      d.corners[k] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
     const double cells = fam->width_at_border;
     bool ok = false;
-    if (options.refine) ok = refine_quad(image, camera, cells, d.corners, d.corners_normalized, &d.edge_rms_px);
+    if (options.refine)
+      ok = refine_quad(image, camera, cells, d.corners, d.corners_normalized, &d.edge_rms_px);
     if (!ok && camera) {
       for (int k = 0; k < 4; ++k) d.corners_normalized[k] = camera->normalize(d.corners[k]);
     }
     out.push_back(d);
   }
   apriltag_detections_destroy(found);
-  std::sort(out.begin(), out.end(), [](const TagDetection& a, const TagDetection& b) { return a.id < b.id; });
+  std::sort(out.begin(), out.end(),
+            [](const TagDetection& a, const TagDetection& b) { return a.id < b.id; });
   return out;
 }
 

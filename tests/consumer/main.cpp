@@ -1,6 +1,5 @@
 // FK then IK of the default robot with the header-only core (the README's example).
 #include <cstdio>
-
 #include <pcr/pcr.hpp>
 
 int main() {

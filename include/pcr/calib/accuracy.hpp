@@ -5,11 +5,12 @@
 // statistics, and runs against the virtual robot.
 //
 // ISO 9283, per commanded pose c and its n attained poses j (n >= 30 in the standard):
-//   barycentre  x_bar = mean(x_j), y_bar = mean(y_j), theta_bar = theta_c + mean(wrap(theta_j - theta_c))
-//   AP_p     = sqrt((x_bar - x_c)^2 + (y_bar - y_c)^2)                       (Eq. 10)
+//   barycentre  x_bar = mean(x_j), y_bar = mean(y_j), theta_bar = theta_c + mean(wrap(theta_j -
+//   theta_c)) AP_p     = sqrt((x_bar - x_c)^2 + (y_bar - y_c)^2)                       (Eq. 10)
 //   AP_theta = theta_bar - theta_c                                            (Eq. 11)
 //   l_j = |(x_j, y_j) - (x_bar, y_bar)|,  S_l = sqrt(sum (l_j - l_bar)^2 / (n - 1)),
-//   RP_l = l_bar + 3 S_l;  S_theta = sqrt(sum (theta_j - theta_bar)^2 / (n - 1)), RP_theta = +-3 S_theta.
+//   RP_l = l_bar + 3 S_l;  S_theta = sqrt(sum (theta_j - theta_bar)^2 / (n - 1)), RP_theta = +-3
+//   S_theta.
 // Table 4 of the paper is the max, mean and min over the path of AP_p and |AP_theta|.
 
 #include <string>
@@ -35,10 +36,10 @@ struct PathCommandOptions {
 };
 
 struct PathCommand {
-  std::vector<JointVector> q;          ///< commanded joints of each pose (m)
-  std::vector<Pose2<double>> poses;    ///< the poses solved for (theta solved when n = 2)
-  std::vector<double> max_strain;      ///< largest bending strain at each pose
-  std::vector<int> iterations;         ///< Newton iterations spent on each pose
+  std::vector<JointVector> q;        ///< commanded joints of each pose (m)
+  std::vector<Pose2<double>> poses;  ///< the poses solved for (theta solved when n = 2)
+  std::vector<double> max_strain;    ///< largest bending strain at each pose
+  std::vector<int> iterations;       ///< Newton iterations spent on each pose
 };
 
 /// Throws InputError "pose k (x, y, theta): <reason>" (k 0-based) at the first pose that has no
@@ -50,15 +51,15 @@ PathCommand command_path(const RobotParams<double>& model, const std::vector<Pos
 /// ISO 9283 statistics of one commanded pose.
 struct Iso9283Pose {
   Pose2<double> commanded;
-  Pose2<double> barycentre;  ///< (x_bar, y_bar, theta_bar)
-  int cycles = 0;            ///< n attained poses
-  double ap_x = 0, ap_y = 0; ///< x_bar - x_c, y_bar - y_c (m)
-  double ap_p = 0;           ///< Eq. 10 (m)
-  double ap_theta = 0;       ///< Eq. 11, signed (rad)
-  double l_bar = 0, s_l = 0; ///< m
-  double rp_l = 0;           ///< l_bar + 3 S_l (m)
-  double s_theta = 0;        ///< rad
-  double rp_theta = 0;       ///< 3 S_theta: the repeatability is +-rp_theta (rad)
+  Pose2<double> barycentre;   ///< (x_bar, y_bar, theta_bar)
+  int cycles = 0;             ///< n attained poses
+  double ap_x = 0, ap_y = 0;  ///< x_bar - x_c, y_bar - y_c (m)
+  double ap_p = 0;            ///< Eq. 10 (m)
+  double ap_theta = 0;        ///< Eq. 11, signed (rad)
+  double l_bar = 0, s_l = 0;  ///< m
+  double rp_l = 0;            ///< l_bar + 3 S_l (m)
+  double s_theta = 0;         ///< rad
+  double rp_theta = 0;        ///< 3 S_theta: the repeatability is +-rp_theta (rad)
 };
 
 struct Iso9283Stats {
@@ -111,8 +112,7 @@ struct AccuracyEvaluation {
 /// virtual robot: each cycle visits every pose in path order, so every pose is approached from
 /// the same direction (from the previous pose) in every cycle, as ISO 9283 asks. The robot moves
 /// on its true parameters and load; the camera adds its repeatability noise.
-AccuracyEvaluation evaluate_on_virtual_robot(const RobotParams<double>& model,
-                                             VirtualRobot& robot,
+AccuracyEvaluation evaluate_on_virtual_robot(const RobotParams<double>& model, VirtualRobot& robot,
                                              const std::vector<Pose2<double>>& path,
                                              const AccuracyOptions& options = AccuracyOptions());
 

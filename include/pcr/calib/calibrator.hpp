@@ -23,11 +23,12 @@
 //   the data) left LM crawling along near-gauge valleys. Holding limb 0 at its nominal values
 //   during the stages is not an option: a rotation of up to 5 mrad about limb 0's clamp moves the
 //   other clamps by up to 0.5 mm, outside their +-0.16 mm boxes.
-//   After the last stage the gauge is fixed exactly, without changing any prediction: limb 0 defines the frames, so A_0, alpha_0 (and, distally, B_0,
-//   beta_0) and d_0 get back their nominal (measured) values, the others and the extrinsics follow.
-//   The standard deviations are computed in that gauge (those parameters held), so every reported
-//   value and deviation is relative to limb 0's measured clamps. Gauge directions are detected
-//   (rank of the scaled Jacobian at the solution) and named in the report.
+//   After the last stage the gauge is fixed exactly, without changing any prediction: limb 0
+//   defines the frames, so A_0, alpha_0 (and, distally, B_0, beta_0) and d_0 get back their nominal
+//   (measured) values, the others and the extrinsics follow. The standard deviations are computed
+//   in that gauge (those parameters held), so every reported value and deviation is relative to
+//   limb 0's measured clamps. Gauge directions are detected (rank of the scaled Jacobian at the
+//   solution) and named in the report.
 // - Uncertainty: ceres::Covariance (dense SVD) on the free parameters with the gauge references
 //   held, scaled by the residual variance (sum of squares / (m - p)).
 
@@ -80,8 +81,8 @@ struct CalibrationOptions {
   double residual_scale = kDefaultResidualScale;          ///< whitening of the residuals (m)
   DerivativeMode derivatives = DerivativeMode::kImplicit;
   SolverOptions fk;
-  int max_iterations = 100;     ///< per stage
-  bool fix_gauge = true;        ///< move the result to the limb-0 gauge (see above)
+  int max_iterations = 100;  ///< per stage
+  bool fix_gauge = true;     ///< move the result to the limb-0 gauge (see above)
   /// Weight of the weak prior towards the nominal values during the stages (whitened residual
   /// per half-width of deviation). It fixes the gauge directions smoothly; 0 disables it.
   double gauge_prior_weight = 1e-3;
@@ -113,10 +114,10 @@ struct StageReport {
   std::string termination;  ///< Ceres' brief report
   bool usable = false;      ///< Ceres' IsSolutionUsable()
   // Where the time goes (all solves of the stage, active-set passes included).
-  int residual_evaluations = 0;    ///< Ceres residual-only evaluations of the whole problem
-  int jacobian_evaluations = 0;    ///< Ceres residual + Jacobian evaluations
-  double residual_time_s = 0;      ///< Ceres' residual evaluation time
-  double jacobian_time_s = 0;      ///< Ceres' Jacobian evaluation time
+  int residual_evaluations = 0;  ///< Ceres residual-only evaluations of the whole problem
+  int jacobian_evaluations = 0;  ///< Ceres residual + Jacobian evaluations
+  double residual_time_s = 0;    ///< Ceres' residual evaluation time
+  double jacobian_time_s = 0;    ///< Ceres' Jacobian evaluation time
   double linear_solver_time_s = 0;
   int fk_solves = 0;               ///< double FK solves (all configurations)
   int fk_warm_start_failures = 0;  ///< warm starts that failed (a cold start followed)
@@ -124,33 +125,33 @@ struct StageReport {
 };
 
 struct ParameterEstimate {
-  std::string name;   ///< "l[1]", "camera_x" ...
+  std::string name;  ///< "l[1]", "camera_x" ...
   double nominal = 0;
-  double value = 0;   ///< identified, in the final gauge
-  double std_dev = 0; ///< 0 when not free or gauge reference; NaN when the covariance failed
+  double value = 0;    ///< identified, in the final gauge
+  double std_dev = 0;  ///< 0 when not free or gauge reference; NaN when the covariance failed
   double half_width = 0;
-  bool free = false;        ///< free in the last stage
+  bool free = false;             ///< free in the last stage
   bool gauge_reference = false;  ///< held by the gauge fix
-  bool at_bound = false;    ///< ended (before the gauge fix) within 1e-6 of its bound range
+  bool at_bound = false;         ///< ended (before the gauge fix) within 1e-6 of its bound range
 };
 
 struct GaugeDirection {
-  std::string name;   ///< e.g. "proximal clamps + camera: rotation"
-  std::string combination;  ///< the parameters it moves, e.g. "A_x[*] + camera_x"
+  std::string name;          ///< e.g. "proximal clamps + camera: rotation"
+  std::string combination;   ///< the parameters it moves, e.g. "A_x[*] + camera_x"
   double relative_gain = 0;  ///< |J g| / (sigma_max |g|), scaled units: ~0 means a gauge
   bool present = false;      ///< every parameter it moves is free in the last stage
 };
 
 struct CalibrationResult {
-  RobotParams<double> identified;     ///< final parameters (gauge fixed)
+  RobotParams<double> identified;       ///< final parameters (gauge fixed)
   RobotParams<double> extrinsics_only;  ///< nominal robot with identified extrinsics
   std::vector<StageReport> stages;
   std::vector<ParameterEstimate> parameters;  ///< every flat parameter, in flat order
   std::vector<GaugeDirection> gauge;
-  int free_count = 0;        ///< free parameters of the last stage
-  int jacobian_rank = 0;     ///< numerical rank of the scaled Jacobian on them
+  int free_count = 0;                   ///< free parameters of the last stage
+  int jacobian_rank = 0;                ///< numerical rank of the scaled Jacobian on them
   std::vector<double> singular_values;  ///< of the scaled Jacobian, relative to the largest
-  double residual_variance = 0;  ///< of the whitened residuals: ~1 at the noise floor
+  double residual_variance = 0;         ///< of the whitened residuals: ~1 at the noise floor
   bool covariance_ok = false;
 };
 
@@ -185,7 +186,7 @@ std::vector<double> parameter_half_widths(const RobotUncertainty& uncertainty, i
 /// take `reference`'s values; predictions (with no load) are unchanged.
 RobotParams<double> fix_gauge(const RobotParams<double>& params,
                               const RobotParams<double>& reference, bool proximal_translation,
-                              bool proximal_rotation, bool distal_translation,
-                              bool distal_rotation, bool stiffness);
+                              bool proximal_rotation, bool distal_translation, bool distal_rotation,
+                              bool stiffness);
 
 }  // namespace pcr

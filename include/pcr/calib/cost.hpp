@@ -26,15 +26,15 @@
 //   residual: AutoDiffCostFunction<3, 36> for n = 3, DynamicAutoDiffCostFunction with
 //   Jet<double, 16> chunks otherwise. Kept as the independent cross-check of the assembly.
 
-#include <algorithm>
-#include <array>
-#include <memory>
-#include <type_traits>
-
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/dynamic_autodiff_cost_function.h>
 #include <ceres/dynamic_numeric_diff_cost_function.h>
 #include <ceres/numeric_diff_cost_function.h>
+
+#include <algorithm>
+#include <array>
+#include <memory>
+#include <type_traits>
 
 #include "pcr/calib/jet_traits.hpp"  // before the core templates meet a Jet
 #include "pcr/implicit_kinematics.hpp"
@@ -82,8 +82,12 @@ inline void limb_residual_partials(const LimbParams<double>& limb, double q,
   using J3 = ceres::Jet<double, 3>;  // lanes: start angle alpha, EI, length
   const double ca = std::cos(limb.alpha + limb.gamma), sa = std::sin(limb.alpha + limb.gamma);
   const double ei = limb.bending_stiffness();
-  const RodState<J3> start{J3(limb.A.x() + q * ca), J3(limb.A.y() + q * sa), J3(limb.alpha, 0),
-                           J3(w.nx), J3(w.ny), J3(w.m)};
+  const RodState<J3> start{J3(limb.A.x() + q * ca),
+                           J3(limb.A.y() + q * sa),
+                           J3(limb.alpha, 0),
+                           J3(w.nx),
+                           J3(w.ny),
+                           J3(w.m)};
   const RodState<J3> tip = integrate_rod(start, J3(ei, 1), J3(limb.length, 2), rod_steps);
   // d (x, y, theta, m)(l) / d (alpha as start angle, EI, l).
   const J3* tips[4] = {&tip.x, &tip.y, &tip.theta, &tip.m};
@@ -182,8 +186,13 @@ class PoseMeasurementError {
                        const Pose2<double>& measured, double orientation_weight,
                        double residual_scale, FkCache* cache,
                        const SolverOptions& options = SolverOptions())
-      : base_(base), q_(q), measured_(measured), weight_(orientation_weight),
-        inverse_scale_(1.0 / residual_scale), cache_(cache), options_(options) {}
+      : base_(base),
+        q_(q),
+        measured_(measured),
+        weight_(orientation_weight),
+        inverse_scale_(1.0 / residual_scale),
+        cache_(cache),
+        options_(options) {}
 
   template <class T>
   bool operator()(const T* const params, T* residuals) const {
@@ -313,8 +322,7 @@ class PoseMeasurementError {
 /// of num_parameters(n) values, three residuals. Takes ownership of the functor.
 class PoseMeasurementCost final : public ceres::CostFunction {
  public:
-  explicit PoseMeasurementCost(PoseMeasurementError* functor, int num_limbs)
-      : functor_(functor) {
+  explicit PoseMeasurementCost(PoseMeasurementError* functor, int num_limbs) : functor_(functor) {
     set_num_residuals(3);
     mutable_parameter_block_sizes()->push_back(num_parameters(num_limbs));
   }
@@ -329,8 +337,8 @@ class PoseMeasurementCost final : public ceres::CostFunction {
 
 inline ceres::CostFunction* PoseMeasurementError::Create(
     const RobotParams<double>& base, const JointVector& q, const Pose2<double>& measured,
-    double orientation_weight, double residual_scale, FkCache* cache,
-    const SolverOptions& options, DerivativeMode mode) {
+    double orientation_weight, double residual_scale, FkCache* cache, const SolverOptions& options,
+    DerivativeMode mode) {
   auto* functor = new PoseMeasurementError(base, q, measured, orientation_weight, residual_scale,
                                            cache, options);
   const int count = num_parameters(base.num_limbs);
@@ -346,8 +354,8 @@ inline ceres::CostFunction* PoseMeasurementError::Create(
     return cost;
   }
   if (count == kThreeLimbs) {
-    return new ceres::NumericDiffCostFunction<PoseMeasurementError, ceres::CENTRAL, 3,
-                                              kThreeLimbs>(functor);
+    return new ceres::NumericDiffCostFunction<PoseMeasurementError, ceres::CENTRAL, 3, kThreeLimbs>(
+        functor);
   }
   auto* cost =
       new ceres::DynamicNumericDiffCostFunction<PoseMeasurementError, ceres::CENTRAL>(functor);

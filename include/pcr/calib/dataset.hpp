@@ -19,9 +19,9 @@ namespace pcr {
 
 struct Dataset {
   int num_joints = 0;
-  std::vector<JointVector> q;         ///< joint values (m)
-  std::vector<Pose2<double>> poses;   ///< measured ^Se T_M (m, m, rad)
-  std::vector<int> line_numbers;      ///< 1-based source line of each row (empty if built in code)
+  std::vector<JointVector> q;        ///< joint values (m)
+  std::vector<Pose2<double>> poses;  ///< measured ^Se T_M (m, m, rad)
+  std::vector<int> line_numbers;     ///< 1-based source line of each row (empty if built in code)
 
   std::size_t size() const { return q.size(); }
   void add(const JointVector& joints, const Pose2<double>& pose);

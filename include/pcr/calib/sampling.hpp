@@ -65,7 +65,8 @@ bool admissible_configuration(const RobotParams<double>& robot, const JointVecto
                               ForwardSolution* solution = nullptr);
 
 /// Throws InputError on a bad box, count or radius.
-SamplingResult poisson_disc_sample(const RobotParams<double>& robot, const SamplingOptions& options);
+SamplingResult poisson_disc_sample(const RobotParams<double>& robot,
+                                   const SamplingOptions& options);
 
 /// First `first_count` configurations and the rest (the sampler's order is already shuffled).
 void split_configurations(const std::vector<JointVector>& all, int first_count,

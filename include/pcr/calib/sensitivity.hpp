@@ -12,10 +12,9 @@
 // orientation error = max |dtheta/dp| * h_p, h_p the parameter's uncertainty half-width; sorted by
 // position error (ties: orientation error). For E and D, h is the global (all-limbs) half-width.
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "pcr/kinematics.hpp"
 #include "pcr/parameters.hpp"
@@ -31,18 +30,19 @@ struct SensitivityOptions {
 };
 
 struct SensitivityRow {
-  std::string kind;           ///< "E", "D", "d", "alpha", "beta", "gamma", "l", "A_x", ...
+  std::string kind;                   ///< "E", "D", "d", "alpha", "beta", "gamma", "l", "A_x", ...
   double dx = 0, dy = 0, dtheta = 0;  ///< max |d pose / d p| (SI: m/unit, rad/unit)
-  double half_width = 0;      ///< the largest uncertainty half-width of this kind (SI)
-  double position_error = 0;  ///< m, max hypot(dx, dy) * h over configurations and limbs
-  double orientation_error = 0;  ///< rad, max |dtheta| * h
+  double half_width = 0;              ///< the largest uncertainty half-width of this kind (SI)
+  double position_error = 0;          ///< m, max hypot(dx, dy) * h over configurations and limbs
+  double orientation_error = 0;       ///< rad, max |dtheta| * h
 };
 
 struct SensitivityReport {
   double step = 0;
   std::vector<JointVector> configurations;
-  std::vector<SensitivityRow> rows;  ///< Table 2 order: E, D, d, alpha, beta, gamma, l, A_x, A_y, B_x, B_y
-  std::vector<int> ranking;          ///< indices into rows, most influential first
+  std::vector<SensitivityRow>
+      rows;                  ///< Table 2 order: E, D, d, alpha, beta, gamma, l, A_x, A_y, B_x, B_y
+  std::vector<int> ranking;  ///< indices into rows, most influential first
 };
 
 /// The 3^n grid minus its centre (throws InputError on a non-positive step).

@@ -30,9 +30,10 @@ inline constexpr double kDefaultNoiseAngle = 1.2e-6;      ///< rad
 
 struct UnmodelledEffects {
   bool misalignments = false;
-  double misalignment_half_width = 5e-3;  ///< rad, on beta_i and gamma_i (paper Section 4.3: 5 mrad)
+  double misalignment_half_width =
+      5e-3;  ///< rad, on beta_i and gamma_i (paper Section 4.3: 5 mrad)
   bool unequal_diameters = false;
-  double diameter_half_width = 2e-6;      ///< m, independent on each d_i
+  double diameter_half_width = 2e-6;  ///< m, independent on each d_i
   bool external_load = false;
   /// N, N m (in W, at P). The default robot is stiff: 5 mN along x moves the platform ~1 um.
   PlatformLoad<double> load{Vector2<double>(5e-3, 0.0), 0.0};
@@ -50,11 +51,11 @@ struct VirtualRobotOptions {
 
 /// One simulated measurement.
 struct VirtualMeasurement {
-  bool ok = false;          ///< false: FK of the true robot has no solution at q (see summary)
-  Pose2<double> measured;   ///< ^Se T_M with noise: what the camera reports
-  Pose2<double> exact;      ///< ^Se T_M without noise
-  Pose2<double> platform;   ///< ^W T_P of the true robot
-  SolverSummary summary;    ///< of the true robot's FK
+  bool ok = false;         ///< false: FK of the true robot has no solution at q (see summary)
+  Pose2<double> measured;  ///< ^Se T_M with noise: what the camera reports
+  Pose2<double> exact;     ///< ^Se T_M without noise
+  Pose2<double> platform;  ///< ^W T_P of the true robot
+  SolverSummary summary;   ///< of the true robot's FK
 };
 
 class VirtualRobot {

@@ -101,8 +101,8 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
   const SolveStatus path_status = solution.summary.status;
   const bool near_bifurcation =
       path_status == SolveStatus::kBifurcation ||
-      (robot.num_limbs >= 4 && (path_status == SolveStatus::kSingular ||
-                                path_status == SolveStatus::kMaxIterations));
+      (robot.num_limbs >= 4 &&
+       (path_status == SolveStatus::kSingular || path_status == SolveStatus::kMaxIterations));
   if (near_bifurcation && options.continuation) {
     internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load,
                                       options);
@@ -165,8 +165,8 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
     failed.summary.path_fraction = 0.0;
     return failed;
   }
-  InverseSolution solution = inverse_kinematics(robot, pose, as_inverse_warm_start(home),
-                                                options, load);
+  InverseSolution solution =
+      inverse_kinematics(robot, pose, as_inverse_warm_start(home), options, load);
   solution.summary.iterations += home.summary.iterations;
   solution.summary.residual_evaluations += home.summary.residual_evaluations;
   return solution;
@@ -210,12 +210,12 @@ Solution solve_with_cold_fallback(const Solution* warm, WarmSolve&& warm_solve,
 }  // namespace internal
 
 inline ForwardSolution forward_kinematics_or_cold(const RobotParams<double>& robot,
-                                                  const JointVector& q,
-                                                  const ForwardSolution* warm,
+                                                  const JointVector& q, const ForwardSolution* warm,
                                                   const SolverOptions& options,
                                                   const PlatformLoad<double>& load) {
   return internal::solve_with_cold_fallback(
-      warm, [&](const ForwardSolution& w) { return forward_kinematics(robot, q, w, options, load); },
+      warm,
+      [&](const ForwardSolution& w) { return forward_kinematics(robot, q, w, options, load); },
       [&] { return forward_kinematics(robot, q, options, load); });
 }
 
@@ -253,8 +253,7 @@ void visit_rod_shapes(const RobotParams<double>& robot, const JointVector& q,
   for (int i = 0; i < robot.num_limbs; ++i) {
     const LimbParams<double>& limb = robot.limb(i);
     sample_rod(proximal_rod_state(limb, q(i), wrenches[i]), limb.bending_stiffness(), limb.length,
-               rod_steps,
-               [&](double s, const RodState<double>& state) { visit(i, s, state); });
+               rod_steps, [&](double s, const RodState<double>& state) { visit(i, s, state); });
   }
 }
 

@@ -2,11 +2,10 @@
 // Damped Newton with chord steps, generic over a square problem, and its building blocks. No heap,
 // no exceptions, a bounded number of evaluations.
 
-#include <cmath>
-#include <limits>
-
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <cmath>
+#include <limits>
 
 #include "pcr/shooting.hpp"
 #include "pcr/solver.hpp"

@@ -2,11 +2,10 @@
 // Paths of FK and IK solutions: continuation along an input path, the RK4 step count chosen from
 // an error estimate of the solution, and the homotopies that reach a robot's home configuration.
 
-#include <algorithm>
-#include <cmath>
-
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
 
 #include "pcr/internal/newton.hpp"
 #include "pcr/internal/shooting_problem.hpp"
@@ -26,8 +25,8 @@ inline constexpr double kBifurcationRcond = 1e-13;
 
 inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const ShootingVector& u0,
                                              const ShootingVector& u1, ShootingVector& z,
-                                             const SolverOptions& options,
-                                             SolverSummary& summary, Factorisation* carried) {
+                                             const SolverOptions& options, SolverSummary& summary,
+                                             Factorisation* carried) {
   const ShootingVector z0 = z;
   // Tangent predictor from the carried factorisation (a warm start's): z moves by
   // -J^-1 (dr/du) du, which leaves an error of second order in du for the chord steps.
@@ -212,10 +211,9 @@ inline constexpr double kVariantBow = 0.2;
 /// robot's by natural continuation with a secant predictor. Returns the status and, in z, the
 /// unknowns of the robot's FK problem (same scaling: it depends on l and EI only).
 inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
-                                          const PlatformLoad<double>& load,
-                                          const ShootingVector& u, double bow,
-                                          const SolverOptions& options, SolverSummary& summary,
-                                          ShootingVector& z) {
+                                          const PlatformLoad<double>& load, const ShootingVector& u,
+                                          double bow, const SolverOptions& options,
+                                          SolverSummary& summary, ShootingVector& z) {
   const int n = robot.num_limbs;
   // Straight rods' tips from the moved proximal clamps, and their rigid fit (2D Procrustes).
   Vector2<double> tips[kMaxLimbs], b_mean(0, 0), t_mean(0, 0);
@@ -295,8 +293,8 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
   tangent_z /= norm;
   tangent_t /= norm;
   double ds = 0.125;
-  for (int steps = 0; steps < 4 * options.max_continuation_steps && ds >= options.min_continuation_step;
-       ++steps) {
+  for (int steps = 0;
+       steps < 4 * options.max_continuation_steps && ds >= options.min_continuation_step; ++steps) {
     ++summary.continuation_steps;
     // Predictor; a step that would pass t = 1 is shortened to land on it.
     double step = ds;
@@ -318,8 +316,9 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
       // plane (the end step keeps t = 1 instead).
       a = lu.solve(r);
       b = lu.solve(ShootingVector(r_shift - r));
-      const double g = last ? 0.0 : tangent_z.dot(zz - z_last - step * tangent_z) +
-                                        tangent_t * (t - t_last - step * tangent_t);
+      const double g = last ? 0.0
+                            : tangent_z.dot(zz - z_last - step * tangent_z) +
+                                  tangent_t * (t - t_last - step * tangent_t);
       const double dt = last ? 0.0 : (-g + tangent_z.dot(a)) / (tangent_t - tangent_z.dot(b));
       zz -= a + b * dt;
       t += dt;
@@ -392,8 +391,7 @@ inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& op
   ShootingVector z = ShootingVector::Zero(fk.size());
   NewtonResult home = newton_solve(fk, z, options, summary);
   summary.initial_residual_norm = home.initial_norm;
-  if (home.status != SolveStatus::kConverged && options.continuation &&
-      fk.robot().num_limbs <= 3) {
+  if (home.status != SolveStatus::kConverged && options.continuation && fk.robot().num_limbs <= 3) {
     // Newton homotopy from the straight guess z0: r(z) = (1 - t) r(z0), t from 0 to 1.
     ShootingVector r0, z_last = ShootingVector::Zero(fk.size());
     fk.evaluate(z_last, r0, nullptr);
@@ -415,7 +413,8 @@ inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& op
     }
     fk.set_residual_offset(ShootingVector());
     z = z_last;
-    if (t < 1.0 && home.status == SolveStatus::kConverged) home.status = SolveStatus::kMaxIterations;
+    if (t < 1.0 && home.status == SolveStatus::kConverged)
+      home.status = SolveStatus::kMaxIterations;
   }
   summary.final_residual_norm = home.final_norm;
   summary.max_strain = home.max_strain;

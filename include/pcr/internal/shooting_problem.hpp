@@ -18,8 +18,12 @@ class ShootingProblem {
 
   ShootingProblem(Kind kind, const RobotParams<double>& robot, const PlatformLoad<double>& load,
                   const SolverOptions& options)
-      : kind_(kind), robot_(robot), load_(load), options_(options),
-        scale_(shooting_scale(robot)), n_(robot.num_limbs) {
+      : kind_(kind),
+        robot_(robot),
+        load_(load),
+        options_(options),
+        scale_(shooting_scale(robot)),
+        n_(robot.num_limbs) {
     steps_ = options.rod_steps > 0 ? options.rod_steps : options.min_rod_steps;
   }
 
@@ -109,8 +113,8 @@ class ShootingProblem {
     }
     if (kind_ == Kind::kForward) {
       for (int i = 0; i < n_; ++i) p.q[i] = input_(i);
-      p.pose = Pose2<double>{z(3 * n_) * scale_.length, z(3 * n_ + 1) * scale_.length,
-                             z(3 * n_ + 2)};
+      p.pose =
+          Pose2<double>{z(3 * n_) * scale_.length, z(3 * n_ + 1) * scale_.length, z(3 * n_ + 2)};
     } else {
       for (int i = 0; i < n_; ++i) p.q[i] = z(3 * n_ + i) * scale_.length;
       p.pose = Pose2<double>{input_(0), input_(1), n_ == 2 ? z(4 * n_) : input_(2)};
@@ -123,8 +127,8 @@ class ShootingProblem {
     const ShootingPoint<double> p = unpack(z);
 
     ResidualVector<double> res;
-    const double strain = shooting_residual(robot_, p, load_, scale_, steps_, res,
-                                            jacobian ? &partials_ : nullptr);
+    const double strain =
+        shooting_residual(robot_, p, load_, scale_, steps_, res, jacobian ? &partials_ : nullptr);
     r = res;
     if (offset_.size() == r.size()) r -= offset_;
     if (jacobian) {

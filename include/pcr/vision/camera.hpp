@@ -3,11 +3,10 @@
 // (cv::FileStorage keys camera_matrix, distortion_coefficients, image_width, image_height, the
 // format written by OpenCV's calibration sample and by `pcr camera`).
 
-#include <string>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <string>
+#include <vector>
 
 namespace pcr::vision {
 
@@ -58,9 +57,9 @@ struct ChessboardSpec {
 
 struct CalibrationResult {
   CameraModel camera;
-  double rms_px{0};                    ///< reprojection error
-  std::vector<std::string> used;       ///< images whose board was found
-  std::vector<std::string> rejected;   ///< images without a board
+  double rms_px{0};                   ///< reprojection error
+  std::vector<std::string> used;      ///< images whose board was found
+  std::vector<std::string> rejected;  ///< images without a board
 };
 
 /// cv::calibrateCamera over the images in which the board is found (at least 3 are needed).

@@ -15,7 +15,9 @@ struct GrayImage {
 
   GrayImage() = default;
   GrayImage(int w, int h, float value = 0.f)
-      : width(w), height(h), pixels(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), value) {}
+      : width(w),
+        height(h),
+        pixels(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), value) {}
 
   bool empty() const { return width <= 0 || height <= 0; }
   float& at(int u, int v) { return pixels[static_cast<std::size_t>(v) * width + u]; }

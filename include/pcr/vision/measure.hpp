@@ -6,8 +6,9 @@
 //    free gauge, fixed by the initial guess) together with every tag's planar pose (x, y, theta),
 //    minimising the reprojection error of all tag corners in undistorted coordinates (scaled to
 //    pixels). The covariance of the poses is sigma^2 (J^T J)^-1, with sigma the corner noise
-//    estimated from the residuals times `corner_sigma_scale` (never below `corner_sigma_floor_px`). It includes the plane's
-//    uncertainty (scale, tilt). When the plane pose is known it is held fixed.
+//    estimated from the residuals times `corner_sigma_scale` (never below `corner_sigma_floor_px`).
+//    It includes the plane's uncertainty (scale, tilt). When the plane pose is known it is held
+//    fixed.
 // 2. Clamps. A = c + R(theta) o and alpha = theta + phi for each mount (o, phi from the layout).
 // 3. Frames. W is the least-squares rigid registration of the measured A_i onto the design's A_i,
 //    P the one of the measured B_i onto the design's B_i (the usual metrology best fit), so the
@@ -18,12 +19,11 @@
 //    least-squares line (direction from the first image to the last, images in name order);
 //    gamma = its angle - alpha, with the line's and alpha's uncertainties.
 
+#include <Eigen/Core>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "pcr/robot_io.hpp"
 #include "pcr/se2.hpp"
@@ -45,7 +45,7 @@ struct PoseOptions {
 struct MarkerPose {
   std::string family;
   int id{-1};
-  Pose2<double> pose;  ///< tag frame in the plane frame (m, rad)
+  Pose2<double> pose;                                   ///< tag frame in the plane frame (m, rad)
   Eigen::Matrix3d covariance{Eigen::Matrix3d::Zero()};  ///< on (x, y, theta)
 };
 
@@ -77,7 +77,7 @@ struct LimbMeasurement {
   Eigen::Vector2d B{0, 0}, B_halfwidth{0, 0};
   double beta{0}, beta_halfwidth{0};
   std::optional<double> gamma, gamma_halfwidth;  ///< from a sweep
-  Eigen::Vector2d A_plane{0, 0};  ///< A in the plane frame (before registration)
+  Eigen::Vector2d A_plane{0, 0};                 ///< A in the plane frame (before registration)
   double alpha_plane{0};
   Eigen::Vector2d B_plane{0, 0};
   double beta_plane{0};
@@ -85,10 +85,10 @@ struct LimbMeasurement {
 
 struct RobotMeasurement {
   std::vector<LimbMeasurement> limbs;
-  PlaneFit fit;                        ///< the home image's fit
-  std::vector<TagDetection> detections;  ///< matched detections, in layout order
-  Pose2<double> world_in_plane;        ///< W in the plane frame (registration)
-  Pose2<double> platform_in_plane;     ///< P in the plane frame
+  PlaneFit fit;                                         ///< the home image's fit
+  std::vector<TagDetection> detections;                 ///< matched detections, in layout order
+  Pose2<double> world_in_plane;                         ///< W in the plane frame (registration)
+  Pose2<double> platform_in_plane;                      ///< P in the plane frame
   double registration_rms_A{0}, registration_rms_B{0};  ///< m
 };
 
@@ -101,14 +101,15 @@ std::vector<TagDetection> match_mounts(const std::vector<TagDetection>& detectio
 /// Detects, fits and registers onto `design`. `image_source` names the image in messages.
 RobotMeasurement measure_robot(const GrayImage& image, const std::string& image_source,
                                const MountLayout& layout, const CameraModel& camera,
-                               const RobotParams<double>& design, const MeasureOptions& options = {});
+                               const RobotParams<double>& design,
+                               const MeasureOptions& options = {});
 
 struct SweepResult {
-  double direction_plane{0};      ///< angle of the fitted line in the plane frame (rad)
-  double direction_sigma{0};      ///< rad
+  double direction_plane{0};  ///< angle of the fitted line in the plane frame (rad)
+  double direction_sigma{0};  ///< rad
   double gamma{0}, gamma_halfwidth{0};
   std::vector<Eigen::Vector2d> centres;  ///< tag centres in the plane frame
-  double line_rms{0};                   ///< m
+  double line_rms{0};                    ///< m
 };
 
 /// Sweep of `limb`: its proximal tag in every image (in order), the plane held at `home.fit.plane`.
@@ -134,7 +135,7 @@ namespace pcr::vision {
 
 /// A colour PNG for a person to check at a glance: the detected tag outlines and ids (green), the
 /// clamp points (red) and the rod directions (blue, 5 mm long) projected back into the image.
-void write_annotated(const GrayImage& image, const RobotMeasurement& measurement, const MountLayout& layout,
-                     const CameraModel& camera, const std::string& path);
+void write_annotated(const GrayImage& image, const RobotMeasurement& measurement,
+                     const MountLayout& layout, const CameraModel& camera, const std::string& path);
 
 }  // namespace pcr::vision

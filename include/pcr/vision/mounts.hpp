@@ -21,10 +21,9 @@
 // The tag frame is defined in pcr/vision/tags.hpp (centre, x to the bitmap's right, y to its top).
 // Every limb needs exactly one proximal and one distal mount; ids are unique per family.
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace pcr::vision {
 

@@ -5,11 +5,10 @@
 // through the distortion and the plane), then an illumination gradient, a Gaussian blur and
 // Gaussian noise. The tag bitmaps are the AprilTag library's own (apriltag_to_image).
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "pcr/se2.hpp"
 #include "pcr/vision/camera.hpp"
@@ -32,8 +31,8 @@ struct RenderSegment {
   float intensity{0.15f};
 };
 
-/// A dark circle outline (the platform's 100 mm wafer, for a person looking at the image): a band of
-/// `width_m` centred on the circle of `radius_m`, drawn under the tags.
+/// A dark circle outline (the platform's 100 mm wafer, for a person looking at the image): a band
+/// of `width_m` centred on the circle of `radius_m`, drawn under the tags.
 struct RenderCircle {
   Eigen::Vector2d centre{0, 0};
   double radius_m{0.05};
@@ -41,8 +40,8 @@ struct RenderCircle {
   float intensity{0.25f};
 };
 
-/// A chessboard with `cols` x `rows` inner corners; its corner (0, 0) at `pose`, squares along +x, +y,
-/// with a one-square white margin.
+/// A chessboard with `cols` x `rows` inner corners; its corner (0, 0) at `pose`, squares along +x,
+/// +y, with a one-square white margin.
 struct RenderChessboard {
   int cols{9};
   int rows{6};
@@ -50,9 +49,11 @@ struct RenderChessboard {
   Pose2<double> pose;
 
   /// The board whose centre is at `centre` (the pose `pcr render --board-pose` takes).
-  static RenderChessboard centred(int cols, int rows, double square_m, const Pose2<double>& centre) {
-    return {cols, rows, square_m,
-            centre * Pose2<double>{-0.5 * (cols - 1) * square_m, -0.5 * (rows - 1) * square_m, 0.0}};
+  static RenderChessboard centred(int cols, int rows, double square_m,
+                                  const Pose2<double>& centre) {
+    return {
+        cols, rows, square_m,
+        centre * Pose2<double>{-0.5 * (cols - 1) * square_m, -0.5 * (rows - 1) * square_m, 0.0}};
   }
 };
 
@@ -66,10 +67,10 @@ struct Scene {
 };
 
 struct RenderOptions {
-  int supersampling{4};       ///< s x s samples per pixel
-  double blur_sigma_px{0.0};  ///< Gaussian blur (optics), px
-  double noise_sigma{0.0};    ///< additive Gaussian noise, in units of full scale
-  double gradient{0.0};       ///< illumination: relative change from one image side to the other
+  int supersampling{4};        ///< s x s samples per pixel
+  double blur_sigma_px{0.0};   ///< Gaussian blur (optics), px
+  double noise_sigma{0.0};     ///< additive Gaussian noise, in units of full scale
+  double gradient{0.0};        ///< illumination: relative change from one image side to the other
   double gradient_angle{0.5};  ///< direction of the gradient in the image (rad)
   float background{0.45f};
   float white{0.92f};
@@ -90,9 +91,9 @@ std::vector<Eigen::Vector2d> tag_corner_pixels(const Scene& scene, const RenderT
 namespace pcr::vision {
 
 /// The tags of `layout` placed on `robot`, with the plane frame = W: proximal tags at A_i + q_i
-/// along the actuator direction (q empty = all 0), distal tags on the platform at `platform` (^W T_P).
-/// Each tag is placed so that its clamp point and rod angle (the layout's offsets) fall on the
-/// robot's A_i, alpha_i or B_i, beta_i. Also adds the rods (straight A-B segments, for a person
+/// along the actuator direction (q empty = all 0), distal tags on the platform at `platform` (^W
+/// T_P). Each tag is placed so that its clamp point and rod angle (the layout's offsets) fall on
+/// the robot's A_i, alpha_i or B_i, beta_i. Also adds the rods (straight A-B segments, for a person
 /// looking at the image) to `segments` when it is non-null.
 std::vector<RenderTag> mount_tags(const MountLayout& layout, const RobotParams<double>& robot,
                                   const Pose2<double>& platform, const std::vector<double>& q = {},

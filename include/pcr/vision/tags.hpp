@@ -6,11 +6,10 @@
 // (as printed and seen from above). `size_m` is the edge of the black border square, as in the
 // AprilTag papers; the bitmap with its white quiet zone is total_width / width_at_border larger.
 
+#include <Eigen/Core>
 #include <array>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
@@ -31,7 +30,7 @@ struct DetectorOptions {
   double quad_decimate{2.0};         ///< AprilTag's quad detection decimation (refined after)
   double quad_sigma{0.0};
   int threads{1};
-  bool refine{true};                 ///< sub-pixel edge refinement (below)
+  bool refine{true};  ///< sub-pixel edge refinement (below)
 };
 
 struct TagDetection {
