@@ -22,7 +22,7 @@ MAIN_JOB=(build/apps/pcr demo)  # writes pcr-demo/ (pcr demo --output)
 MAIN_TARGETS=(pcr_cli _pcr)
 
 APT_PACKAGES=(
-  build-essential cmake ninja-build pkg-config
+  build-essential cmake ninja-build pkg-config clang-format
   libeigen3-dev libceres-dev libopencv-dev libapriltag-dev libsundials-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
   python3 python3-dev python3-venv python3-pip
@@ -141,6 +141,20 @@ print_timings() {
   printf '    %-22s %5d s\n' total "$SECONDS" >&2
 }
 
+# The C++ sources are formatted by the repository's .clang-format (Debian 12's clang-format 14):
+# reports the files that are not, and fails. `clang-format -i FILE` formats one.
+check_format() {
+  local files
+  if git -C "$ROOT" rev-parse --is-inside-work-tree >/dev/null 2>&1; then
+    mapfile -t files < <(git -C "$ROOT" ls-files '*.cpp' '*.hpp')
+  else
+    mapfile -t files < <(cd "$ROOT" && find apps benchmarks include python/src src tests \
+      -name '*.cpp' -o -name '*.hpp')
+  fi
+  log "clang-format --dry-run on ${#files[@]} files"
+  (cd "$ROOT" && clang-format --dry-run --Werror "${files[@]}")
+}
+
 # ---- commands --------------------------------------------------------------------------------
 run_demo() {
   install_system_packages
@@ -167,6 +181,8 @@ run_tests() {
   phase setup
   install_system_packages
   setup_venv
+  phase format
+  check_format || failed+=("clang-format")
   phase build/
   build_main --pytest-installed
   phase "pip install ./python"
