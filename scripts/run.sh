@@ -9,6 +9,9 @@
 #                               wall time of each phase
 #   bash scripts/run.sh setup   only install what is missing (system packages + .venv)
 #   bash scripts/run.sh build   setup, then configure and build build/ (Release)
+#   bash scripts/run.sh quick   the developer loop: build/ incrementally, then the fast tests
+#                               (ctest labels unit, cli, python; not slow), pytest on build/'s
+#                               module; not a substitute for `test`
 #
 # Arguments after `demo` are passed to the main job. Environment: PCR_JOBS (parallel jobs,
 # default nproc), PCR_PYTHON (interpreter for .venv, default python3).
@@ -224,13 +227,22 @@ run_tests() {
   log "All tests passed"
 }
 
+run_quick() {
+  install_system_packages
+  setup_venv
+  build_main
+  log "ctest in build/ (labels unit, cli, python; not slow)"
+  ctest --test-dir build --output-on-failure -j "$JOBS" --timeout 900 -L 'unit|cli|python' -LE slow
+}
+
 case ${1:-} in
   demo) shift; run_demo "$@" ;;
   test) run_tests ;;
   setup) install_system_packages; setup_venv ;;
   build) install_system_packages; setup_venv; build_main ;;
+  quick) run_quick ;;
   *)
-    echo "usage: bash scripts/run.sh {demo|test|setup|build} [main job arguments]" >&2
+    echo "usage: bash scripts/run.sh {demo|test|setup|build|quick} [main job arguments]" >&2
     exit 2
     ;;
 esac
