@@ -30,10 +30,11 @@ struct ForwardSolution {
   Pose2<double> pose;                                ///< platform pose ^W T_P
   std::array<Wrench<double>, kMaxLimbs> wrenches{};  ///< proximal wrench (n, m)(0) of each rod
   SolverSummary summary;
-  /// The factorisation of the last Jacobian the solver evaluated (scaled units; empty if none): a
-  /// warm start from this solution predicts its first point along the tangent and takes its
-  /// first, chord, steps with it instead of evaluating a new Jacobian.
-  internal::Factorisation jacobian;
+  /// The solver's chord matrix at the end of the solve (scaled units; empty if none): the last
+  /// Jacobian it evaluated, with the secant corrections of the chord steps since. A warm start
+  /// from this solution predicts its first point along the tangent and takes its first, chord,
+  /// steps with it instead of evaluating a new Jacobian.
+  internal::ChordMatrix jacobian;
 };
 
 struct InverseSolution {
@@ -44,7 +45,7 @@ struct InverseSolution {
   std::array<Wrench<double>, kMaxLimbs> wrenches{};  ///< proximal wrench (n, m)(0) of each rod
   SolverSummary summary;
   /// As ForwardSolution::jacobian, for the inverse problem.
-  internal::Factorisation jacobian;
+  internal::ChordMatrix jacobian;
 };
 
 /// Forward kinematics warm-started from a previous solution (the normal case in a control loop).

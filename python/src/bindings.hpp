@@ -35,7 +35,7 @@ struct Solution {
   py::object shapes = py::none();
   /// The solver's factorised last Jacobian, so that a warm start from Python costs what it costs
   /// in C++; only for a warm start of the same problem (FK or IK) it was solved by.
-  internal::Factorisation jacobian;
+  internal::ChordMatrix jacobian;
   bool inverse = false;
 };
 

@@ -284,7 +284,7 @@ ForwardSolution forward_kinematics_reference(const RobotParams<double>& robot, c
   ResidualVector<double> r;
   ShootingVector r_rk4;
   JacobianMatrix J;
-  internal::Factorisation lu;
+  internal::JacobianLU lu;
 
   // Quasi-Newton: the residual is CVODE's, the matrix the RK4 Jacobian. The fixed point is the
   // CVODE solution; the iteration contracts by about the RK4 discretisation error of J.

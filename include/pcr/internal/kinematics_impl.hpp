@@ -91,8 +91,6 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
                                           const PlatformLoad<double>& load) {
   ForwardSolution home = home_solution(robot, options, load);
   if (!home.summary.converged()) return home;  // q = 0 then, path_fraction 0: nothing solved
-  // A tangent predictor is for the small steps of a sequence, not a path across the workspace.
-  home.jacobian = internal::Factorisation();
   ForwardSolution solution = forward_kinematics(robot, q, home, options, load);
   solution.summary.iterations += home.summary.iterations;
   solution.summary.residual_evaluations += home.summary.residual_evaluations;
@@ -112,7 +110,7 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
     SolveStatus status =
         internal::solve_from_bowed_variant(robot, load, u, options, solution.summary, z);
     if (status == SolveStatus::kConverged) {
-      solution.jacobian = internal::Factorisation();
+      solution.jacobian = internal::ChordMatrix();
       status = internal::refine_rod_steps(problem, z, options, solution.summary, status,
                                           &solution.jacobian);
       internal::store_configuration(problem, z, solution);

@@ -12,8 +12,50 @@
 
 namespace pcr::internal {
 
-/// A factorised Jacobian, carried from one solve to the next as the chord matrix of a warm start.
-using Factorisation = Eigen::PartialPivLU<JacobianMatrix>;
+using JacobianLU = Eigen::PartialPivLU<JacobianMatrix>;
+
+/// The matrix of Newton's chord steps, an approximation of the inverse Jacobian carried from one
+/// solve to the next (a warm start's). It starts as the factorisation of an evaluated Jacobian;
+/// each chord step then corrects it with the secant its residual measured (Broyden's "good"
+/// update of the inverse, a rank-one Sherman-Morrison term), so that along a sequence of nearby
+/// solves it follows the Jacobian as the configuration moves instead of ageing, and a warm solve
+/// rarely needs a new Jacobian (which costs about four residuals).
+class ChordMatrix {
+ public:
+  /// Factorises a freshly evaluated Jacobian (dropping the secant corrections).
+  void compute(const JacobianMatrix& J) {
+    lu_.compute(J);
+    rcond_ = lu_.rcond();
+    has_inverse_ = false;
+  }
+  /// Size of the Jacobian; 0 when there is none.
+  int rows() const { return lu_.rows(); }
+  /// Reciprocal condition number of the last factorised Jacobian.
+  double rcond() const { return rcond_; }
+  /// The chord step's solution of J x = b.
+  ShootingVector solve(const ShootingVector& b) const {
+    if (has_inverse_) return inverse_ * b;
+    return lu_.solve(b);
+  }
+  /// The secant condition of a step s that changed the residual by y: afterwards solve(y) = s.
+  /// Skipped when s is not seen through the current matrix (s . solve(y) near zero).
+  void secant_update(const ShootingVector& s, const ShootingVector& y) {
+    if (!has_inverse_) {
+      inverse_ = lu_.inverse();
+      has_inverse_ = true;
+    }
+    const ShootingVector Hy = inverse_ * y;
+    const double denominator = s.dot(Hy);
+    if (!(std::abs(denominator) > 1e-3 * s.norm() * Hy.norm())) return;
+    inverse_ += ((s - Hy) / denominator) * (s.transpose() * inverse_);
+  }
+
+ private:
+  JacobianLU lu_;
+  JacobianMatrix inverse_;
+  double rcond_ = 0.0;
+  bool has_inverse_ = false;
+};
 
 /// Max-norm of a residual; NaN when a component is not finite (Eigen's max-norm may skip a NaN,
 /// which made a NaN warm start look converged).
@@ -46,7 +88,7 @@ struct NewtonResult {
 /// bending strain).
 template <class Problem>
 NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const SolverOptions& options,
-                          SolverSummary& summary, Factorisation* carried = nullptr) {
+                          SolverSummary& summary, ChordMatrix* carried = nullptr) {
   // Residual norms below this ask for no Jacobian at the trial point: Newton from there is
   // expected to contract by kChordContraction, so the old factorisation will do.
   constexpr double kWarmNorm = 1e-2;
@@ -56,7 +98,7 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
   NewtonResult result;
   ShootingVector r, r_trial, z_trial, step, r_corrected, z_corrected;
   JacobianMatrix J, J_trial;
-  Factorisation lu_corrector;
+  ChordMatrix lu_corrector;
   const bool try_chord = carried && carried->rows() == problem.size();
   result.max_strain = problem.evaluate(z, r, try_chord ? nullptr : &J);
   ++summary.residual_evaluations;
@@ -67,7 +109,7 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
     result.status = SolveStatus::kNonFinite;
     return result;
   }
-  Factorisation lu;
+  ChordMatrix lu;
   bool jacobian_at_z = true;  // J is the Jacobian at z (else: at an earlier iterate, chord)
   bool factorised = false;    // lu holds the factorisation of the newest Jacobian
   if (try_chord) {
@@ -82,8 +124,8 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
   }
   // Hands the factorisation of the newest Jacobian back to the caller on every exit.
   struct HandBack {
-    Factorisation* out;
-    Factorisation& lu;
+    ChordMatrix* out;
+    ChordMatrix& lu;
     const JacobianMatrix& J;
     const bool& factorised;
     ~HandBack() {
@@ -136,6 +178,7 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
       const double strain = problem.evaluate(z_trial, r_trial, nullptr);
       ++summary.residual_evaluations;
       const double trial_norm = max_norm(r_trial);
+      if (std::isfinite(trial_norm)) lu.secant_update(step, r_trial - r);
       if (std::isfinite(trial_norm) &&
           (trial_norm <= kChordContraction * norm || trial_norm <= options.tolerance)) {
         const double contraction = trial_norm / norm;
@@ -264,7 +307,7 @@ double jacobian_rcond(const Problem& problem, const ShootingVector& z, SolverSum
   JacobianMatrix J;
   problem.evaluate(z, r, &J);
   ++summary.residual_evaluations;
-  const Factorisation lu(J);
+  const JacobianLU lu(J);
   const double rcond = lu.rcond();
   return std::isfinite(rcond) ? rcond : 0.0;
 }

@@ -26,13 +26,16 @@ inline constexpr double kBifurcationRcond = 1e-13;
 inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const ShootingVector& u0,
                                              const ShootingVector& u1, ShootingVector& z,
                                              const SolverOptions& options, SolverSummary& summary,
-                                             Factorisation* carried) {
+                                             ChordMatrix* carried) {
   const ShootingVector z0 = z;
-  // Tangent predictor from the carried factorisation (a warm start's): z moves by
-  // -J^-1 (dr/du) du, which leaves an error of second order in du for the chord steps.
-  if (carried && carried->rows() == problem.size()) {
-    const ShootingVector predicted = z0 - carried->solve(problem.input_derivative(z0, u1 - u0));
-    if (predicted.allFinite()) z = predicted;
+  // Tangent predictor from the carried chord matrix (a warm start's): z moves by
+  // -J^-1 (dr/du) du, which leaves an error of second order in du for the chord steps. Not from
+  // a singular Jacobian (a bifurcation point: the tangent is not unique there).
+  bool predicted = false;
+  if (carried && carried->rows() == problem.size() && carried->rcond() > kBifurcationRcond) {
+    const ShootingVector z_predicted = z0 - carried->solve(problem.input_derivative(z0, u1 - u0));
+    predicted = z_predicted.allFinite();
+    if (predicted) z = z_predicted;
   }
   problem.set_input(u1);
   NewtonResult direct = newton_solve(problem, z, options, summary, carried);
@@ -47,7 +50,7 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   summary.path_fraction = 0.0;
   if (!options.continuation) return direct.status;
   // A start that is not finite (a broken warm start) has no path to continue along.
-  if (!std::isfinite(direct.initial_norm)) return SolveStatus::kNonFinite;
+  if (!predicted && !std::isfinite(direct.initial_norm)) return SolveStatus::kNonFinite;
 
   SolverOptions sub_options = options;
   sub_options.max_iterations = options.max_continuation_iterations;
@@ -120,11 +123,11 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
 /// its direction, not its last digits.
 inline double estimate_discretisation_error(ShootingProblem& problem, const ShootingVector& z,
                                             const SolverOptions& options, SolverSummary& summary,
-                                            const Factorisation* carried) {
+                                            const ChordMatrix* carried) {
   const int steps = problem.rod_steps();
   const int half = std::max(1, steps / 2);
-  Factorisation at_z;
-  const Factorisation* lu = carried;
+  ChordMatrix at_z;
+  const ChordMatrix* lu = carried;
   if (lu == nullptr || lu->rows() != problem.size()) {
     ShootingVector r;
     JacobianMatrix J;
@@ -150,7 +153,7 @@ inline double estimate_discretisation_error(ShootingProblem& problem, const Shoo
 /// count its estimated discretisation error calls for, until the estimate meets the targets.
 inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
                                     const SolverOptions& options, SolverSummary& summary,
-                                    SolveStatus status, Factorisation* carried) {
+                                    SolveStatus status, ChordMatrix* carried) {
   for (int pass = 0; status == SolveStatus::kConverged && options.rod_steps <= 0; ++pass) {
     const double ratio = estimate_discretisation_error(problem, z, options, summary, carried);
     const int needed = problem.rod_steps_for_error(ratio);
@@ -183,7 +186,7 @@ inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
 inline SolveStatus solve_along_path(ShootingProblem& problem, const ShootingVector& u0,
                                     const ShootingVector& u1, ShootingVector& z,
                                     const SolverOptions& options, SolverSummary& summary,
-                                    int start_steps, Factorisation* carried) {
+                                    int start_steps, ChordMatrix* carried) {
   if (options.rod_steps <= 0) {
     problem.set_rod_steps(
         std::min(std::max(start_steps, options.min_rod_steps), options.max_rod_steps));
@@ -275,7 +278,7 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
   constexpr double kPathTolerance = 1e-8;
   ShootingVector r, r_shift, a, b;
   JacobianMatrix J;
-  Factorisation lu;
+  JacobianLU lu;
   const auto linearise = [&](const ShootingVector& zz, double t) {
     blend(t + 1.0);
     problem.evaluate(zz, r_shift, nullptr);
@@ -385,12 +388,14 @@ inline SolveStatus solve_from_bowed_variant(const RobotParams<double>& robot,
 /// robot (n >= 4, where the straight guess is on a bifurcation, or when that homotopy fails).
 inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& options,
                                     SolverSummary& summary, SolveStatus& status,
-                                    Factorisation* carried) {
+                                    ChordMatrix* carried) {
   ShootingVector u = ShootingVector::Zero(fk.num_inputs());
   fk.set_input(u);
   ShootingVector z = ShootingVector::Zero(fk.size());
-  NewtonResult home = newton_solve(fk, z, options, summary);
+  // Newton hands back the Jacobian it evaluated last, the estimate's below when it converged.
+  NewtonResult home = newton_solve(fk, z, options, summary, carried);
   summary.initial_residual_norm = home.initial_norm;
+  if (home.status != SolveStatus::kConverged && carried) *carried = ChordMatrix();  // not at z
   if (home.status != SolveStatus::kConverged && options.continuation && fk.robot().num_limbs <= 3) {
     // Newton homotopy from the straight guess z0: r(z) = (1 - t) r(z0), t from 0 to 1.
     ShootingVector r0, z_last = ShootingVector::Zero(fk.size());
