@@ -240,6 +240,12 @@ TEST(Kinematics, FourLimbRobotBranchesOffItsStraightHome) {
   const ForwardSolution next = forward_kinematics(robot, joints({0.00011, 0.0, 0.0, 0.0}), cold);
   ASSERT_TRUE(next.summary.converged()) << to_string(next.summary.status);
   EXPECT_LT(std::abs(next.pose.x - cold.pose.x), 1e-5);
+  // Back through q = 0 the bowed branch meets the straight home, a bifurcation: said so (not
+  // `singular`, which would mean no solution ahead), the last point solved next to it.
+  const ForwardSolution through = forward_kinematics(robot, joints({-0.0001, 0.0, 0.0, 0.0}), cold);
+  EXPECT_EQ(through.summary.status, SolveStatus::kBifurcation);
+  EXPECT_NEAR(through.summary.path_fraction, 0.5, 0.01);
+  EXPECT_NEAR(through.q(0), 0.0, 2e-6);
   InverseSolution warm;
   warm.q = JointVector::Zero(4);
   EXPECT_EQ(inverse_kinematics(robot, Pose2<double>{}, warm).summary.status,
@@ -277,9 +283,6 @@ TEST(Kinematics, PreStressedRedundantRobotsFindTheirBowedHome) {
     EXPECT_LT(std::hypot(refined.pose.x - home.pose.x, refined.pose.y - home.pose.y), 1e-9);
     // And the robot moves from there: warm, or, where straight rods at home still carry a
     // self-stress (a bifurcation), cold from the bowed variant at those joints.
-    // Known limit: the symmetric 6-limb robot with one longer limb (robot 2) keeps five straight
-    // rods at home, and 10 um from there the bowed variant's path does not reach it either.
-    if (r == 2) continue;
     JointVector q = JointVector::Zero(n);
     q(0) = 1e-5;
     ForwardSequence sequence(robot);

@@ -64,7 +64,8 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot,
 /// Forward kinematics from a cold start: the home solution, then a (continued) path to q. When
 /// home is a bifurcation (straight rods of a robot with n >= 4 limbs), or with n >= 4 the path
 /// from home fails, q is solved directly from a bowed variant of the robot instead: the branch
-/// whose rods bow to their left, else the one where they bow to their right.
+/// whose rods bow to their left, else the one where they bow to their right (then the same with
+/// twice and with half the bow).
 inline ForwardSolution forward_kinematics(
     const RobotParams<double>& robot, const JointVector& q,
     const SolverOptions& options = SolverOptions(),

@@ -9,7 +9,8 @@ enum class SolveStatus {
   kConverged,      ///< the scaled residual is below the tolerance
   kMaxIterations,  ///< the iteration or continuation budget ran out
   kSingular,       ///< no solution on this branch: the Jacobian became singular along the path
-  kBifurcation,    ///< the path starts on a bifurcation (solutions exist on other branches)
+  kBifurcation,    ///< the path starts on, or meets, a bifurcation: solutions exist on other
+                   ///< branches (kSingular: a fold, no solution ahead on this branch)
   kNonFinite,      ///< the residual became NaN or infinite
   kOutOfRange,     ///< IK converged, but a joint value lies outside its stroke
   kUnsupported,    ///< the request is not a square problem (IK with n > 3 limbs)

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 
@@ -22,6 +23,30 @@ namespace pcr::internal {
 
 /// Reciprocal condition number below which a solved start counts as a bifurcation point.
 inline constexpr double kBifurcationRcond = 1e-13;
+
+/// At the last solved point z of a path that stalled at a nearly singular Jacobian, whether the
+/// path meets a bifurcation there rather than a fold. At a fold the path turns back: the input
+/// direction pushes the residual along J's left null vector w (w . dr/du du != 0), so no solution
+/// lies ahead on this branch. Where branches cross, the input direction stays in the range of J
+/// (w . dr/du du -> 0 as the path nears the crossing). Measured on the default robot's folds and on
+/// a 4-limb robot driven through its straight home, |w . g| / |g| is above 0.03 at the former and
+/// near 0.003 at the latter: the threshold sits between them, and w must be a distinct null
+/// direction (the smallest singular value well below the next).
+inline bool stalled_at_bifurcation(const ShootingProblem& problem, const ShootingVector& z,
+                                   const ShootingVector& du, SolverSummary& summary) {
+  ShootingVector r;
+  JacobianMatrix J;
+  problem.evaluate(z, r, &J);
+  ++summary.residual_evaluations;
+  if (!J.allFinite()) return false;
+  const Eigen::JacobiSVD<JacobianMatrix> svd(J, Eigen::ComputeFullU);
+  const int m = static_cast<int>(J.rows());
+  const auto& sigma = svd.singularValues();
+  if (m < 2 || !(sigma(m - 1) < 0.1 * sigma(m - 2))) return false;
+  const ShootingVector g = problem.input_derivative(z, du);
+  const double g_norm = g.norm();
+  return g_norm > 0.0 && std::abs(svd.matrixU().col(m - 1).dot(g)) <= 0.01 * g_norm;
+}
 
 inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const ShootingVector& u0,
                                              const ShootingVector& u1, ShootingVector& z,
@@ -72,12 +97,17 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
     const double slope = (rc_last * rc_last - rc_prev * rc_prev) / (t_rc_last - t_rc_prev);
     return slope < 0.0 && t_rc_last - rc_last * rc_last / slope <= 1.0;
   };
+  // The status of a path that stalls at a singular Jacobian, from its last solved point z_last.
+  const auto singular_status = [&]() {
+    return stalled_at_bifurcation(problem, z_last, u1 - u0, summary) ? SolveStatus::kBifurcation
+                                                                     : SolveStatus::kSingular;
+  };
   while (t < 1.0) {
     if (summary.continuation_steps >= options.max_continuation_steps) {
       z = z_last;  // the last solved point of the path
       problem.set_input(u0 + t * (u1 - u0));
       summary.path_fraction = t;
-      return singular_ahead() ? SolveStatus::kSingular : SolveStatus::kMaxIterations;
+      return singular_ahead() ? singular_status() : SolveStatus::kMaxIterations;
     }
     ++summary.continuation_steps;
     const double t_next = std::min(1.0, t + dt);
@@ -108,7 +138,7 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
       problem.set_input(u0 + t * (u1 - u0));
       summary.path_fraction = t;
       summary.final_residual_norm = sub.final_norm;
-      return singular_ahead() || sub.status == SolveStatus::kSingular ? SolveStatus::kSingular
+      return singular_ahead() || sub.status == SolveStatus::kSingular ? singular_status()
                                                                       : sub.status;
     }
   }
@@ -370,13 +400,16 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
 }
 
 /// bowed_variant_homotopy with the rods bowed to their left, then, if that path fails, to their
-/// right (the documented order of the branches tried).
+/// right; then the same with twice and half the bow (the documented order of the branches tried).
+/// Next to a bifurcation (rods that are straight at home, moved a few um) the path from one bow
+/// can wander off where another reaches the robot.
 inline SolveStatus solve_from_bowed_variant(const RobotParams<double>& robot,
                                             const PlatformLoad<double>& load,
                                             const ShootingVector& u, const SolverOptions& options,
                                             SolverSummary& summary, ShootingVector& z) {
   SolveStatus status = SolveStatus::kMaxIterations;
-  for (const double bow : {kVariantBow, -kVariantBow}) {
+  for (const double bow : {kVariantBow, -kVariantBow, 2 * kVariantBow, -2 * kVariantBow,
+                           kVariantBow / 2, -kVariantBow / 2}) {
     status = bowed_variant_homotopy(robot, load, u, bow, options, summary, z);
     if (status == SolveStatus::kConverged) break;
   }
