@@ -31,6 +31,7 @@ bool same_file(const std::string& a, const std::string& b) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pcr::protect_inputs();  // the identified robot is never written over the nominal one
   CLI::App app{
       "Identify a pcr-robot description from measured platform poses (Mauze et al. 2021, "
       "Section 5)."};
@@ -73,6 +74,7 @@ int main(int argc, char** argv) {
 
     const pcr::CalibrationResult result = pcr::calibrate(nominal, calibration, options);
 
+    pcr::OutputTransaction outputs;              // the robot and the report: all or none
     pcr::RobotDescription identified = nominal;  // uncertainty section kept from the nominal
     identified.params = result.identified;
     pcr::save_robot(identified, output_path);
@@ -88,6 +90,9 @@ int main(int argc, char** argv) {
                           {"orientation_weight_m_per_rad", weight}};
       pcr::write_file_atomically(report_path, report.dump(2) + "\n");
     }
+    outputs.commit();
+    std::cout.flush();
+    if (!std::cout) throw std::runtime_error("<stdout>: write error");
   } catch (const std::exception& e) {
     std::cerr << "pcr_calibrate: " << e.what() << "\n";
     return 1;

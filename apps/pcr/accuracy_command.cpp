@@ -55,6 +55,7 @@ std::vector<pcr::Pose2<double>> make_path(const AccuracyArguments& args, std::st
 }
 
 void run_accuracy(const AccuracyArguments& args) {
+  pcr::OutputTransaction outputs;  // the poses and the table: all or none
   using namespace pcr;
   if (args.format != "text" && args.format != "json" && args.format != "csv") {
     throw InputError("--format: expected text, json or csv, got '" + args.format + "'");
@@ -131,6 +132,7 @@ void run_accuracy(const AccuracyArguments& args) {
   else
     out.stream() << iso9283_table_markdown(rows);
   out.commit();
+  outputs.commit();
 }
 
 }  // namespace

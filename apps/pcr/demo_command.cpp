@@ -310,6 +310,9 @@ std::string accuracy_section(const pcr::CalibrationResult& calibrated, pcr::Virt
 void run_demo(const DemoArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out = prepare_output(args.output);
+  // Every file goes in place at the end, when all were written: a failed or interrupted demo
+  // leaves the files of the previous run as they were.
+  pcr::OutputTransaction outputs;
   Progress progress(5, args.quiet);
   json report;
   report["seed"] = args.seed;
@@ -455,6 +458,7 @@ void run_demo(const DemoArgs& args) {
   md += fmt("\nTotal time %.1f s.\n", Progress::seconds_since(start));
   pcr::write_file_atomically((out / "report.json").string(), report.dump(2) + "\n");
   pcr::write_file_atomically((out / "report.md").string(), md);
+  outputs.commit();
   std::cout << md;
   progress.say("wrote " + (out / "report.md").string());
 }

@@ -32,6 +32,7 @@ void exec_full_tool(char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pcr::protect_inputs();  // no output of a command is written over one of its inputs
   CLI::App app{"pcr: planar parallel continuum robots (kinematics, description files)"};
   app.require_subcommand(1);
   register_fk_command(app);
@@ -65,6 +66,12 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const std::exception& e) {
     std::cerr << "pcr: error: " << e.what() << "\n";
+    return 2;
+  }
+  // What went to stdout must have arrived (a full disk, a closed pipe, > /dev/full).
+  std::cout.flush();
+  if (!std::cout) {
+    std::cerr << "pcr: error: <stdout>: write error\n";
     return 2;
   }
   return pcr::cli::exit_status();

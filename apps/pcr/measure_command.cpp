@@ -72,8 +72,10 @@ void register_measure_command(CLI::App& app) {
           limb, images.size(), r.line_rms * 1e6, r.direction_plane, r.direction_sigma * 1e3);
     }
     const RobotDescription out = measured_description(design, m);
+    OutputTransaction outputs;  // all or none
     save_robot(out, args->output);
     if (!args->annotated.empty()) write_annotated(image, m, layout, camera, args->annotated);
+    outputs.commit();
     std::printf(
         "plane fit: corner rms %.4f px (sigma used %.4f px); registration rms A %.1f um, B %.1f "
         "um\n",

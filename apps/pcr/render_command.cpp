@@ -117,6 +117,7 @@ void register_render_command(CLI::App& app) {
           RenderChessboard::centred(board.cols, board.rows, board.square_m, {c[0], c[1], c[2]});
     }
     const GrayImage image = render_scene(scene, args->render);
+    OutputTransaction outputs;  // the image, the camera and the truth: all or none
     write_png(image, args->output, args->bits);
     if (!args->camera_out.empty()) save_camera(scene.camera, args->camera_out);
     if (!args->truth.empty()) {
@@ -160,15 +161,9 @@ void register_render_command(CLI::App& app) {
                               {"beta_W", l.beta + platform.theta},
                               {"q", qi}});
       }
-      const std::string tmp = args->truth + ".tmp";
-      {
-        std::ofstream out(tmp);
-        out << j.dump(2) << "\n";
-        if (!out) throw std::runtime_error(args->truth + ": cannot write");
-      }
-      if (std::rename(tmp.c_str(), args->truth.c_str()) != 0)
-        throw std::runtime_error(args->truth + ": cannot rename");
+      write_file_atomically(args->truth, j.dump(2) + "\n");
     }
+    outputs.commit();
     std::cout << "wrote " << args->output << " (" << image.width << " x " << image.height << " px, "
               << scene.tags.size() << " tags)\n";
   });

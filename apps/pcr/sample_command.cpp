@@ -55,8 +55,10 @@ void run_sample(const SampleArguments& args) {
   }
   std::vector<JointVector> calibration, validation;
   split_configurations(result.configurations, args.count, &calibration, &validation);
+  OutputTransaction outputs;  // all or none
   write_configurations(calibration, args.output);
   if (!args.validation_output.empty()) write_configurations(validation, args.validation_output);
+  outputs.commit();
   std::cerr << "pcr sample: " << calibration.size() << " configurations";
   if (!args.validation_output.empty()) std::cerr << " + " << validation.size() << " validation";
   std::cerr << ", pairwise >= " << result.min_distance * 1e3 << " mm; " << result.candidates

@@ -23,8 +23,10 @@ void run_sensitivity(const SensitivityArguments& args) {
   options.solver = args.solve.options();
   const SensitivityReport report = sensitivity_analysis(robot, options);
   std::cout << sensitivity_table_text(report);
+  OutputTransaction outputs;  // all or none
   if (!args.csv.empty()) write_file_atomically(args.csv, sensitivity_csv(report));
   if (!args.json.empty()) write_file_atomically(args.json, sensitivity_json(report));
+  outputs.commit();
 }
 
 }  // namespace

@@ -60,8 +60,10 @@ void run_simulate(const SimulateArguments& args) {
     }
     data.add(configs[k], m.measured);
   }
+  OutputTransaction outputs;  // all or none
   write_dataset(data, args.output);
   if (!args.truth.empty()) save_robot(robot.truth(), args.truth);
+  outputs.commit();
   std::cerr << "pcr simulate: " << data.size() << " measurements of robot '" << nominal.name
             << "' (seed " << args.seed << ") written to " << args.output;
   if (fx.external_load) {

@@ -1,5 +1,5 @@
 #pragma once
-// Small numeric CSV tables (joint values, poses, calibration datasets) and atomic output files.
+// Small numeric CSV tables (joint values, poses, calibration datasets).
 // Compiled in pcr::io. Format documented in docs/formats.md.
 //
 // Reading rules:
@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "pcr/files.hpp"  // OutputFile, open_input_file
 #include "pcr/robot_io.hpp"
 
 namespace pcr {
@@ -83,30 +84,5 @@ class CsvWriter {
   std::string buffer_;
   bool row_started_{false};
 };
-
-/// An output stream that is stdout when `path` is empty or "-", otherwise a temporary file in the
-/// same directory renamed over `path` by commit(). Dropped uncommitted, the temporary is removed,
-/// so a failed run never leaves a half-written file behind.
-class OutputFile {
- public:
-  explicit OutputFile(const std::string& path);
-  ~OutputFile();
-  OutputFile(const OutputFile&) = delete;
-  OutputFile& operator=(const OutputFile&) = delete;
-
-  std::ostream& stream();
-  /// Flushes and renames the temporary over the target (throws std::runtime_error on failure).
-  void commit();
-
- private:
-  std::string path_;
-  std::string temp_path_;
-  std::ofstream file_;
-  bool to_stdout_{false};
-  bool committed_{false};
-};
-
-/// Writes `text` to `path` atomically (temporary file + rename).
-void write_file_atomically(const std::string& path, const std::string& text);
 
 }  // namespace pcr

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "pcr/csv_io.hpp"
+#include "pcr/files.hpp"
 
 namespace pcr {
 namespace {
@@ -73,11 +74,7 @@ CsvTable read_table(std::istream& in, const std::string& source, int num_joints,
   return parse_csv(in, source, options);
 }
 
-std::ifstream open(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open for reading");
-  return in;
-}
+std::ifstream open(const std::string& path) { return open_input_file(path); }
 
 }  // namespace
 

@@ -6,14 +6,14 @@
 #include <vector>
 
 #include "pcr/calib/calibrator.hpp"
+#include "pcr/files.hpp"
 
 namespace pcr {
 
 using nlohmann::json;
 
 std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the stages file");
+  std::ifstream in = open_input_file(path);
   json j;
   try {
     j = json::parse(in);

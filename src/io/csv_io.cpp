@@ -195,8 +195,7 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
 }
 
 CsvTable read_csv(const std::string& path, const CsvReadOptions& options) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open for reading: " + std::strerror(errno));
+  std::ifstream in = open_input_file(path);
   return parse_csv(in, path, options);
 }
 
@@ -293,64 +292,6 @@ void CsvWriter::end_row() {
 void CsvWriter::flush() {
   out_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
   buffer_.clear();
-}
-
-OutputFile::OutputFile(const std::string& path) : path_(path) {
-  if (path.empty() || path == "-") {
-    to_stdout_ = true;
-    return;
-  }
-  // mkstemp gives a unique name in the target's directory, so rename() stays on one filesystem.
-  std::string pattern = path + ".tmp-XXXXXX";
-  std::vector<char> name(pattern.begin(), pattern.end());
-  name.push_back('\0');
-  const int fd = ::mkstemp(name.data());
-  if (fd < 0) {
-    throw std::runtime_error(path + ": cannot create a temporary file: " + std::strerror(errno));
-  }
-  // mkstemp creates the file 0600; give it the permissions a plain open() would have.
-  const mode_t mask = ::umask(0);
-  ::umask(mask);
-  ::fchmod(fd, 0666 & ~mask);
-  ::close(fd);
-  temp_path_ = name.data();
-  file_.open(temp_path_, std::ios::out | std::ios::trunc);
-  if (!file_) {
-    std::remove(temp_path_.c_str());
-    throw std::runtime_error(path + ": cannot open " + temp_path_ + " for writing");
-  }
-}
-
-OutputFile::~OutputFile() {
-  if (!to_stdout_ && !committed_) {
-    file_.close();
-    std::remove(temp_path_.c_str());
-  }
-}
-
-std::ostream& OutputFile::stream() { return to_stdout_ ? std::cout : file_; }
-
-void OutputFile::commit() {
-  if (committed_) return;
-  if (to_stdout_) {
-    std::cout.flush();
-    committed_ = true;
-    return;
-  }
-  file_.flush();
-  file_.close();
-  if (file_.fail()) throw std::runtime_error(path_ + ": write error on " + temp_path_);
-  if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
-    throw std::runtime_error(path_ + ": cannot rename " + temp_path_ + ": " + std::strerror(errno));
-  }
-  committed_ = true;
-}
-
-void write_file_atomically(const std::string& path, const std::string& text) {
-  if (path.empty()) throw std::invalid_argument("write_file_atomically: empty path");
-  OutputFile out(path);
-  out.stream() << text;
-  out.commit();
 }
 
 }  // namespace pcr

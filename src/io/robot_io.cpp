@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "pcr/csv_io.hpp"
+#include "pcr/files.hpp"
 
 namespace pcr {
 namespace {
@@ -373,8 +374,7 @@ RobotDescription parse_robot(const std::string& json_text, const std::string& so
 }
 
 RobotDescription load_robot(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open for reading: " + std::strerror(errno));
+  std::ifstream in = open_input_file(path);
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw InputError(path + ": read error");

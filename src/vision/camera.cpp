@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "pcr/files.hpp"
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/image.hpp"
 
@@ -73,6 +74,7 @@ PlanePose PlanePose::looking_down(double height_m, double tilt_x, double tilt_y)
 }
 
 CameraModel load_camera(const std::string& path) {
+  check_input_file(path);
   cv::FileStorage fs;
   try {
     fs.open(path, cv::FileStorage::READ);
@@ -143,9 +145,9 @@ CameraModel load_camera(const std::string& path) {
 }
 
 void save_camera(const CameraModel& camera, const std::string& path, double rms_px) {
-  const std::string tmp = path + ".tmp.yaml";
+  OutputFile file(path, OutputFile::Writer::kExternal, ".yaml");
   {
-    cv::FileStorage fs(tmp, cv::FileStorage::WRITE);
+    cv::FileStorage fs(file.temp_path(), cv::FileStorage::WRITE);
     if (!fs.isOpened()) throw std::runtime_error(path + ": cannot write the camera file");
     cv::Mat K(3, 3, CV_64F), D(1, static_cast<int>(camera.distortion.size()), CV_64F);
     for (int r = 0; r < 3; ++r)
@@ -155,10 +157,7 @@ void save_camera(const CameraModel& camera, const std::string& path, double rms_
        << "distortion_coefficients" << D;
     if (rms_px >= 0) fs << "avg_reprojection_error" << rms_px;
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot rename " + tmp);
-  }
+  file.commit();
 }
 
 void check_image_size(const CameraModel& camera, int width, int height,

@@ -5,11 +5,13 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "pcr/files.hpp"
 #include "pcr/robot_io.hpp"
 
 namespace pcr::vision {
 
 GrayImage read_image(const std::string& path) {
+  check_input_file(path);
   const cv::Mat raw = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
   if (raw.empty()) throw InputError(path + ": cannot read the image (missing or not an image)");
   cv::Mat gray = raw;
@@ -54,12 +56,11 @@ void write_png(const GrayImage& image, const std::string& path, int bits) {
   } else {
     f.convertTo(out, CV_16U, 65535.0);
   }
-  const std::string tmp = path + ".tmp.png";
-  if (!cv::imwrite(tmp, out)) throw std::runtime_error(path + ": cannot write the image");
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot rename " + tmp);
+  OutputFile file(path, OutputFile::Writer::kExternal, ".png");
+  if (!cv::imwrite(file.temp_path(), out)) {
+    throw std::runtime_error(path + ": cannot write the image");
   }
+  file.commit();
 }
 
 }  // namespace pcr::vision

@@ -9,6 +9,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "pcr/files.hpp"
+
 namespace pcr::vision {
 
 namespace {
@@ -494,10 +496,11 @@ void write_annotated(const GrayImage& image, const RobotMeasurement& m, const Mo
                thick);
     }
   }
-  const std::string tmp = path + ".tmp.png";
-  if (!cv::imwrite(tmp, bgr)) throw std::runtime_error(path + ": cannot write the annotated image");
-  if (std::rename(tmp.c_str(), path.c_str()) != 0)
-    throw std::runtime_error(path + ": cannot rename " + tmp);
+  OutputFile file(path, OutputFile::Writer::kExternal, ".png");
+  if (!cv::imwrite(file.temp_path(), bgr)) {
+    throw std::runtime_error(path + ": cannot write the annotated image");
+  }
+  file.commit();
 }
 
 }  // namespace pcr::vision

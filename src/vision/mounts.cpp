@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "pcr/files.hpp"
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/tags.hpp"
 
@@ -134,8 +135,7 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
 }
 
 MountLayout load_mounts(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the mount layout file");
+  std::ifstream in = open_input_file(path);
   std::stringstream ss;
   ss << in.rdbuf();
   return parse_mounts(ss.str(), path);
