@@ -41,13 +41,16 @@ struct Intervals {
 inline RobotParams<double> perturbed(const RobotParams<double>& robot, std::mt19937_64& rng,
                                      const Intervals& intervals = {}) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // Braces, not parentheses, around draws: a braced list is evaluated left to right, a call's
+  // arguments in an order that differs between compilers, and one seed must give the same robots
+  // under every compiler.
   RobotParams<double> out = robot;
   for (int i = 0; i < out.num_limbs; ++i) {
     LimbParams<double>& limb = out.limb(i);
-    limb.A += intervals.position * Vector2<double>(u(rng), u(rng));
+    limb.A += intervals.position * Vector2<double>{u(rng), u(rng)};
     limb.alpha += intervals.angle * u(rng);
     limb.gamma += intervals.angle * u(rng);
-    limb.B += intervals.position * Vector2<double>(u(rng), u(rng));
+    limb.B += intervals.position * Vector2<double>{u(rng), u(rng)};
     limb.beta += intervals.angle * u(rng);
     limb.length += intervals.length * u(rng);
     limb.diameter += intervals.diameter * u(rng);

@@ -275,12 +275,17 @@ TEST(Kinematics, PreStressedRedundantRobotsFindTheirBowedHome) {
     ASSERT_TRUE(home.summary.converged())
         << "robot " << r << ": " << to_string(home.summary.status);
     EXPECT_GT(home.summary.max_strain, 1e-4) << "robot " << r;
-    // An equilibrium of the exact model too: at 4x the steps the pose moves by far less than 1 nm.
+    // An equilibrium of the exact model too: solved again from there at 4x the steps, the pose
+    // moves by far less than 1 nm. Where straight rods at home still carry a self-stress, home is
+    // a bifurcation (the warm solve says so) and the cold solve at 4x the steps stands in.
     SolverOptions fine;
     fine.rod_steps = 4 * home.summary.rod_steps;
-    const ForwardSolution refined = home_solution(robot, fine);
-    ASSERT_TRUE(refined.summary.converged()) << "robot " << r;
-    EXPECT_LT(std::hypot(refined.pose.x - home.pose.x, refined.pose.y - home.pose.y), 1e-9);
+    ForwardSolution refined = forward_kinematics(robot, JointVector::Zero(n), home, fine);
+    if (refined.summary.status == SolveStatus::kBifurcation) refined = home_solution(robot, fine);
+    ASSERT_TRUE(refined.summary.converged())
+        << "robot " << r << ": " << to_string(refined.summary.status);
+    EXPECT_LT(std::hypot(refined.pose.x - home.pose.x, refined.pose.y - home.pose.y), 1e-9)
+        << "robot " << r;
     // And the robot moves from there: warm, or, where straight rods at home still carry a
     // self-stress (a bifurcation), cold from the bowed variant at those joints.
     JointVector q = JointVector::Zero(n);

@@ -28,7 +28,8 @@ PoseError tag_pose_error(double noise, double blur, int trials) {
     scene.camera.width = scene.camera.height = 640;
     scene.camera.K << 8000, 0, 320.2, 0, 8000, 319.6, 0, 0, 1;
     scene.camera.distortion[0] = -0.2;
-    scene.plane = PlanePose::looking_down(0.2, 0.02 * u(rng), 0.02 * u(rng));
+    const double tilt_x = 0.02 * u(rng), tilt_y = 0.02 * u(rng);  // drawn in this order
+    scene.plane = PlanePose::looking_down(0.2, tilt_x, tilt_y);
     RenderTag tag;
     tag.id = 5 + t;
     tag.pose = Pose2<double>{0.0005 * u(rng), 0.0005 * u(rng), M_PI * u(rng)};
@@ -152,10 +153,10 @@ void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Co
     RobotParams<double> truth = design;
     for (int i = 0; i < 3; ++i) {
       LimbParams<double>& l = truth.limb(i);
-      l.A += Eigen::Vector2d(u(rng), u(rng)) * 1e-3;
+      l.A += Eigen::Vector2d{u(rng), u(rng)} * 1e-3;
       l.alpha += 0.02 * u(rng);
       l.gamma = 0.01 * u(rng);
-      l.B += Eigen::Vector2d(u(rng), u(rng)) * 1e-3;
+      l.B += Eigen::Vector2d{u(rng), u(rng)} * 1e-3;
       l.beta += 0.02 * u(rng);
     }
     MountLayout actual = nominal;
@@ -164,15 +165,16 @@ void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Co
         m.clamp_offset_uncertainty.setZero(), m.rod_angle_uncertainty = 0;
     } else {
       for (Mount& m : actual.mounts) {
-        m.clamp_offset += Eigen::Vector2d(u(rng) * m.clamp_offset_uncertainty.x(),
-                                          u(rng) * m.clamp_offset_uncertainty.y());
+        m.clamp_offset += Eigen::Vector2d{u(rng) * m.clamp_offset_uncertainty.x(),
+                                          u(rng) * m.clamp_offset_uncertainty.y()};
         m.rod_angle += u(rng) * m.rod_angle_uncertainty;
       }
     }
     const MountLayout& used = exact_offsets ? actual : nominal;
     Scene scene;
     scene.camera = robot_camera();
-    scene.plane = PlanePose::looking_down(0.5, 0.03 * u(rng), 0.03 * u(rng));
+    const double tilt_x = 0.03 * u(rng), tilt_y = 0.03 * u(rng);  // drawn in this order
+    scene.plane = PlanePose::looking_down(0.5, tilt_x, tilt_y);
     const Pose2<double> platform{2e-3 * u(rng), 2e-3 * u(rng), 0.03 * u(rng)};
     scene.tags = mount_tags(actual, truth, platform, {}, &scene.segments);
     RenderOptions opt;

@@ -107,12 +107,9 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
     const ShootingVector u = q;
     ShootingVector z;
     problem.set_input(u);
-    SolveStatus status =
-        internal::solve_from_bowed_variant(robot, load, u, options, solution.summary, z);
+    const SolveStatus status = internal::solve_from_bowed_variant_at_refined_steps(
+        problem, u, options, solution.summary, z, &solution.jacobian);
     if (status == SolveStatus::kConverged) {
-      solution.jacobian = internal::ChordMatrix();
-      status = internal::refine_rod_steps(problem, z, options, solution.summary, status,
-                                          &solution.jacobian);
       internal::store_configuration(problem, z, solution);
       solution.summary.path_fraction = 1.0;
     }

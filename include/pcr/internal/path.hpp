@@ -416,6 +416,44 @@ inline SolveStatus solve_from_bowed_variant(const RobotParams<double>& robot,
   return status;
 }
 
+/// solve_from_bowed_variant at the unknowns' step count, then refine_rod_steps. Near a fold of the
+/// blended geometry the path of a coarse model can cross to a neighbouring branch that the finer
+/// models do not reach (two equilibria of a 5-limb robot 0.6 um apart: 16 steps reach one, 24 and
+/// more the other). So the homotopy is run again at the step count the refinement settles on, until
+/// the two agree: the branch returned is the one the returned solution's own model reaches. Should
+/// a finer homotopy fail, the coarser one's refined solution, an equilibrium as accurate, stands.
+inline SolveStatus solve_from_bowed_variant_at_refined_steps(
+    ShootingProblem& problem, const ShootingVector& u, const SolverOptions& options,
+    SolverSummary& summary, ShootingVector& z, ChordMatrix* carried) {
+  SolverOptions fixed = options;
+  fixed.rod_steps = problem.rod_steps();
+  SolveStatus status =
+      solve_from_bowed_variant(problem.robot(), problem.load(), u, fixed, summary, z);
+  for (int pass = 0; status == SolveStatus::kConverged; ++pass) {
+    problem.set_rod_steps(fixed.rod_steps);
+    if (carried) *carried = ChordMatrix();  // the homotopy's last Jacobian was not this problem's
+    status = refine_rod_steps(problem, z, options, summary, status, carried);
+    if (status != SolveStatus::kConverged || problem.rod_steps() <= fixed.rod_steps || pass == 2)
+      break;
+    const ShootingVector kept_z = z;
+    const SolverSummary kept = summary;
+    const ChordMatrix kept_jacobian = carried ? *carried : ChordMatrix();
+    fixed.rod_steps = problem.rod_steps();
+    if (solve_from_bowed_variant(problem.robot(), problem.load(), u, fixed, summary, z) !=
+        SolveStatus::kConverged) {
+      z = kept_z;
+      const SolverSummary spent = summary;
+      summary = kept;
+      summary.iterations = spent.iterations;
+      summary.residual_evaluations = spent.residual_evaluations;
+      summary.continuation_steps = spent.continuation_steps;
+      if (carried) *carried = kept_jacobian;
+      break;
+    }
+  }
+  return status;
+}
+
 /// The solution at q = 0: from the unloaded straight guess (exact for a stress-free robot); when
 /// Newton fails from there, by a Newton homotopy from it (n <= 3) and from a bowed variant of the
 /// robot (n >= 4, where the straight guess is on a bifurcation, or when that homotopy fails).
@@ -457,7 +495,8 @@ inline ShootingVector home_unknowns(ShootingProblem& fk, const SolverOptions& op
   summary.final_residual_norm = home.final_norm;
   summary.max_strain = home.max_strain;
   if (home.status != SolveStatus::kConverged && options.continuation) {
-    home.status = solve_from_bowed_variant(fk.robot(), fk.load(), u, options, summary, z);
+    status = solve_from_bowed_variant_at_refined_steps(fk, u, options, summary, z, carried);
+    return z;
   }
   status = refine_rod_steps(fk, z, options, summary, home.status, carried);
   return z;
