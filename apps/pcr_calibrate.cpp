@@ -2,6 +2,7 @@
 // (issue 3, section 5). Thin: parse arguments, call pcr::calibrate, print and write the report.
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -45,7 +46,15 @@ int main(int argc, char** argv) {
   app.add_option("--stages", stages_path,
                  "stages JSON: [{\"name\", \"free\": [kinds], \"bounds_scale\"}]");
   app.add_option("--weight", weight, "orientation weight w of Eq. 6 (m/rad)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double w = std::strtod(text.c_str(), &end);
+            if (text.empty() || *end != '\0' || !std::isfinite(w) || w < 0.0 || w > 10.0)
+              return "'" + text + "' is outside [0, 10] m/rad";
+            return std::string();
+          },
+          "in [0, 10] m/rad"));
   app.add_option("--output", output_path, "identified pcr-robot description")->required();
   app.add_option("--report", report_path, "report JSON");
   app.add_flag("--quiet", quiet, "no progress on stderr");

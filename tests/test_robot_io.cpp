@@ -223,16 +223,16 @@ TEST(RobotIo, TypeAndShapeErrors) {
 TEST(RobotIo, ValueRules) {
   Json j = valid();
   j["limbs"][2]["l"] = -0.03;
-  EXPECT_MESSAGE(error_of(j), "limbs[2].l", "positive", "-0.03");
+  EXPECT_MESSAGE(error_of(j), "limbs[2].l", "physical range", "-0.03");
   j = valid();
   j["limbs"][0]["d"] = 0.0;
-  EXPECT_MESSAGE(error_of(j), "limbs[0].d", "positive", "0");
+  EXPECT_MESSAGE(error_of(j), "limbs[0].d", "physical range", "got 0");
   j = valid();
   j["E"] = 0;
-  EXPECT_MESSAGE(error_of(j), "E", "positive", "0");
+  EXPECT_MESSAGE(error_of(j), "E", "physical range", "got 0");
   j = valid();
   j["limbs"][1]["E"] = -70e9;
-  EXPECT_MESSAGE(error_of(j), "limbs[1].E", "positive", "-70000000000");
+  EXPECT_MESSAGE(error_of(j), "limbs[1].E", "physical range", "-70000000000");
   j = valid();
   j["limbs"][1]["q_range"] = Json::array({0.01, -0.01});
   EXPECT_MESSAGE(error_of(j), "limbs[1].q_range", "min > max", "[0.01,-0.01]");
@@ -250,13 +250,13 @@ TEST(RobotIo, ValueRules) {
 TEST(RobotIo, UncertaintyRules) {
   Json j = valid();
   j["uncertainty"]["l"] = -1e-6;
-  EXPECT_MESSAGE(error_of(j), "uncertainty.l", "non-negative", "-1e-06");
+  EXPECT_MESSAGE(error_of(j), "uncertainty.l", "must be 0 or in", "-1e-06");
   j = valid();
   j["uncertainty"]["camera"][2] = -0.05;
-  EXPECT_MESSAGE(error_of(j), "uncertainty.camera[2]", "non-negative", "-0.05");
+  EXPECT_MESSAGE(error_of(j), "uncertainty.camera[2]", "must be 0 or in", "-0.05");
   j = valid();
   j["uncertainty"]["limbs"][1]["B"][0] = -1e-5;
-  EXPECT_MESSAGE(error_of(j), "uncertainty.limbs[1].B[0]", "non-negative", "-1e-05");
+  EXPECT_MESSAGE(error_of(j), "uncertainty.limbs[1].B[0]", "must be 0 or in", "-1e-05");
   j = valid();
   j["uncertainty"]["limbs"].erase(2);
   EXPECT_MESSAGE(error_of(j), "uncertainty.limbs", "array of 3");
@@ -298,29 +298,33 @@ TEST(RobotIo, RoundTripIsBitExact) {
   for (int trial = 0; trial < 50; ++trial) {
     pcr::RobotDescription r;
     r.name = "random \"robot\" \\ " + std::to_string(trial);
-    r.young_modulus = random_double(rng, -3, 12, true);
+    // Random bits over every magnitude the loader accepts (a double's binary exponent, so the
+    // decimal bounds below sit inside each field's physical range).
+    r.young_modulus = random_double(rng, 6.1, 11.9, true);
     r.params.num_limbs = 2 + trial % (pcr::kMaxLimbs - 1);
-    auto any = [&] { return random_double(rng, -300, 300, false); };
-    auto pos = [&] { return random_double(rng, -300, 300, true); };
+    auto any = [&] { return random_double(rng, -300, 0.9, false); };  // |x| < 8: m or rad
+    auto length = [&] { return random_double(rng, -2.9, 0.9, true); };
+    auto diameter = [&] { return random_double(rng, -5.5, -3.1, true); };  // below any length
+    auto half = [&] { return random_double(rng, -11.5, -2.1, true); };
     pcr::RobotUncertainty u;
-    u.global.length = pos();
-    u.global.A = Eigen::Vector2d(pos(), 0.0);
-    u.camera = Eigen::Vector3d(pos(), pos(), 0.0);
+    u.global.length = half();
+    u.global.A = Eigen::Vector2d(half(), 0.0);
+    u.camera = Eigen::Vector3d(half(), half(), 0.0);
     for (int i = 0; i < r.params.num_limbs; ++i) {
       pcr::LimbParams<double>& l = r.params.limb(i);
-      l.A = Eigen::Vector2d(any(), any());
+      l.A = Eigen::Vector2d{any(), any()};
       l.B = Eigen::Vector2d(any(), -0.0);
       l.alpha = any();
       l.beta = any();
       l.gamma = any();
-      l.length = pos();
-      l.diameter = pos();
-      l.young_modulus = (i % 2) ? pos() : r.young_modulus;
-      l.q_min = -pos();
-      l.q_max = pos();
+      l.length = length();
+      l.diameter = diameter();
+      l.young_modulus = (i % 2) ? random_double(rng, 6.1, 11.9, true) : r.young_modulus;
+      l.q_min = -std::abs(any());
+      l.q_max = std::abs(any());
       pcr::LimbUncertainty lu = u.global;
-      if (i == 1) lu.beta = pos();
-      if (i == 2) lu.young_modulus = pos();
+      if (i == 1) lu.beta = half();
+      if (i == 2) lu.young_modulus = random_double(rng, 6.1, 8.9, true);
       u.limbs.push_back(lu);
     }
     r.params.extrinsics.camera = pcr::Pose2<double>{any(), any(), any()};

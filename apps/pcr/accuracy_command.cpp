@@ -143,17 +143,20 @@ void register_accuracy_command(CLI::App& app) {
       "accuracy",
       "ISO 9283 accuracy of a path commanded by IK (Table 4), on a virtual robot or "
       "from measured poses");
+  using pcr::cli::within;
   pcr::cli::add_robot_option(*cmd, args->robot);
   cmd->add_option("--path", args->path, "square, circle, or a CSV file of poses (x,y,theta)")
       ->capture_default_str();
   cmd->add_option("--size", args->size, "square side or circle diameter (m; default 2 mm / 3 mm)")
-      ->check(CLI::PositiveNumber);
+      ->check(within(1e-6, 0.1, "m"));
   cmd->add_option("--centre", args->centre, "path centre x,y (m, in W; default 0,0)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(within(-0.1, 0.1, "m"));
   cmd->add_option("--theta", args->theta, "constant platform orientation (rad)")
+      ->check(within(-M_PI, M_PI, "rad"))
       ->capture_default_str();
   cmd->add_option("--count", args->count, "poses on the path (default 40 square, 36 circle)")
-      ->check(CLI::PositiveNumber);
+      ->check(within(1, 100000));
   cmd->add_option("--repeat", args->repeat, "ISO 9283 cycles per pose")
       ->check(CLI::Range(2, 100000))
       ->capture_default_str();
@@ -165,10 +168,10 @@ void register_accuracy_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "seed of the truth draw and of the noise")
       ->capture_default_str();
   cmd->add_option("--noise-position", args->noise_position, "camera noise std on x and y (m)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(within(0.0, 0.01, "m"))
       ->capture_default_str();
   cmd->add_option("--noise-angle", args->noise_angle, "camera noise std on theta (rad)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(within(0.0, 0.1, "rad"))
       ->capture_default_str();
   cmd->add_option("--effects", args->effects,
                   "unmodelled effects of the virtual robot: misalignments, diameters, load")
@@ -179,7 +182,7 @@ void register_accuracy_command(CLI::App& app) {
                   "of a nominal model's robot parameters alone)")
       ->capture_default_str();
   cmd->add_option("--strain-limit", args->strain_limit, "max bending strain of a commanded pose")
-      ->check(CLI::PositiveNumber)
+      ->check(within(1e-6, 0.1))
       ->capture_default_str();
   cmd->add_option("--poses", args->poses,
                   "write the commanded and attained poses (the --measured CSV format)");

@@ -18,15 +18,18 @@ void register_camera_command(CLI::App& app) {
       "calibrate a camera from chessboard images; writes OpenCV YAML (camera_matrix, ...)");
   cmd->add_option("--board", args->board, "inner corners COLSxROWS of the chessboard")
       ->capture_default_str();
-  cmd->add_option("--square", args->square, "chessboard square edge (m)")->capture_default_str();
+  cmd->add_option("--square", args->square, "chessboard square edge (m)")
+      ->check(pcr::cli::within(1e-4, 1.0, "m"))
+      ->capture_default_str();
   cmd->add_option("--images", args->images, "images of the board (at least 3, varied poses)")
       ->required();
   cmd->add_option("--output", args->output, "camera YAML to write")->required();
   cmd->callback([args]() {
     pcr::vision::ChessboardSpec spec;
-    if (std::sscanf(args->board.c_str(), "%dx%d", &spec.cols, &spec.rows) != 2) {
-      throw pcr::InputError("--board: expected COLSxROWS (inner corners), got '" + args->board +
-                            "'");
+    if (std::sscanf(args->board.c_str(), "%dx%d", &spec.cols, &spec.rows) != 2 || spec.cols < 2 ||
+        spec.rows < 2 || spec.cols > 100 || spec.rows > 100) {
+      throw pcr::InputError("--board: expected COLSxROWS (inner corners, 2 to 100 each), got '" +
+                            args->board + "'");
     }
     spec.square_m = args->square;
     const auto result = pcr::vision::calibrate_camera(args->images, spec);

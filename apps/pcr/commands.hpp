@@ -38,16 +38,54 @@ inline int& exit_status() {
   return status;
 }
 
+/// The documented range of a numeric option: a finite number (CLI11's PositiveNumber and
+/// NonNegativeNumber let NaN through) in [lo, hi]; CLI11's error names the option, this the value
+/// and the range. `unit` is printed after the bounds.
+inline CLI::Validator within(double lo, double hi, const std::string& unit = "") {
+  const std::string range =
+      "[" + format_double(lo) + ", " + format_double(hi) + "]" + (unit.empty() ? "" : " " + unit);
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (text.empty() || *end != '\0') return "'" + text + "' is not a number";
+        if (!std::isfinite(value) || value < lo || value > hi) {
+          return "'" + text + "' is outside " + range;
+        }
+        return std::string();
+      },
+      "in " + range);
+}
+
 /// Adds the common `--robot FILE` option (empty: the built-in default robot).
 inline CLI::Option* add_robot_option(CLI::App& command, std::string& path) {
   return command.add_option("--robot", path,
                             "pcr-robot JSON description (default: the built-in femto-3pf)");
 }
 
-/// Reads a CSV table from `path`, or from stdin when it is empty or "-".
+/// Reads a CSV table from `path`, or from stdin when it is empty or "-"; a table without rows is
+/// an input error (nothing to do is more likely a wrong file than a wish).
 inline CsvTable read_table(const std::string& path, const CsvReadOptions& options) {
-  if (path.empty() || path == "-") return parse_csv(std::cin, "<stdin>", options);
-  return read_csv(path, options);
+  CsvTable table = path.empty() || path == "-" ? parse_csv(std::cin, "<stdin>", options)
+                                               : read_csv(path, options);
+  if (table.rows.empty()) throw InputError(table.source + ": no data rows");
+  return table;
+}
+
+/// Refuses a table whose column `column` (0-based) holds a value outside [lo, hi], naming the
+/// source, the line, the column and the value: a value no robot can mean (a typo, another unit)
+/// is an input error, not a row to solve.
+inline void check_column_range(const CsvTable& table, std::size_t column, double lo, double hi,
+                               const std::string& unit) {
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    const double value = table.rows[r][column];
+    if (!(value >= lo && value <= hi)) {
+      throw InputError(table.source + ":" + std::to_string(table.line_numbers[r]) + ": " +
+                       table.columns[column] + " = " + format_double(value) + " " + unit +
+                       " is outside [" + format_double(lo) + ", " + format_double(hi) + "] " +
+                       unit);
+    }
+  }
 }
 
 /// Names q1, ..., qn.
@@ -65,7 +103,8 @@ struct SolveArguments {
 
   void add_to(CLI::App& command) {
     command.add_option("--force", force, "external force on the platform, fx,fy (N, in W)");
-    command.add_option("--moment", moment, "external moment on the platform, mz (N m)");
+    command.add_option("--moment", moment, "external moment on the platform, mz (N m)")
+        ->check(within(-1e3, 1e3, "N m"));
     command
         .add_option(
             "--steps", steps,

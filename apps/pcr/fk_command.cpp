@@ -20,6 +20,9 @@ void run_fk(const FkArguments& args) {
   CsvReadOptions csv;
   csv.columns = cli::joint_names(n);
   const CsvTable table = cli::read_table(args.input, csv);
+  for (std::size_t c = 0; c < csv.columns.size(); ++c) {
+    cli::check_column_range(table, c, -1.0, 1.0, "m");
+  }
 
   std::vector<std::string> header = csv.columns;
   for (const char* c : {"x", "y", "theta"}) header.emplace_back(c);
@@ -30,13 +33,19 @@ void run_fk(const FkArguments& args) {
     JointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
     const ForwardSolution& solution = sequence.solve(q);
-    const SolverSummary& s = solution.summary;
+    SolverSummary s = solution.summary;
+    // As IK does: an equilibrium outside the stroke is reported, not passed as converged.
+    for (int i = 0; i < n && s.converged(); ++i) {
+      const LimbParams<double>& limb = robot.params.limb(i);
+      if (q(i) < limb.q_min || q(i) > limb.q_max) s.status = SolveStatus::kOutOfRange;
+    }
+    const bool valid = usable_as_warm_start(s);  // a valid equilibrium, maybe out of range
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (int i = 0; i < n; ++i) out.add(q(i));
-    out.add(s.converged() ? solution.pose.x : nan);
-    out.add(s.converged() ? solution.pose.y : nan);
-    out.add(s.converged() ? solution.pose.theta : nan);
-    cli::add_summary_fields(s, s.converged(), out);
+    out.add(valid ? solution.pose.x : nan);
+    out.add(valid ? solution.pose.y : nan);
+    out.add(valid ? solution.pose.theta : nan);
+    cli::add_summary_fields(s, valid, out);
     return s.status;
   };
   cli::solve_rows("pcr fk", table, args.output, header, solve_row);
@@ -49,7 +58,9 @@ void register_fk_command(CLI::App& app) {
   CLI::App* fk = app.add_subcommand(
       "fk",
       "Forward kinematics: rows q1,...,qn (m) -> q1,...,qn,x,y,theta,converged,"
-      "iterations,residual,status,max_strain. Exit status 1 if a row did not converge.");
+      "iterations,residual,status,max_strain. Joints outside q_range give converged=0, status "
+      "out_of_range (the pose of that equilibrium is still given). Exit status 1 if a row did "
+      "not converge.");
   pcr::cli::add_robot_option(*fk, args->robot);
   fk->add_option("--input", args->input, "CSV of joint values (default: stdin)");
   fk->add_option("--output", args->output, "output CSV (default: stdout)");

@@ -26,6 +26,8 @@ void run_ik(const IkArguments& args) {
   CsvReadOptions csv;
   csv.columns = {"x", "y", "theta"};
   const CsvTable table = cli::read_table(args.input, csv);
+  for (std::size_t c = 0; c < 2; ++c) cli::check_column_range(table, c, -1.0, 1.0, "m");
+  cli::check_column_range(table, 2, -2 * M_PI, 2 * M_PI, "rad");
 
   std::vector<std::string> header = {"x", "y", "theta"};
   for (const std::string& q : cli::joint_names(n)) header.push_back(q);

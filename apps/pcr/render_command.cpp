@@ -50,30 +50,43 @@ void register_render_command(CLI::App& app) {
   cmd->add_option("--camera-out", args->camera_out, "write the camera used as OpenCV YAML");
   cmd->add_option("--output", args->output, "PNG to write")->required();
   cmd->add_option("--truth", args->truth, "JSON ground truth to write");
+  using pcr::cli::within;
   cmd->add_option("--height", args->height, "camera height above the work plane (m)")
+      ->check(within(0.01, 100.0, "m"))
       ->capture_default_str();
-  cmd->add_option("--tilt-x", args->tilt_x, "camera tilt about its x axis (rad)");
-  cmd->add_option("--tilt-y", args->tilt_y, "camera tilt about its y axis (rad)");
+  // Beyond about 60 degrees the plane is seen too obliquely to measure.
+  cmd->add_option("--tilt-x", args->tilt_x, "camera tilt about its x axis (rad)")
+      ->check(within(-1.0, 1.0, "rad"));
+  cmd->add_option("--tilt-y", args->tilt_y, "camera tilt about its y axis (rad)")
+      ->check(within(-1.0, 1.0, "rad"));
   cmd->add_option("--q", args->q, "actuator positions q1,...,qn (m, default 0)");
   cmd->add_option("--platform", args->platform,
                   "platform pose x,y,theta in W (m, rad) for the distal tags");
+  // The work grows with its square: 16 x 16 samples per pixel is already a minute's render.
   cmd->add_option("--supersampling", args->render.supersampling, "samples per pixel per axis")
+      ->check(within(1, 16))
       ->capture_default_str();
-  cmd->add_option("--blur", args->render.blur_sigma_px, "Gaussian blur sigma (px)");
+  cmd->add_option("--blur", args->render.blur_sigma_px, "Gaussian blur sigma (px)")
+      ->check(within(0.0, 50.0, "px"));
   cmd->add_option("--noise", args->render.noise_sigma,
-                  "Gaussian noise sigma (fraction of full scale)");
+                  "Gaussian noise sigma (fraction of full scale)")
+      ->check(within(0.0, 1.0));
   cmd->add_option("--gradient", args->render.gradient,
-                  "illumination change across the image (fraction)");
+                  "illumination change across the image (fraction)")
+      ->check(within(0.0, 1.0));
   cmd->add_option("--seed", args->render.seed, "noise seed");
   cmd->add_option("--bits", args->bits, "PNG bits per pixel (8 or 16)")
       ->check(CLI::IsMember({8, 16}));
   cmd->add_flag("!--no-rods", args->rods, "do not draw the rods nor the platform outline");
   cmd->add_option("--wafer-diameter", args->wafer,
                   "platform outline: wafer circle centred on P (m, 0 = none)")
+      ->check(within(0.0, 1.0, "m"))
       ->capture_default_str();
   cmd->add_option("--chessboard", args->chessboard,
                   "also draw a chessboard of COLSxROWS inner corners (for pcr camera)");
-  cmd->add_option("--square", args->square, "chessboard square edge (m)")->capture_default_str();
+  cmd->add_option("--square", args->square, "chessboard square edge (m)")
+      ->check(within(1e-4, 1.0, "m"))
+      ->capture_default_str();
   cmd->add_option("--board-pose", args->board_pose,
                   "chessboard centre pose x,y,theta in the plane (m, rad)");
   cmd->callback([args]() {
@@ -106,8 +119,8 @@ void register_render_command(CLI::App& app) {
     if (!args->chessboard.empty()) {
       RenderChessboard board;
       if (std::sscanf(args->chessboard.c_str(), "%dx%d", &board.cols, &board.rows) != 2 ||
-          board.cols < 2 || board.rows < 2)
-        throw InputError("--chessboard: expected COLSxROWS (inner corners), got '" +
+          board.cols < 2 || board.rows < 2 || board.cols > 100 || board.rows > 100)
+        throw InputError("--chessboard: expected COLSxROWS (inner corners, 2 to 100 each), got '" +
                          args->chessboard + "'");
       if (!(args->square > 0))
         throw InputError("--square: must be > 0, got " + std::to_string(args->square));

@@ -45,6 +45,18 @@ void run_sample(const SampleArguments& args) {
                        std::to_string(2 * n) + " (min1,max1,...), got " +
                        std::to_string(args.box.size()));
     }
+    for (int i = 0; i < n; ++i) {
+      const LimbParams<double>& limb = robot.params.limb(i);
+      if (!(options.box_min(i) < options.box_max(i)) || options.box_min(i) < limb.q_min ||
+          options.box_max(i) > limb.q_max) {
+        throw InputError("--box: joint " + std::to_string(i + 1) + ": [" +
+                         format_double(options.box_min(i)) + ", " +
+                         format_double(options.box_max(i)) +
+                         "] m is not a sub-interval of its "
+                         "stroke [" +
+                         format_double(limb.q_min) + ", " + format_double(limb.q_max) + "] m");
+      }
+    }
   }
   const SamplingResult result = poisson_disc_sample(robot.params, options);
   if (!result.complete) {
@@ -73,23 +85,26 @@ void register_sample_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "sample", "joint configurations by Poisson-disc sampling (FK converged, strain-limited)");
   pcr::cli::add_robot_option(*cmd, args->robot);
+  using pcr::cli::within;
   cmd->add_option("--count", args->count, "calibration configurations")
-      ->check(CLI::PositiveNumber)
+      ->check(within(1, 1000000))
       ->capture_default_str();
   cmd->add_option("--seed", args->seed, "sampling seed")->capture_default_str();
   cmd->add_option("--output", args->output, "configurations CSV to write (q1,...,qn)")->required();
   cmd->add_option("--validation-output", args->validation_output,
                   "also write a disjoint validation set (drawn together, then split)");
   cmd->add_option("--validation-count", args->validation_count, "validation configurations")
-      ->check(CLI::PositiveNumber)
+      ->check(within(1, 1000000))
       ->capture_default_str();
   cmd->add_option("--min-distance", args->min_distance,
-                  "Poisson-disc radius in joint space (m; default: chosen from the count)");
+                  "Poisson-disc radius in joint space (m; default: chosen from the count)")
+      ->check(within(0.0, 0.1, "m"));
   cmd->add_option("--box", args->box,
                   "joint sub-box: min,max for all joints, or min1,max1,...,minn,maxn (m)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(within(-1.0, 1.0, "m"));
   cmd->add_option("--strain-limit", args->strain_limit, "max bending strain")
-      ->check(CLI::PositiveNumber)
+      ->check(within(1e-6, 0.1))
       ->capture_default_str();
   cmd->callback([args] { run_sample(*args); });
 }

@@ -87,20 +87,23 @@ void register_simulate_command(CLI::App& app) {
   cmd->add_option("--output", args->output, "dataset CSV to write (q1,...,qn,x,y,theta)")
       ->required();
   cmd->add_option("--truth", args->truth, "also write the true robot description (JSON)");
+  using pcr::cli::within;
   cmd->add_option("--noise-position", args->noise_position, "std of x and y (m)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(within(0.0, 0.01, "m"))
       ->capture_default_str();
   cmd->add_option("--noise-angle", args->noise_angle, "std of theta (rad)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(within(0.0, 0.1, "rad"))
       ->capture_default_str();
   cmd->add_option("--effects", args->effects,
                   "unmodelled effects to switch on: misalignments, diameters, load")
       ->delimiter(',');
   cmd->add_option("--misalignment", args->misalignment,
                   "extra half-width on beta_i and gamma_i with 'misalignments' (rad)")
+      ->check(within(0.0, 0.1, "rad"))
       ->capture_default_str();
   cmd->add_option("--diameter-spread", args->diameter_spread,
                   "independent half-width on each d_i with 'diameters' (m)")
+      ->check(within(0.0, 1e-3, "m"))
       ->capture_default_str();
   args->solve.add_to(*cmd);
   cmd->callback([args] { run_simulate(*args); });

@@ -50,6 +50,15 @@ struct RobotDescription {
 
 /// Parses and validates a description; `source` names the file in error messages.
 RobotDescription parse_robot(const std::string& json_text, const std::string& source);
+
+/// The deepest nesting of arrays and objects a pcr JSON file may have: every format is a few
+/// levels deep. Parsers and messages walk nested values recursively, so every JSON loader
+/// (robot, mount layout, stages) checks the text first with check_json_nesting.
+inline constexpr int kMaxJsonNesting = 32;
+
+/// InputError naming `source`, the line and the column where the text nests deeper than
+/// kMaxJsonNesting.
+void check_json_nesting(const std::string& json_text, const std::string& source);
 /// Reads a description from a file (throws InputError naming the file on any problem).
 RobotDescription load_robot(const std::string& path);
 /// Serialises with full double precision (lossless round trip).

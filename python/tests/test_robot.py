@@ -83,7 +83,7 @@ def test_load_errors_are_value_errors(tmp_path):
     bad["limbs"][2]["l"] = -0.03
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(bad))
-    with pytest.raises(ValueError, match=r"bad\.json: limbs\[2\]\.l: must be positive, got -0\.03"):
+    with pytest.raises(ValueError, match=r"bad\.json: limbs\[2\]\.l: outside its physical range .*, got -0\.03"):
         pcr.Robot.load(str(path))
     with pytest.raises(ValueError, match="missing.json"):
         pcr.Robot.load(str(tmp_path / "missing.json"))

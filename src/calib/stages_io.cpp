@@ -1,12 +1,14 @@
 // The calibration stages file (documented in the README): {"stages": [...]} or the bare list.
 
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/files.hpp"
+#include "pcr/robot_io.hpp"
 
 namespace pcr {
 
@@ -14,9 +16,11 @@ using nlohmann::json;
 
 std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
   std::ifstream in = open_input_file(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  check_json_nesting(text, path);
   json j;
   try {
-    j = json::parse(in);
+    j = json::parse(text);
   } catch (const json::exception& e) {
     throw InputError(path + ": invalid JSON: " + e.what());
   }
@@ -33,7 +37,11 @@ std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
       }
     }
     CalibrationStage stage;
-    stage.name = e.value("name", "stage " + std::to_string(s + 1));
+    stage.name = "stage " + std::to_string(s + 1);
+    if (e.contains("name")) {
+      if (!e["name"].is_string()) throw InputError(where + ".name: expected a string");
+      stage.name = e["name"].get<std::string>();
+    }
     if (!e.contains("free") || !e["free"].is_array()) {
       throw InputError(where + ".free: expected a list of parameter kinds");
     }

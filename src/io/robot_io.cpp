@@ -35,6 +35,14 @@ bool is_overflow(const Json& value) {
   return value.is_string() && value.get_ref<const std::string&>().rfind(kOverflowMarker, 0) == 0;
 }
 
+// Physical ranges of the fields (the README's format table): a lab robot fits in a 10 m room, an
+// angle needs no more than two turns, E spans soft polymers (1 MPa) to diamond (1.2 TPa), and
+// every EI = E pi d^4 / 64 they allow is a finite, normal double.
+constexpr double kMaxCoordinate = 10.0;    // m
+constexpr double kMaxAngle = 4.0 * M_PI;   // rad
+constexpr double kMinYoungModulus = 1e6;   // Pa
+constexpr double kMaxYoungModulus = 2e12;  // Pa
+
 /// A short rendering of an offending value for messages.
 std::string show(const Json& value) {
   if (is_overflow(value)) return value.get<std::string>().substr(kOverflowMarker.size());
@@ -87,34 +95,77 @@ class Reader {
     if (!std::isfinite(x)) fail(path, "expected a finite number", value);
     return x;
   }
-  double positive(const Json& value, const std::string& path) const {
+  /// A number in the field's physical range [lo, hi] (the README's format table).
+  double in_range(const Json& value, const std::string& path, double lo, double hi,
+                  const char* unit) const {
     const double x = number(value, path);
-    if (!(x > 0)) fail(path, "must be positive", value);
+    if (!(x >= lo && x <= hi)) {
+      fail(path,
+           std::string("outside its physical range [") + format_double(lo) + ", " +
+               format_double(hi) + "] " + unit,
+           value);
+    }
     return x;
   }
-  double non_negative(const Json& value, const std::string& path) const {
+  /// A half-width: 0 (the parameter is known) or in [min, max]. Below min a bound would be
+  /// indistinguishable from the value itself (a denormal aborts the bounded solver).
+  double half_width(const Json& value, const std::string& path, double min, double max,
+                    const char* unit) const {
     const double x = number(value, path);
-    if (!(x >= 0)) fail(path, "must be non-negative (a half-width)", value);
+    if (x == 0.0) return x;
+    if (!(x >= min && x <= max)) {
+      fail(path,
+           std::string("a half-width must be 0 or in [") + format_double(min) + ", " +
+               format_double(max) + "] " + unit,
+           value);
+    }
     return x;
   }
 
   template <int N>
-  Eigen::Matrix<double, N, 1> vector(const Json& value, const std::string& path,
-                                     bool half_widths = false) const {
+  Eigen::Matrix<double, N, 1> vector(const Json& value, const std::string& path) const {
     if (!value.is_array() || value.size() != static_cast<std::size_t>(N)) {
       fail(path, "expected an array of " + std::to_string(N) + " numbers", value);
     }
     Eigen::Matrix<double, N, 1> out;
     for (int i = 0; i < N; ++i) {
       const Json& v = value[static_cast<std::size_t>(i)];
-      out(i) = half_widths ? non_negative(v, index(path, i)) : number(v, index(path, i));
+      out(i) = number(v, index(path, i));
     }
     return out;
   }
 
+  Eigen::Vector2d position_half_widths(const Json& value, const std::string& path) const {
+    const Eigen::Vector2d v = vector<2>(value, path);
+    for (std::size_t i = 0; i < 2; ++i) half_width(value[i], index(path, i), 1e-12, 0.1, "m");
+    return v;
+  }
+
+  Eigen::Vector3d pose_half_widths(const Json& value, const std::string& path) const {
+    const Eigen::Vector3d v = vector<3>(value, path);
+    for (std::size_t i = 0; i < 2; ++i) half_width(value[i], index(path, i), 1e-12, 0.1, "m");
+    half_width(value[2], index(path, 2), 1e-12, 1.0, "rad");
+    return v;
+  }
+
   Pose2<double> pose(const Json& value, const std::string& path) const {
     const Eigen::Vector3d v = vector<3>(value, path);
+    in_range(value[0], index(path, 0), -kMaxCoordinate, kMaxCoordinate, "m");
+    in_range(value[1], index(path, 1), -kMaxCoordinate, kMaxCoordinate, "m");
+    angle(value[2], index(path, 2));
     return Pose2<double>{v(0), v(1), v(2)};
+  }
+  /// A point or an interval of the plane (m): within kMaxCoordinate of the origin.
+  Eigen::Vector2d position(const Json& value, const std::string& path) const {
+    const Eigen::Vector2d v = vector<2>(value, path);
+    for (int i = 0; i < 2; ++i) {
+      in_range(value[static_cast<std::size_t>(i)], index(path, i), -kMaxCoordinate, kMaxCoordinate,
+               "m");
+    }
+    return v;
+  }
+  double angle(const Json& value, const std::string& path) const {
+    return in_range(value, path, -kMaxAngle, kMaxAngle, "rad");
   }
 
   /// Reads the limb uncertainty fields present in `object` over `out` (overrides).
@@ -122,14 +173,14 @@ class Reader {
     for (auto it = object.begin(); it != object.end(); ++it) {
       const std::string key = it.key();
       const std::string p = join(path, key);
-      if (key == "E") out.young_modulus = non_negative(*it, p);
-      if (key == "l") out.length = non_negative(*it, p);
-      if (key == "d") out.diameter = non_negative(*it, p);
-      if (key == "alpha") out.alpha = non_negative(*it, p);
-      if (key == "beta") out.beta = non_negative(*it, p);
-      if (key == "gamma") out.gamma = non_negative(*it, p);
-      if (key == "A") out.A = vector<2>(*it, p, true);
-      if (key == "B") out.B = vector<2>(*it, p, true);
+      if (key == "E") out.young_modulus = half_width(*it, p, kMinYoungModulus * 1e-9, 1e12, "Pa");
+      if (key == "l") out.length = half_width(*it, p, 1e-12, 0.1, "m");
+      if (key == "d") out.diameter = half_width(*it, p, 1e-12, 1e-2, "m");
+      if (key == "alpha") out.alpha = half_width(*it, p, 1e-12, 1.0, "rad");
+      if (key == "beta") out.beta = half_width(*it, p, 1e-12, 1.0, "rad");
+      if (key == "gamma") out.gamma = half_width(*it, p, 1e-12, 1.0, "rad");
+      if (key == "A") out.A = position_half_widths(*it, p);
+      if (key == "B") out.B = position_half_widths(*it, p);
     }
   }
 
@@ -140,10 +191,10 @@ class Reader {
     RobotUncertainty u;
     limb_uncertainty(object, path, u.global);
     if (object.contains("camera")) {
-      u.camera = vector<3>(object["camera"], join(path, "camera"), true);
+      u.camera = pose_half_widths(object["camera"], join(path, "camera"));
     }
     if (object.contains("pattern")) {
-      u.pattern = vector<3>(object["pattern"], join(path, "pattern"), true);
+      u.pattern = pose_half_widths(object["pattern"], join(path, "pattern"));
     }
     u.limbs.assign(static_cast<std::size_t>(num_limbs), u.global);
     if (object.contains("limbs")) {
@@ -177,7 +228,8 @@ class Reader {
     const Json& name = required(root, "", "name");
     if (!name.is_string()) fail("name", "expected a string", name);
     out.name = name.get<std::string>();
-    out.young_modulus = positive(required(root, "", "E"), "E");
+    out.young_modulus =
+        in_range(required(root, "", "E"), "E", kMinYoungModulus, kMaxYoungModulus, "Pa");
 
     const Json& limbs = required(root, "", "limbs");
     if (!limbs.is_array()) fail("limbs", "expected an array of limb objects", limbs);
@@ -191,16 +243,21 @@ class Reader {
       const Json& l = limbs[i];
       check_object(l, path, {"A", "alpha", "gamma", "B", "beta", "l", "d", "q_range", "E"});
       LimbParams<double>& limb = out.params.limb(static_cast<int>(i));
-      limb.A = vector<2>(required(l, path, "A"), join(path, "A"));
-      limb.alpha = number(required(l, path, "alpha"), join(path, "alpha"));
-      limb.gamma = number(required(l, path, "gamma"), join(path, "gamma"));
-      limb.B = vector<2>(required(l, path, "B"), join(path, "B"));
-      limb.beta = number(required(l, path, "beta"), join(path, "beta"));
-      limb.length = positive(required(l, path, "l"), join(path, "l"));
-      limb.diameter = positive(required(l, path, "d"), join(path, "d"));
-      limb.young_modulus = l.contains("E") ? positive(l["E"], join(path, "E")) : out.young_modulus;
+      limb.A = position(required(l, path, "A"), join(path, "A"));
+      limb.alpha = angle(required(l, path, "alpha"), join(path, "alpha"));
+      limb.gamma = angle(required(l, path, "gamma"), join(path, "gamma"));
+      limb.B = position(required(l, path, "B"), join(path, "B"));
+      limb.beta = angle(required(l, path, "beta"), join(path, "beta"));
+      limb.length = in_range(required(l, path, "l"), join(path, "l"), 1e-4, 10.0, "m");
+      limb.diameter = in_range(required(l, path, "d"), join(path, "d"), 1e-6, 0.1, "m");
+      if (!(limb.diameter < limb.length)) {
+        fail(join(path, "d"), "a rod's diameter must be smaller than its length (l)", l["d"]);
+      }
+      limb.young_modulus = l.contains("E") ? in_range(l["E"], join(path, "E"), kMinYoungModulus,
+                                                      kMaxYoungModulus, "Pa")
+                                           : out.young_modulus;
       const Json& range = required(l, path, "q_range");
-      const Eigen::Vector2d q = vector<2>(range, join(path, "q_range"));
+      const Eigen::Vector2d q = position(range, join(path, "q_range"));
       if (q(0) > q(1)) fail(join(path, "q_range"), "min > max", range);
       limb.q_min = q(0);
       limb.q_max = q(1);
@@ -324,7 +381,41 @@ Ordered limb_uncertainty_json(const LimbUncertainty& u, const LimbUncertainty* b
 
 }  // namespace
 
+void check_json_nesting(const std::string& json_text, const std::string& source) {
+  int depth = 0, line = 1, column = 0;
+  bool in_string = false, escaped = false;
+  for (const char c : json_text) {
+    ++column;
+    if (c == '\n') {
+      ++line;
+      column = 0;
+    }
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonNesting) {
+        throw InputError(source + ":" + std::to_string(line) + ":" + std::to_string(column) +
+                         ": JSON nested deeper than " + std::to_string(kMaxJsonNesting) +
+                         " levels; not a pcr file");
+      }
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+}
+
 RobotDescription parse_robot(const std::string& json_text, const std::string& source) {
+  check_json_nesting(json_text, source);
   // Duplicate keys would otherwise silently keep the last value: reject them while parsing.
   std::vector<std::set<std::string>> keys;
   const Json::parser_callback_t check_duplicates = [&](int, Json::parse_event_t event,

@@ -41,6 +41,17 @@ struct Reader {
     if (!std::isfinite(v)) fail(path + "." + key, "not finite");
     return v;
   }
+  /// The string field `key` of `j`, or `fallback` when absent.
+  std::string text(const json& j, const std::string& key, const std::string& path,
+                   const std::string& fallback) const {
+    if (!j.is_object() || !j.contains(key)) return fallback;
+    if (!j[key].is_string()) {
+      std::string shown = j[key].dump();
+      if (shown.size() > 60) shown = shown.substr(0, 57) + "...";
+      fail(path + "." + key, "expected a string, got " + shown);
+    }
+    return j[key].get<std::string>();
+  }
   Eigen::Vector2d pair(const json& j, const std::string& key, const std::string& path) const {
     if (!j.contains(key)) fail(path + "." + key, "missing");
     const json& a = j[key];
@@ -54,6 +65,7 @@ struct Reader {
 }  // namespace
 
 MountLayout parse_mounts(const std::string& text, const std::string& source) {
+  check_json_nesting(text, source);
   json root;
   try {
     root = json::parse(text);
@@ -65,7 +77,7 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
   if (root.contains("format") && root["format"] != "pcr-mounts") {
     r.fail("format", "expected \"pcr-mounts\", got " + root["format"].dump());
   }
-  const std::string family = root.value("family", std::string("tag36h11"));
+  const std::string family = r.text(root, "family", "(root)", "tag36h11");
   const double size = root.contains("tag_size") ? r.number(root, "tag_size", "") : 0.0;
   if (!root.contains("mounts") || !root["mounts"].is_array() || root["mounts"].empty()) {
     r.fail("mounts", "missing or empty array");
@@ -77,9 +89,9 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
     const std::string path = "mounts[" + std::to_string(i) + "]";
     if (!j.is_object()) r.fail(path, "expected an object");
     Mount m;
-    m.name = j.value("name", path);
+    m.name = r.text(j, "name", path, path);
     const std::string where = path + " (" + m.name + ")";
-    const std::string role = j.value("role", std::string());
+    const std::string role = r.text(j, "role", where, std::string());
     if (role == "proximal") {
       m.role = MountRole::kProximal;
     } else if (role == "distal") {
@@ -91,12 +103,12 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
     if (limb < 0 || limb >= 6 || limb != std::floor(limb))
       r.fail(where + ".limb", "expected 0..5, got " + j["limb"].dump());
     m.limb = static_cast<int>(limb);
-    m.family = j.value("family", family);
+    m.family = r.text(j, "family", where, family);
     if (!is_known_family(m.family))
       r.fail(where + ".family", "unknown tag family \"" + m.family + "\"");
     const double id = r.number(j, "id", where);
-    if (id < 0 || id != std::floor(id))
-      r.fail(where + ".id", "expected a non-negative integer, got " + j["id"].dump());
+    if (id < 0 || id > 1e6 || id != std::floor(id))
+      r.fail(where + ".id", "expected a tag id (an integer from 0), got " + j["id"].dump());
     m.id = static_cast<int>(id);
     int total = 0, wab = 0;
     try {
