@@ -29,3 +29,13 @@ function(pcr_add_test name)
     "endif()\n")
   set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${labels_script})
 endfunction()
+
+# pcr_fuzz_instrument(SOURCES...): with PCR_FUZZ, these sources (the parsers of users' files) are
+# compiled with libFuzzer's coverage instrumentation, which guides the fuzz targets in
+# tests/fuzz. Only they: the rest of the sanitizer build, which runs the whole suite, stays as fast.
+function(pcr_fuzz_instrument)
+  if(PCR_FUZZ)
+    set_source_files_properties(${ARGN} DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}
+                                PROPERTIES COMPILE_OPTIONS -fsanitize=fuzzer-no-link)
+  endif()
+endfunction()

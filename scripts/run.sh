@@ -198,7 +198,8 @@ run_tests() {
   # bounds checks) keeps the run short; -g1 (line tables only: the reports' stack traces keep
   # their file:line) compiles 25-35 % faster than -g. Clang compiles this tree with the
   # sanitizers in about half gcc's time (calibrator.cpp: 53 s against 112 s); libomp-14-dev is
-  # for SUNDIALS' CMake package, which asks for OpenMP.
+  # for SUNDIALS' CMake package, which asks for OpenMP. The fuzz targets (PCR_FUZZ) link libFuzzer
+  # from libclang-rt-14-dev and run under ctest with the suite (label fuzz).
   phase build-asan/
   log "Building build-asan/ (AddressSanitizer + UndefinedBehaviorSanitizer, clang)"
   if [[ -f build-asan/CMakeCache.txt ]] &&
@@ -206,7 +207,7 @@ run_tests() {
     rm -rf build-asan  # configured by another compiler: CMake cannot switch a build tree's
   fi
   configure build-asan -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Debug \
-    "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g1" -DPCR_SANITIZE=ON -DPCR_BUILD_BENCHMARKS=OFF \
+    "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g1" -DPCR_SANITIZE=ON -DPCR_FUZZ=ON -DPCR_BUILD_BENCHMARKS=OFF \
     -DPCR_BUILD_PYTHON=OFF
   cmake --build build-asan -j "$JOBS"
   # Every test's output is kept (JUnit XML) and searched for reports, so one from a child process

@@ -3,7 +3,11 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <vector>
 
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/measure.hpp"
@@ -110,6 +114,49 @@ TEST(VisionInputs, UnreadableAndBlankImagesNameTheFile) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("blank"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(blank), std::string::npos) << e.what();
+  }
+}
+
+std::vector<unsigned char> bytes_of(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The size is read from every format's header as OpenCV's encoders wrote it, and every truncated
+// header is an InputError naming the file, never a read past the end (ASan) nor a wrong size.
+TEST(VisionInputs, HeaderSizeIsReadBeforeDecoding) {
+  cv::Mat grey(23, 37, CV_8U), wide(23, 37, CV_16U), colour(23, 37, CV_8UC3);
+  cv::randu(grey, 0, 255);
+  cv::randu(wide, 0, 65535);
+  cv::randu(colour, 0, 255);
+  const std::vector<std::pair<std::string, cv::Mat>> files = {
+      {"grey.png", grey}, {"wide.png", wide}, {"grey.jpg", grey},    {"colour.jpg", colour},
+      {"grey.tif", grey}, {"wide.tif", wide}, {"grey.bmp", grey},    {"colour.bmp", colour},
+      {"grey.pgm", grey}, {"wide.pgm", wide}, {"colour.ppm", colour}};
+  for (const auto& [name, mat] : files) {
+    const std::string path = tmp(name);
+    ASSERT_TRUE(cv::imwrite(path, mat)) << name;
+    const std::vector<unsigned char> bytes = bytes_of(path);
+    EXPECT_EQ(image_header_size(bytes, name), std::make_pair(37, 23)) << name;
+    const GrayImage image = read_image(path);
+    EXPECT_EQ(image.width, 37) << name;
+    EXPECT_EQ(image.height, 23) << name;
+    for (std::size_t size = 0; size < std::min<std::size_t>(bytes.size(), 300); ++size) {
+      const std::vector<unsigned char> prefix(bytes.begin(), bytes.begin() + size);
+      try {
+        EXPECT_EQ(image_header_size(prefix, name), std::make_pair(37, 23)) << name << size;
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      }
+    }
+  }
+  const std::string webp = tmp("other.webp");
+  std::ofstream(webp) << "RIFF\x10\0\0\0WEBPVP8 ";
+  try {
+    read_image(webp);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not an image pcr reads"), std::string::npos) << e.what();
   }
 }
 

@@ -182,6 +182,7 @@ void run_coverage(bool exact_offsets, int scenes, Coverage& cA, Coverage& cB, Co
     opt.blur_sigma_px = 0.8;
     opt.noise_sigma = 0.02;
     opt.gradient = 0.3;
+    opt.white = 0.75f;  // exposed for the brightest corner (1.2x the centre's light): no clipping
     opt.seed = 7 + s;
     const GrayImage im = render_scene(scene, opt);
     RobotMeasurement meas =
@@ -257,6 +258,59 @@ TEST(VisionMeasure, RobotIntervalsContainTheTruth) {
       EXPECT_LT(ca.mean(), 5e-3);
     }
   }
+}
+
+// Over-exposure: white above full scale clips. Drawn at random from well exposed (0.8) to 50 %
+// over (1.5), with and without an illumination gradient: a measurement either refuses the clipped
+// tag, naming it and the exposure, or its A and B lie within their image-only intervals (exact
+// offsets: the tightest intervals, the ones a scale bias would break first).
+TEST(VisionMeasure, ClippedHighlightsAreRefusedNotMeasured) {
+  const MountLayout layout = femto_layout();
+  const RobotParams<double> design = femto_3pf();
+  MountLayout exact = layout;
+  for (Mount& m : exact.mounts) m.clamp_offset_uncertainty.setZero(), m.rod_angle_uncertainty = 0;
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> exposure(0.8, 1.5);
+  int refused = 0, measured = 0;
+  double worst_ratio = 0;
+  for (int trial = 0; trial < 8; ++trial) {
+    Scene scene;
+    scene.camera = robot_camera();
+    scene.plane = PlanePose::looking_down(0.5);
+    scene.tags = mount_tags(exact, design, Pose2<double>{}, {}, &scene.segments);
+    RenderOptions opt;
+    opt.supersampling = 3;
+    opt.blur_sigma_px = 0.8;
+    opt.noise_sigma = 0.005;
+    opt.white = static_cast<float>(trial == 0 ? 1.05 : exposure(rng));
+    opt.gradient = trial % 2 ? 0.6 : 0.0;
+    opt.seed = 100 + trial;
+    const GrayImage image = render_scene(scene, opt);
+    const std::string name = "exposure" + std::to_string(trial);
+    RobotMeasurement m;
+    try {
+      m = measure_robot(image, name, exact, scene.camera, design);
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(name + ": mount "), std::string::npos) << what;
+      EXPECT_NE(what.find("reduce the exposure"), std::string::npos) << what;
+      ++refused;
+      continue;
+    }
+    ++measured;
+    for (int i = 0; i < 3; ++i) {
+      for (int c = 0; c < 2; ++c) {
+        const LimbMeasurement& l = m.limbs[i];
+        worst_ratio =
+            std::max({worst_ratio, std::abs(l.A[c] - design.limb(i).A[c]) / l.A_halfwidth[c],
+                      std::abs(l.B[c] - design.limb(i).B[c]) / l.B_halfwidth[c]});
+      }
+    }
+  }
+  std::printf("exposure 0.8-1.5: %d refused, %d measured, worst |error| / half-width %.2f\n",
+              refused, measured, worst_ratio);
+  EXPECT_GE(refused, 1);  // the 5 % over-exposed image (trial 0) at least
+  EXPECT_LE(worst_ratio, 1.0);
 }
 
 }  // namespace

@@ -137,6 +137,9 @@ pcr::RobotDescription measure_nominal(const pcr::RobotDescription& design,
   render.blur_sigma_px = 0.8;
   render.noise_sigma = 0.02;
   render.gradient = 0.3;
+  // Exposed for the brightest corner (1.2x the centre's light): whites stay below full scale, as
+  // pcr measure requires (clipped edges bias the tag size).
+  render.white = 0.75f;
   render.seed = static_cast<unsigned>(seed);
 
   const int n = truth.params.num_limbs;

@@ -3,11 +3,14 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <string_view>
 
 #include "pcr/files.hpp"
 #include "pcr/robot_io.hpp"
@@ -73,15 +76,52 @@ PlanePose PlanePose::looking_down(double height_m, double tilt_x, double tilt_y)
   return pose;
 }
 
-CameraModel load_camera(const std::string& path) {
-  check_input_file(path);
-  cv::FileStorage fs;
-  try {
-    fs.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw InputError(path + ": cannot parse the camera file (" + e.what() + ")");
+namespace {
+
+// OpenCV 4.6's YAML reader loops forever on some malformed directives and document markers
+// (`---%YAML:1.0` then `--`-`, found by tests/fuzz/fuzz_camera). A camera file as OpenCV writes it
+// has one directive, on its first line, and at most one document marker, alone on its line:
+// anything else is refused before OpenCV sees it. And text only: no NUL or other control bytes.
+void check_camera_text(const std::string& text, const std::string& path) {
+  std::size_t line_start = 0;
+  for (int line = 1; line_start < text.size(); ++line) {
+    std::size_t end = text.find('\n', line_start);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view content(text.data() + line_start, end - line_start);
+    for (const char c : content) {
+      if (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\r') {
+        throw InputError(path + ":" + std::to_string(line) +
+                         ": a control character; not a camera file");
+      }
+    }
+    const bool directive = content.substr(0, 1) == "%";
+    const bool marker = content.substr(0, 3) == "---" || content.substr(0, 3) == "...";
+    const bool lone_start = content.substr(0, content.find_last_not_of(" \t\r") + 1) == "---";
+    if ((directive && line != 1) || (marker && !(lone_start && line <= 2))) {
+      throw InputError(path + ":" + std::to_string(line) +
+                       ": only the first line may be a %YAML directive and only the second a "
+                       "lone '---' (OpenCV's camera YAML)");
+    }
+    line_start = end + 1;
   }
-  if (!fs.isOpened()) throw InputError(path + ": cannot open the camera file");
+}
+
+CameraModel read_camera(const std::string& path) {
+  // OpenCV's calibration output with every view's points is a few MB at most.
+  constexpr std::uintmax_t kMaxBytes = 64u << 20;
+  if (std::filesystem::file_size(path) > kMaxBytes)
+    throw InputError(path + ": larger than the 64 MB a camera file can be");
+  std::string text;
+  {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream all;
+    all << in.rdbuf();
+    if (!in.is_open()) throw InputError(path + ": cannot read the camera file");
+    text = all.str();
+  }
+  check_camera_text(text, path);
+  cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  if (!fs.isOpened()) throw InputError(path + ": cannot parse the camera file");
   CameraModel camera;
   const auto need = [&](const char* key) {
     cv::FileNode node = fs[key];
@@ -101,14 +141,30 @@ CameraModel load_camera(const std::string& path) {
   };
   camera.width = read_int("image_width");
   camera.height = read_int("image_height");
-  cv::Mat K, D;
-  try {
-    need("camera_matrix") >> K;
-    need("distortion_coefficients") >> D;
-  } catch (const cv::Exception& e) {
-    throw InputError(path + ": camera_matrix or distortion_coefficients is not a matrix (" +
-                     e.what() + ")");
+  if (static_cast<long long>(camera.width) * camera.height > kMaxImagePixels) {
+    throw InputError(path + ": image_width x image_height = " + std::to_string(camera.width) +
+                     " x " + std::to_string(camera.height) + " px is more than the " +
+                     std::to_string(kMaxImagePixels / 1000000) + " Mpx pcr handles");
   }
+  // A matrix's size is checked before OpenCV allocates it: `rows` and `cols` are the file's word.
+  const auto matrix = [&](const char* key, int max_values) {
+    const cv::FileNode node = need(key);
+    const cv::FileNode rows = node["rows"], cols = node["cols"];
+    if (!node.isMap() || !rows.isInt() || !cols.isInt() || static_cast<int>(rows) < 0 ||
+        static_cast<int>(cols) < 0 ||
+        static_cast<long long>(static_cast<int>(rows)) * static_cast<int>(cols) > max_values) {
+      throw InputError(path + ": field '" + key + "' is not an opencv-matrix of at most " +
+                       std::to_string(max_values) + " values (rows, cols, dt, data)");
+    }
+    cv::Mat m;
+    try {
+      node >> m;
+    } catch (const cv::Exception& e) {
+      throw InputError(path + ": field '" + key + "' is not a matrix (" + e.what() + ")");
+    }
+    return m;
+  };
+  cv::Mat K = matrix("camera_matrix", 9), D = matrix("distortion_coefficients", 14);
   if (K.rows != 3 || K.cols != 3) {
     throw InputError(path + ": field 'camera_matrix' must be 3x3, got " + std::to_string(K.rows) +
                      "x" + std::to_string(K.cols));
@@ -142,6 +198,21 @@ CameraModel load_camera(const std::string& path) {
         std::to_string(camera.width) + " x " + std::to_string(camera.height) + " image");
   }
   return camera;
+}
+
+}  // namespace
+
+CameraModel load_camera(const std::string& path) {
+  check_input_file(path);
+  // OpenCV's reader reports a malformed file with cv::Exception, and with std::length_error
+  // where it mis-sizes a string (found by tests/fuzz/fuzz_camera): all are the file's fault.
+  try {
+    return read_camera(path);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path + ": cannot parse the camera file (" + e.what() + ")");
+  }
 }
 
 void save_camera(const CameraModel& camera, const std::string& path, double rms_px) {

@@ -73,6 +73,43 @@ double fit_line(const std::vector<Eigen::Vector2d>& pts, Eigen::Vector2d* n, dou
   return std::sqrt(std::max(0.0, es.eigenvalues()[0]) / static_cast<double>(pts.size()));
 }
 
+// The reach of the edge refinement along an edge's normal (px): within the black border on the
+// dark side and the white ring on the light side.
+double edge_reach(const std::array<Eigen::Vector2d, 4>& px, double cells) {
+  const double side = 0.25 * ((px[1] - px[0]).norm() + (px[2] - px[1]).norm() +
+                              (px[3] - px[2]).norm() + (px[0] - px[3]).norm());
+  return std::min(0.45 * side / cells, 8.0);
+}
+
+// Fraction of the edge points (as refine_quad samples them) whose light side, out to the
+// refinement's reach, holds a pixel at full scale.
+double clipped_edge_fraction(const GrayImage& im, const std::array<Eigen::Vector2d, 4>& px,
+                             double cells) {
+  const double reach = edge_reach(px, cells);
+  const Eigen::Vector2d centre = 0.25 * (px[0] + px[1] + px[2] + px[3]);
+  int points = 0, clipped = 0;
+  for (int e = 0; e < 4; ++e) {
+    const Eigen::Vector2d a = px[e], b = px[(e + 1) % 4];
+    const Eigen::Vector2d t = (b - a).normalized();
+    Eigen::Vector2d n(-t.y(), t.x());
+    if (n.dot(0.5 * (a + b) - centre) < 0) n = -n;  // towards the light outside
+    const int samples = std::max(8, static_cast<int>((b - a).norm()));
+    for (int k = 0; k < samples; ++k) {
+      const Eigen::Vector2d p0 = a + (0.1 + 0.8 * (k + 0.5) / samples) * (b - a);
+      bool hit = false;
+      for (double j = 0.5; j <= reach + 0.5 && !hit; j += 0.5) {
+        const Eigen::Vector2d p = p0 + j * n;
+        const long u = std::lround(p.x()), v = std::lround(p.y());
+        if (u < 0 || v < 0 || u >= im.width || v >= im.height) continue;
+        hit = im.at(static_cast<int>(u), static_cast<int>(v)) >= kFullScale;
+      }
+      clipped += hit;
+      ++points;
+    }
+  }
+  return points ? static_cast<double>(clipped) / points : 0.0;
+}
+
 // Sub-pixel refinement of the quad: for each border edge, edge points found along the edge's normal
 // (centroid of the intensity derivative), a straight line through them (in undistorted coordinates
 // when the camera is known), the corners where adjacent lines meet.
@@ -82,7 +119,7 @@ bool refine_quad(const GrayImage& im, const CameraModel* camera, double cells,
   const double side = 0.25 * ((px[1] - px[0]).norm() + (px[2] - px[1]).norm() +
                               (px[3] - px[2]).norm() + (px[0] - px[3]).norm());
   const double cell = side / cells;
-  const double reach = std::min(0.45 * cell, 8.0);  // stay inside the black border and white ring
+  const double reach = edge_reach(px, cells);
   if (reach < 1.5) return false;
   const double f = camera ? camera->focal_px() : 1.0;
   std::array<Eigen::Vector2d, 4> normals;
@@ -207,6 +244,7 @@ std::vector<TagDetection> detect_tags(const GrayImage& image, const DetectorOpti
     for (int k = 0; k < 4; ++k)
       d.corners[k] = Eigen::Vector2d(det->p[k][0] - 0.5, det->p[k][1] - 0.5);
     const double cells = fam->width_at_border;
+    d.clipped_fraction = clipped_edge_fraction(image, d.corners, cells);
     bool ok = false;
     if (options.refine)
       ok = refine_quad(image, camera, cells, d.corners, d.corners_normalized, &d.edge_rms_px);

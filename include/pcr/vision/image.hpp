@@ -4,6 +4,7 @@
 // (u, v) is at the coordinates (u, v), so pixel u covers [u - 0.5, u + 0.5].
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pcr::vision {
@@ -24,8 +25,20 @@ struct GrayImage {
   float at(int u, int v) const { return pixels[static_cast<std::size_t>(v) * width + u]; }
 };
 
-/// Reads an 8- or 16-bit grey or colour image (PNG, TIFF, ...); colour is converted to grey.
-/// Throws pcr::InputError naming the file when it cannot be read or has no contrast (blank).
+/// The most pixels an image, a camera or a render may have: the largest sensors sold have about
+/// 150 Mpx. It bounds memory (a float per pixel, and OpenCV's decoded copy) before any decoding.
+inline constexpr long long kMaxImagePixels = 200'000'000;
+
+/// The width and height (px) a PNG, JPEG, TIFF, BMP or PNM file declares in its header, read
+/// without decoding it. Throws pcr::InputError naming `source` when `bytes` are none of these or
+/// their header is truncated.
+std::pair<int, int> image_header_size(const std::vector<unsigned char>& bytes,
+                                      const std::string& source);
+
+/// Reads an 8- or 16-bit grey or colour PNG, JPEG, TIFF, BMP or PNM image; colour is converted
+/// to grey. Throws pcr::InputError naming the file when it cannot be read, when its header
+/// declares more than kMaxImagePixels (checked before decoding: a few hundred compressed bytes
+/// can unpack to gigabytes) or when it has no contrast (blank).
 GrayImage read_image(const std::string& path);
 
 /// Writes a PNG with 8 or 16 bits per pixel (temporary file, then renamed).

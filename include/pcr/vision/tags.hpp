@@ -44,7 +44,15 @@ struct TagDetection {
   /// The same corners in normalised (undistorted) camera coordinates, when a camera was given.
   std::array<Eigen::Vector2d, 4> corners_normalized;
   double edge_rms_px{0};  ///< scatter of the refined edge points about their fitted lines
+  /// Fraction of the points along the four border edges whose light side, within the reach of
+  /// the edge refinement, holds a pixel at full scale (clipped highlights; see kFullScale).
+  double clipped_fraction{0};
 };
+
+/// A pixel at or above this value is taken as clipped: the full scale of the image file (an 8- or
+/// 16-bit image's largest code, 1 for a float image). Where the light side of an edge clips, the
+/// edge profile loses its top and the refined edge moves towards the dark side.
+inline constexpr float kFullScale = 1.0f - 1e-6f;
 
 /// Detects the tags of `options.family`. With `camera`, the refinement fits the four border edges
 /// as straight lines in undistorted coordinates (sub-pixel edge points along each edge's normal)

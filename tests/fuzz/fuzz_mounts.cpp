@@ -1,0 +1,12 @@
+// Mount layout JSON (parse_mounts).
+#include "fuzz_input.hpp"
+#include "pcr/robot_io.hpp"
+#include "pcr/vision/mounts.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    pcr::vision::parse_mounts(pcr::fuzz::as_text(data, size), "fuzz.json");
+  } catch (const pcr::InputError&) {
+  }
+  return 0;
+}
