@@ -1,6 +1,7 @@
 """Type stubs of the pcr._pcr extension module (SI units: m, rad, N, Pa)."""
 from __future__ import annotations
 
+import os
 from typing import Any, Callable, Optional, Sequence, Union, overload
 
 import numpy as np
@@ -12,6 +13,11 @@ has_vision: bool
 
 ArrayLike = npt.ArrayLike
 FloatArray = npt.NDArray[np.float64]
+# A file's path: str or any os.PathLike (pathlib.Path); a missing input: FileNotFoundError.
+StrPath = Union[str, os.PathLike[str]]
+# A fixed number of finite numbers (a sequence or a 1-D array): force (fx, fy) N, a centre
+# (x, y) m, ... A wrong count or a NaN raises ValueError naming the argument.
+Vector = Union[Sequence[float], npt.NDArray[np.floating[Any]]]
 
 class Pose:
     x: float  # m
@@ -24,10 +30,16 @@ class Pose:
     def replace(self, **changes: Any) -> Pose: ...
 
 class Limb:
-    A: FloatArray  # (2,) m, in W at q = 0
+    @property
+    def A(self) -> FloatArray: ...  # (2,) m, in W at q = 0 (a view: limb.A[0] = x edits it)
+    @A.setter
+    def A(self, value: Vector) -> None: ...  # 2 numbers
     alpha: float  # rad
     gamma: float  # rad
-    B: FloatArray  # (2,) m, in P
+    @property
+    def B(self) -> FloatArray: ...  # (2,) m, in P
+    @B.setter
+    def B(self, value: Vector) -> None: ...  # 2 numbers
     beta: float  # rad
     l: float  # m
     d: float  # m
@@ -47,10 +59,16 @@ class Extrinsics:
     def replace(self, **changes: Any) -> Extrinsics: ...
 
 class LimbUncertainty:
-    A: FloatArray
+    @property
+    def A(self) -> FloatArray: ...  # (2,) m
+    @A.setter
+    def A(self, value: Vector) -> None: ...  # 2 numbers
     alpha: float
     gamma: float
-    B: FloatArray
+    @property
+    def B(self) -> FloatArray: ...  # (2,) m
+    @B.setter
+    def B(self, value: Vector) -> None: ...  # 2 numbers
     beta: float
     l: float
     d: float
@@ -61,8 +79,14 @@ class LimbUncertainty:
 class Uncertainty:
     global_: LimbUncertainty
     limbs: list[LimbUncertainty]
-    camera: FloatArray  # (3,) m, m, rad
-    pattern: FloatArray  # (3,) m, m, rad
+    @property
+    def camera(self) -> FloatArray: ...  # (3,) m, m, rad
+    @camera.setter
+    def camera(self, value: Vector) -> None: ...  # 3 numbers
+    @property
+    def pattern(self) -> FloatArray: ...  # (3,) m, m, rad
+    @pattern.setter
+    def pattern(self, value: Vector) -> None: ...  # 3 numbers
     def __init__(self) -> None: ...
     def replace(self, **changes: Any) -> Uncertainty: ...
 
@@ -152,31 +176,31 @@ class Robot:
     @staticmethod
     def default() -> Robot: ...
     @staticmethod
-    def load(path: str) -> Robot: ...
+    def load(path: StrPath) -> Robot: ...
     @staticmethod
     def from_json(text: str, source: str = "<string>") -> Robot: ...
-    def save(self, path: str) -> None: ...
+    def save(self, path: StrPath) -> None: ...
     def to_json(self) -> str: ...
     def copy(self) -> Robot: ...
     def replace(self, **changes: Any) -> Robot: ...
     def with_limb(self, index: int, **changes: Any) -> Robot: ...
     @overload
     def forward(self, q: Sequence[float], *, warm_start: Optional[Solution] = None,
-                shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
                 options: Optional[SolverOptions] = None) -> Solution: ...
     @overload
     def forward(self, q: ArrayLike, *, warm_start: Optional[Solution] = None,
-                shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
                 options: Optional[SolverOptions] = None) -> Union[Solution, BatchResult]: ...
     @overload
     def inverse(self, pose: Pose, *, warm_start: Optional[Solution] = None,
-                shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
                 options: Optional[SolverOptions] = None) -> Solution: ...
     @overload
     def inverse(self, pose: ArrayLike, *, warm_start: Optional[Solution] = None,
-                shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
                 options: Optional[SolverOptions] = None) -> Union[Solution, BatchResult]: ...
-    def home(self, *, shapes: bool = False, force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+    def home(self, *, shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
              options: Optional[SolverOptions] = None) -> Solution: ...
 
 # ---- calibration (when has_calibration) ----------------------------------------------------
@@ -184,7 +208,7 @@ class VirtualRobot:
     def __init__(self, nominal: Robot, *, seed: int = 1, noise_position: float = 9.13e-9,
                  noise_angle: float = 1.2e-6, misalignments: bool = False,
                  misalignment_half_width: float = 5e-3, unequal_diameters: bool = False,
-                 diameter_half_width: float = 2e-6, force: Optional[ArrayLike] = None,
+                 diameter_half_width: float = 2e-6, force: Optional[Vector] = None,
                  moment: float = 0.0, options: Optional[SolverOptions] = None) -> None: ...
     @property
     def nominal(self) -> Robot: ...
@@ -196,28 +220,28 @@ class VirtualRobot:
 
 def parameter_names(num_limbs: int) -> list[str]: ...
 def sensitivity_configurations(robot: Robot, step: float = 1e-3,
-                               centre: Optional[ArrayLike] = None) -> FloatArray: ...
-def platform_parameter_jacobian(robot: Robot, q: ArrayLike, *, force: ArrayLike = (0.0, 0.0),
+                               centre: Optional[Vector] = None) -> FloatArray: ...
+def platform_parameter_jacobian(robot: Robot, q: ArrayLike, *, force: Vector = (0.0, 0.0),
                                 moment: float = 0.0,
                                 options: Optional[SolverOptions] = None) -> Optional[FloatArray]: ...
-def sensitivity(robot: Robot, *, step: float = 1e-3, centre: Optional[ArrayLike] = None,
-                force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+def sensitivity(robot: Robot, *, step: float = 1e-3, centre: Optional[Vector] = None,
+                force: Vector = (0.0, 0.0), moment: float = 0.0,
                 options: Optional[SolverOptions] = None) -> dict[str, Any]: ...
-def read_dataset(path: str, num_joints: int = -1) -> tuple[FloatArray, FloatArray]: ...
-def write_dataset(path: str, q: ArrayLike, measured: ArrayLike) -> None: ...
-def read_configurations(path: str, num_joints: int = -1) -> FloatArray: ...
-def write_configurations(path: str, q: ArrayLike) -> None: ...
+def read_dataset(path: StrPath, num_joints: int = -1) -> tuple[FloatArray, FloatArray]: ...
+def write_dataset(path: StrPath, q: ArrayLike, measured: ArrayLike) -> None: ...
+def read_configurations(path: StrPath, num_joints: int = -1) -> FloatArray: ...
+def write_configurations(path: StrPath, q: ArrayLike) -> None: ...
 def admissible_configuration(robot: Robot, q: ArrayLike, strain_limit: float = 0.01) -> bool: ...
 def poisson_disc_sample(robot: Robot, *, count: int = 99, seed: int = 1,
                         min_distance: float = 0.0, box_min: Optional[ArrayLike] = None,
                         box_max: Optional[ArrayLike] = None, strain_limit: float = 0.01,
-                        attempts: int = 30, force: ArrayLike = (0.0, 0.0),
+                        attempts: int = 30, force: Vector = (0.0, 0.0),
                         moment: float = 0.0) -> dict[str, Any]: ...
 def default_stages() -> list[dict[str, Any]]: ...
-def load_calibration_stages(path: str) -> list[dict[str, Any]]: ...
+def load_calibration_stages(path: StrPath) -> list[dict[str, Any]]: ...
 def pose_errors(robot: Robot, q: ArrayLike, measured: ArrayLike) -> dict[str, float]: ...
 def calibrate(nominal: Robot, q: ArrayLike, measured: ArrayLike, *,
-              stages: Union[None, str, list[dict[str, Any]]] = None,
+              stages: Union[None, StrPath, list[dict[str, Any]]] = None,
               orientation_weight: float = ..., residual_scale: float = 9.13e-9,
               derivatives: str = "implicit", max_iterations: int = 100, fix_gauge: bool = True,
               gauge_prior_weight: float = 1e-3, compute_covariance: bool = True,
@@ -227,14 +251,14 @@ def calibrate(nominal: Robot, q: ArrayLike, measured: ArrayLike, *,
 PAPER_SQUARE_SIDE: float  # 2e-3 m
 PAPER_CIRCLE_DIAMETER: float  # 3e-3 m
 
-def square_path(side: float = 2e-3, *, centre: ArrayLike = (0.0, 0.0), rotation: float = 0.0,
+def square_path(side: float = 2e-3, *, centre: Vector = (0.0, 0.0), rotation: float = 0.0,
                 theta: float = 0.0, count: int = 40) -> FloatArray: ...  # (count, 3)
-def circle_path(diameter: float = 3e-3, *, centre: ArrayLike = (0.0, 0.0),
+def circle_path(diameter: float = 3e-3, *, centre: Vector = (0.0, 0.0),
                 start_angle: float = 0.0, theta: float = 0.0,
                 count: int = 36) -> FloatArray: ...  # (count, 3)
-def load_path_csv(path: str) -> FloatArray: ...  # (N, 3)
+def load_path_csv(path: StrPath) -> FloatArray: ...  # (N, 3)
 def command_path(robot: Robot, path: ArrayLike, *, strain_limit: float = 0.01,
-                 force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                 force: Vector = (0.0, 0.0), moment: float = 0.0,
                  options: Optional[SolverOptions] = None,
                  cold_start_fallback: bool = True) -> dict[str, Any]: ...  # q, poses, max_strain, iterations
 
@@ -291,9 +315,9 @@ class AccuracyEvaluation:
 
 def evaluate_on_virtual_robot(model: Robot, robot: VirtualRobot, path: ArrayLike, *,
                               repeat: int = 30, frame: str = "model", strain_limit: float = 0.01,
-                              force: ArrayLike = (0.0, 0.0), moment: float = 0.0,
+                              force: Vector = (0.0, 0.0), moment: float = 0.0,
                               options: Optional[SolverOptions] = None) -> AccuracyEvaluation: ...
-def load_measured_csv(path: str) -> tuple[FloatArray, Union[FloatArray, list[FloatArray]]]: ...
+def load_measured_csv(path: StrPath) -> tuple[FloatArray, Union[FloatArray, list[FloatArray]]]: ...
 def measured_to_csv(commanded: ArrayLike,
                     attained: Union[ArrayLike, Sequence[ArrayLike]]) -> str: ...
 
@@ -305,10 +329,10 @@ class Camera:
     distortion: FloatArray  # OpenCV order k1 k2 p1 p2 [k3 [k4 k5 k6]]
     def __init__(self, width: int, height: int, K: ArrayLike,
                  distortion: Optional[ArrayLike] = None) -> None: ...
-    def project(self, point_camera: ArrayLike) -> FloatArray: ...  # (2,) px
-    def save(self, path: str) -> None: ...
+    def project(self, point_camera: Vector) -> FloatArray: ...  # 3 numbers (m) -> (2,) px
+    def save(self, path: StrPath) -> None: ...
 
-def load_camera(path: str) -> Camera: ...
+def load_camera(path: StrPath) -> Camera: ...
 
 class MountLayout:
     @property
@@ -320,15 +344,16 @@ class MountLayout:
     def from_json(text: str, source: str = "<string>") -> MountLayout: ...
     def __len__(self) -> int: ...
 
-def load_mounts(path: str) -> MountLayout: ...
+def load_mounts(path: StrPath) -> MountLayout: ...
 def default_mounts() -> MountLayout: ...
-def read_image(path: str) -> npt.NDArray[np.float32]: ...  # (H, W) in [0, 1]
-def write_png(path: str, image: ArrayLike, bits: int = 8) -> None: ...
-def mount_tags(robot: Robot, mounts: MountLayout, platform: Union[Pose, ArrayLike] = ...,
+def read_image(path: StrPath) -> npt.NDArray[np.float32]: ...  # (H, W) in [0, 1]
+def write_png(path: StrPath, image: ArrayLike, bits: int = 8) -> None: ...
+def mount_tags(robot: Robot, mounts: MountLayout, platform: Union[Pose, Vector] = (0.0, 0.0, 0.0),
                q: Optional[Sequence[float]] = None) -> list[dict[str, Any]]: ...
 def render_robot(robot: Robot, mounts: MountLayout, *, camera: Optional[Camera] = None,
                  height: float = 0.5, tilt_x: float = 0.0, tilt_y: float = 0.0,
-                 q: Optional[Sequence[float]] = None, platform: Union[Pose, ArrayLike] = ...,
+                 q: Optional[Sequence[float]] = None,
+                 platform: Union[Pose, Vector] = (0.0, 0.0, 0.0),
                  rods: bool = True, supersampling: int = 4, blur: float = 0.0,
                  noise: float = 0.0, gradient: float = 0.0,
                  seed: int = 1) -> npt.NDArray[np.float32]: ...
@@ -370,7 +395,7 @@ def measure_sweep(images: Sequence[ArrayLike], limb: int, mounts: MountLayout, c
                   home: RobotMeasurement, *, sources: Optional[Sequence[str]] = None,
                   coverage_factor: float = 3.0) -> SweepResult: ...
 def render_chessboard(*, camera: Optional[Camera] = None, cols: int = 9, rows: int = 6,
-                      square: float = 0.005, board_pose: Union[Pose, ArrayLike] = ...,
+                      square: float = 0.005, board_pose: Union[Pose, Vector] = (0.0, 0.0, 0.0),
                       height: float = 0.5, tilt_x: float = 0.0, tilt_y: float = 0.0,
                       supersampling: int = 4, blur: float = 0.0, noise: float = 0.0,
                       gradient: float = 0.0, seed: int = 1) -> npt.NDArray[np.float32]: ...
@@ -381,5 +406,5 @@ class CameraCalibration:
     used: list[str]
     rejected: list[str]
 
-def calibrate_camera(images: Sequence[str], *, cols: int = 9, rows: int = 6,
+def calibrate_camera(images: Sequence[StrPath], *, cols: int = 9, rows: int = 6,
                      square: float = 0.005) -> CameraCalibration: ...

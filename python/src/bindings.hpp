@@ -1,13 +1,18 @@
 #pragma once
 // Shared declarations of the pcr._pcr module: one wrap_<concept>() per file (module.cpp calls
-// them in order) and the small value types the bindings hand to Python.
+// them in order), the small value types the bindings hand to Python, and the conversions of
+// arguments every wrapper uses (paths, vectors, numbers), so that a bad argument raises the same
+// Python exception, worded the same way, whichever function it was given to.
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <array>
+#include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -39,10 +44,70 @@ struct Solution {
   bool inverse = false;
 };
 
-/// The platform load from Python arguments: force (fx, fy) in N, moment in N m.
-PlatformLoad<double> make_load(const Eigen::Vector2d& force, double moment);
+// ---- arguments (defined in wrap_robot.cpp, make_load in wrap_kinematics.cpp) -----------------
+// File paths are taken as std::filesystem::path (pybind11's caster: str, bytes or any
+// os.PathLike), then handed to the C++ library through input_path / output_path. Vectors and
+// poses are taken as py::object and converted here, never by pybind11's Eigen caster, whose
+// refusal is a TypeError listing the overloads: a wrong length or a NaN is a ValueError that
+// names the argument, says what it expects and shows what it got.
 
-/// (3,) array-like -> Pose2; Pose2 passes through. Throws ValueError otherwise.
+/// An input file's path as the C++ readers take it. When nothing is there, FileNotFoundError
+/// (errno ENOENT, the path as its filename), as open() raises; the readers report the rest (a
+/// directory, no permission, bad content) as ValueError naming the file.
+std::string input_path(const std::filesystem::path& path);
+
+/// An output file's path as the C++ writers take it (they write a temporary and rename it).
+inline std::string output_path(const std::filesystem::path& path) { return path.string(); }
+
+/// A float64 C-contiguous array from an array-like (a NumPy array, a sequence of numbers), or a
+/// null array when it is none (str and bytes are not numbers).
+using InputArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+InputArray as_input_array(const py::handle& object);
+
+/// What a Python value is, for the "..., got <this>" of a message: "3 numbers (1, 0, 0)", "an
+/// array of shape (4, 2)", "None", or its repr (shortened).
+std::string describe_value(const py::handle& object);
+
+/// Reads `size` finite numbers from `object` into `out`; otherwise ValueError
+/// "<name>: expected <expected>, got <what it is>".
+void read_numbers(const py::handle& object, const char* name, const std::string& expected,
+                  Eigen::Index size, double* out);
+
+/// A vector argument: N finite numbers (or `size` of them when N is Eigen::Dynamic), e.g.
+/// to_vector<2>(force, "force", "fx, fy in N"); otherwise ValueError
+/// "force: expected 2 finite numbers (fx, fy in N), got 3 numbers (1, 0, 0)".
+template <int N>
+Eigen::Matrix<double, N, 1> to_vector(const py::handle& object, const char* name,
+                                      const char* meaning, Eigen::Index size = N) {
+  static_assert(N == Eigen::Dynamic || N > 0, "a vector of N > 0 numbers");
+  Eigen::Matrix<double, N, 1> v;
+  if constexpr (N == Eigen::Dynamic) v.resize(size);
+  read_numbers(object, name,
+               std::to_string(v.size()) + " finite numbers (" + std::string(meaning) + ")",
+               v.size(), v.data());
+  return v;
+}
+
+/// A scalar argument: finite, and within [lo, hi] when they are given; otherwise ValueError
+/// "moment: expected a finite number (N m), got nan" or "step: expected a number from 1e-06 to
+/// 0.01 (m), got 0" (`unit` "" for a dimensionless one).
+double checked_number(double value, const char* name, const char* unit,
+                      double lo = -std::numeric_limits<double>::infinity(),
+                      double hi = std::numeric_limits<double>::infinity());
+
+/// Array-like -> float64 C-contiguous array of 1 or 2 dimensions with `columns` columns and finite
+/// values; ValueError naming `what` otherwise (the row and column of a non-finite value).
+InputArray input_array(const py::handle& object, int columns, const char* what, const char* unit);
+
+/// A pcr.Pose or 3 finite numbers (x m, y m, theta rad) -> Pose2. ValueError naming `what`
+/// otherwise.
 Pose2<double> to_pose(const py::handle& object, const char* what);
+
+/// The platform load from Python arguments: force (2 finite numbers fx, fy in N), moment (N m).
+/// ValueError naming the argument otherwise.
+PlatformLoad<double> make_load(const py::handle& force, double moment);
+
+/// The default of a `force` argument: no force, (0.0, 0.0) N.
+inline py::tuple no_force() { return py::make_tuple(0.0, 0.0); }
 
 }  // namespace pcr::python

@@ -10,7 +10,6 @@ namespace pcr::python {
 namespace {
 
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
 RowMatrix poses_matrix(const std::vector<Pose2<double>>& poses) {
   RowMatrix out(static_cast<Eigen::Index>(poses.size()), 3);
@@ -22,15 +21,11 @@ RowMatrix poses_matrix(const std::vector<Pose2<double>>& poses) {
 
 /// (N, 3) array-like (or one (3,) pose) -> poses. ValueError naming `what` otherwise.
 std::vector<Pose2<double>> pose_rows(const py::handle& object, const char* what) {
-  Array a;
-  try {
-    a = Array::ensure(object);
-  } catch (const py::error_already_set&) {
-  }
+  const InputArray a = as_input_array(object);
   if (!a || a.ndim() < 1 || a.ndim() > 2 || a.shape(a.ndim() - 1) != 3) {
     throw std::invalid_argument(std::string(what) +
                                 ": expected an (N, 3) array of poses (x m, y m, theta rad), got " +
-                                py::repr(object).cast<std::string>().substr(0, 200));
+                                describe_value(object));
   }
   const py::ssize_t rows = a.ndim() == 1 ? 1 : a.shape(0);
   std::vector<Pose2<double>> out(static_cast<std::size_t>(rows));
@@ -44,11 +39,10 @@ std::vector<Pose2<double>> pose_rows(const py::handle& object, const char* what)
 std::vector<std::vector<Pose2<double>>> attained_rows(const py::handle& object) {
   std::vector<std::vector<Pose2<double>>> out;
   if (py::isinstance<py::array>(object) && object.cast<py::array>().ndim() == 3) {
-    const Array a = Array::ensure(object);
+    const InputArray a = InputArray::ensure(object);
     if (!a || a.shape(2) != 3) {
-      throw std::invalid_argument("attained: expected an (N, R, 3) array of poses, got shape (" +
-                                  std::to_string(a.shape(0)) + ", " + std::to_string(a.shape(1)) +
-                                  ", " + std::to_string(a.shape(2)) + ")");
+      throw std::invalid_argument("attained: expected an (N, R, 3) array of poses, got " +
+                                  describe_value(object));
     }
     const double* p = a.data();
     out.resize(static_cast<std::size_t>(a.shape(0)));
@@ -124,11 +118,11 @@ AttainedFrame attained_frame(const std::string& name) {
   throw std::invalid_argument("frame: expected 'model' or 'true', got '" + name + "'");
 }
 
-PathCommandOptions command_options(double strain_limit, const Eigen::Vector2d& force, double moment,
+PathCommandOptions command_options(double strain_limit, const py::object& force, double moment,
                                    const std::optional<SolverOptions>& solver,
                                    bool cold_start_fallback) {
   PathCommandOptions o;
-  o.step.strain_limit = strain_limit;
+  o.step.strain_limit = checked_number(strain_limit, "strain_limit", "", 0.0);
   o.step.load = make_load(force, moment);
   if (solver) o.step.solver = *solver;
   o.step.cold_start_fallback = cold_start_fallback;
@@ -178,47 +172,50 @@ void wrap_accuracy(py::module_& m) {
 
   m.def(
       "square_path",
-      [](double side, const Eigen::Vector2d& centre, double rotation, double theta, int count) {
+      [](double side, const py::object& centre, double rotation, double theta, int count) {
         SquarePath s;
-        s.side = side;
-        s.centre = centre;
-        s.rotation = rotation;
-        s.theta = theta;
+        s.side = checked_number(side, "side", "m");
+        s.centre = to_vector<2>(centre, "centre", "x, y in m");
+        s.rotation = checked_number(rotation, "rotation", "rad");
+        s.theta = checked_number(theta, "theta", "rad");
         s.num_poses = count;
         return poses_matrix(square_path(s));
       },
-      py::arg("side") = kPaperSquareSide, py::kw_only(), py::arg("centre") = Eigen::Vector2d(0, 0),
-      py::arg("rotation") = 0.0, py::arg("theta") = 0.0, py::arg("count") = 40,
+      py::arg("side") = kPaperSquareSide, py::kw_only(),
+      py::arg("centre") = py::make_tuple(0.0, 0.0), py::arg("rotation") = 0.0,
+      py::arg("theta") = 0.0, py::arg("count") = 40,
       "The paper's square (side m) as a (count, 3) array of poses, counter-clockwise from the "
       "corner (-side/2, -side/2) before `rotation` (rad), at the constant orientation theta; "
       "closed (the first pose is not repeated), corners included when count is a multiple of 4.");
   m.def(
       "circle_path",
-      [](double diameter, const Eigen::Vector2d& centre, double start_angle, double theta,
-         int count) {
+      [](double diameter, const py::object& centre, double start_angle, double theta, int count) {
         CirclePath c;
-        c.diameter = diameter;
-        c.centre = centre;
-        c.start_angle = start_angle;
-        c.theta = theta;
+        c.diameter = checked_number(diameter, "diameter", "m");
+        c.centre = to_vector<2>(centre, "centre", "x, y in m");
+        c.start_angle = checked_number(start_angle, "start_angle", "rad");
+        c.theta = checked_number(theta, "theta", "rad");
         c.num_poses = count;
         return poses_matrix(circle_path(c));
       },
       py::arg("diameter") = kPaperCircleDiameter, py::kw_only(),
-      py::arg("centre") = Eigen::Vector2d(0, 0), py::arg("start_angle") = 0.0,
+      py::arg("centre") = py::make_tuple(0.0, 0.0), py::arg("start_angle") = 0.0,
       py::arg("theta") = 0.0, py::arg("count") = 36,
       "The paper's circle (diameter m) as a (count, 3) array of poses, counter-clockwise from "
       "the polar angle start_angle (rad), at the constant orientation theta.");
   m.def(
-      "load_path_csv", [](const std::string& path) { return poses_matrix(load_path_csv(path)); },
+      "load_path_csv",
+      [](const std::filesystem::path& path) {
+        return poses_matrix(load_path_csv(input_path(path)));
+      },
       py::arg("path"),
-      "A path from CSV (columns x,y,theta in m, m, rad) -> (N, 3). ValueError naming the file "
-      "and line.");
+      "A path from CSV (columns x,y,theta in m, m, rad) -> (N, 3). FileNotFoundError when it "
+      "does not exist, ValueError naming the file and line.");
 
   m.def(
       "command_path",
       [](const RobotDescription& model, const py::object& path, double strain_limit,
-         const Eigen::Vector2d& force, double moment, const std::optional<SolverOptions>& solver,
+         const py::object& force, double moment, const std::optional<SolverOptions>& solver,
          bool cold_start_fallback) {
         const std::vector<Pose2<double>> poses = pose_rows(path, "path");
         const PathCommandOptions o =
@@ -231,7 +228,7 @@ void wrap_accuracy(py::module_& m) {
         return command_dict(c, model.params.num_limbs);
       },
       py::arg("robot"), py::arg("path"), py::kw_only(),
-      py::arg("strain_limit") = kDefaultStrainLimit, py::arg("force") = Eigen::Vector2d(0, 0),
+      py::arg("strain_limit") = kDefaultStrainLimit, py::arg("force") = no_force(),
       py::arg("moment") = 0.0, py::arg("options") = py::none(),
       py::arg("cold_start_fallback") = true,
       "IK along a path ((N, 3) poses), warm-started pose to pose from home. Returns a dict: q "
@@ -395,7 +392,7 @@ void wrap_accuracy(py::module_& m) {
   m.def(
       "evaluate_on_virtual_robot",
       [](const RobotDescription& model, VirtualRobot& robot, const py::object& path, int repeat,
-         const std::string& frame, double strain_limit, const Eigen::Vector2d& force, double moment,
+         const std::string& frame, double strain_limit, const py::object& force, double moment,
          const std::optional<SolverOptions>& solver) {
         AccuracyOptions o;
         o.repeat = repeat;
@@ -407,8 +404,7 @@ void wrap_accuracy(py::module_& m) {
       },
       py::arg("model"), py::arg("robot"), py::arg("path"), py::kw_only(), py::arg("repeat") = 30,
       py::arg("frame") = "model", py::arg("strain_limit") = kDefaultStrainLimit,
-      py::arg("force") = Eigen::Vector2d(0, 0), py::arg("moment") = 0.0,
-      py::arg("options") = py::none(),
+      py::arg("force") = no_force(), py::arg("moment") = 0.0, py::arg("options") = py::none(),
       "Commands `path` ((N, 3) poses) with `model` (a Robot, nominal or identified), then runs "
       "`repeat` cycles on the VirtualRobot `robot` (every cycle visits the poses in order). "
       "frame: 'model' maps the camera measurements to W with the model's extrinsics (the "
@@ -418,14 +414,14 @@ void wrap_accuracy(py::module_& m) {
 
   m.def(
       "load_measured_csv",
-      [](const std::string& path) {
-        const MeasuredPath mp = load_measured_csv(path);
+      [](const std::filesystem::path& path) {
+        const MeasuredPath mp = load_measured_csv(input_path(path));
         return py::make_tuple(poses_matrix(mp.commanded), attained_array(mp.attained));
       },
       py::arg("path"),
       "Measured poses CSV (pose,x_c,y_c,theta_c,x,y,theta) -> (commanded (N, 3), attained "
-      "(N, R, 3), or a list of (R_k, 3) arrays when the counts differ). ValueError naming the "
-      "file and line.");
+      "(N, R, 3), or a list of (R_k, 3) arrays when the counts differ). FileNotFoundError when "
+      "it does not exist, ValueError naming the file and line.");
   m.def(
       "measured_to_csv",
       [](const py::object& commanded, const py::object& attained) {

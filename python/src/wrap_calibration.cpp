@@ -4,6 +4,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <sstream>
 
 #include "bindings.hpp"
 #include "pcr/calib/calibrator.hpp"
@@ -184,11 +185,7 @@ py::dict measurement_dict(const VirtualMeasurement& v) {
 
 py::object virtual_measure(VirtualRobot& robot, const py::object& q_in) {
   const int n = robot.nominal().params.num_limbs;
-  const auto q = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(q_in);
-  if (!q || q.ndim() < 1 || q.ndim() > 2 || q.shape(q.ndim() - 1) != n) {
-    throw std::invalid_argument("q: expected " + std::to_string(n) + " joint values or an (N, " +
-                                std::to_string(n) + ") array (m)");
-  }
+  const InputArray q = input_array(q_in, n, "q", "m");
   const Eigen::Index rows = q.ndim() == 1 ? 1 : q.shape(0);
   const InputMatrix matrix = Eigen::Map<const RowMatrix>(q.data(), rows, n);
   const std::vector<JointVector> joints = joint_rows(matrix, n, "q");
@@ -229,6 +226,37 @@ SolverOptions options_or_default(const std::optional<SolverOptions>& o, const So
   return o ? *o : d;
 }
 
+// The grid steps `pcr sensitivity --step` accepts (m): below, the configurations collapse onto
+// the centre (a table of zeros); above, they leave the strokes of a robot of the paper's size.
+constexpr double kMinSensitivityStep = 1e-6;
+constexpr double kMaxSensitivityStep = 0.01;
+
+/// The sensitivity grid's arguments, checked before any solve: `step` (m) in the range above,
+/// `centre` None (the middle of the strokes: an empty JointVector, the library's default) or n
+/// finite joint values (m) within the strokes q_range.
+JointVector sensitivity_centre(const RobotParams<double>& robot, double step,
+                               const py::object& centre) {
+  checked_number(step, "step", "m", kMinSensitivityStep, kMaxSensitivityStep);
+  if (centre.is_none()) return JointVector();
+  const int n = robot.num_limbs;
+  const JointVector c = to_vector<Eigen::Dynamic>(centre, "centre", "joint values in m", n);
+  for (int i = 0; i < n; ++i) {
+    const LimbParams<double>& limb = robot.limb(i);
+    if (c(i) < limb.q_min || c(i) > limb.q_max) {
+      std::ostringstream s;
+      s << "centre: joint " << i << " at " << c(i) << " m is outside its stroke q_range ["
+        << limb.q_min << ", " << limb.q_max << "] m";
+      throw std::invalid_argument(s.str());
+    }
+  }
+  return c;
+}
+
+/// The stages argument of calibrate() when it names a file: a str or an os.PathLike.
+bool is_path(const py::handle& object) {
+  return py::isinstance<py::str>(object) || py::hasattr(object, "__fspath__");
+}
+
 }  // namespace
 
 void wrap_calibration(py::module_& m) {
@@ -247,45 +275,46 @@ void wrap_calibration(py::module_& m) {
 
   m.def(
       "sensitivity_configurations",
-      [](const RobotDescription& robot, double step, const std::optional<Eigen::VectorXd>& centre) {
-        const JointVector c = centre ? JointVector(*centre) : JointVector();
+      [](const RobotDescription& robot, double step, const py::object& centre) {
+        const JointVector c = sensitivity_centre(robot.params, step, centre);
         return joints_matrix(sensitivity_configurations(robot.params, step, c),
                              robot.params.num_limbs);
       },
       py::arg("robot"), py::arg("step") = 1e-3, py::arg("centre") = py::none(),
-      "The 3^n grid of joint values (step in m) around the stroke centre, minus the centre.");
+      "The 3^n grid of joint values (step in m, 1e-6 to 0.01) around `centre` (n joint values "
+      "in m within the strokes; None: the middle of the strokes), minus the centre.");
 
   m.def(
       "platform_parameter_jacobian",
-      [](const RobotDescription& robot, const Eigen::VectorXd& q, const Eigen::Vector2d& force,
+      [](const RobotDescription& robot, const Eigen::VectorXd& q, const py::object& force,
          double moment, const std::optional<SolverOptions>& options) -> py::object {
         if (q.size() != robot.params.num_limbs || !q.allFinite()) {
           throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
                                       " finite joint values (m)");
         }
+        const PlatformLoad<double> load = make_load(force, moment);
         Eigen::MatrixXd jacobian;
         bool ok;
         {
           py::gil_scoped_release release;
-          ok = platform_parameter_jacobian(robot.params, JointVector(q), &jacobian,
-                                           make_load(force, moment),
+          ok = platform_parameter_jacobian(robot.params, JointVector(q), &jacobian, load,
                                            options_or_default(options, SolverOptions()));
         }
         if (!ok) return py::none();
         return py::cast(jacobian);
       },
-      py::arg("robot"), py::arg("q"), py::kw_only(), py::arg("force") = Eigen::Vector2d(0, 0),
+      py::arg("robot"), py::arg("q"), py::kw_only(), py::arg("force") = no_force(),
       py::arg("moment") = 0.0, py::arg("options") = py::none(),
       "d(^W T_P)/d(limb parameters) at q: a (3, 10 n) array (rows x, y, theta; columns in "
       "parameter_names order), exact (implicit function theorem); None when FK fails.");
 
   m.def(
       "sensitivity",
-      [](const RobotDescription& robot, double step, const std::optional<Eigen::VectorXd>& centre,
-         const Eigen::Vector2d& force, double moment, const std::optional<SolverOptions>& solver) {
+      [](const RobotDescription& robot, double step, const py::object& centre,
+         const py::object& force, double moment, const std::optional<SolverOptions>& solver) {
         SensitivityOptions options;
         options.step = step;
-        if (centre) options.centre = JointVector(*centre);
+        options.centre = sensitivity_centre(robot.params, step, centre);
         options.load = make_load(force, moment);
         options.solver = options_or_default(solver, SolverOptions());
         SensitivityReport report;
@@ -314,21 +343,21 @@ void wrap_calibration(py::module_& m) {
         return d;
       },
       py::arg("robot"), py::kw_only(), py::arg("step") = 1e-3, py::arg("centre") = py::none(),
-      py::arg("force") = Eigen::Vector2d(0, 0), py::arg("moment") = 0.0,
-      py::arg("options") = py::none(),
+      py::arg("force") = no_force(), py::arg("moment") = 0.0, py::arg("options") = py::none(),
       "The paper's Table 2 for `robot`: a dict with 'rows' (kind, dx, dy, dtheta: max |d pose / "
       "d p| in SI units; half_width; position_error m; orientation_error rad), 'ranking' "
       "(indices into rows, most influential first), 'configurations' and 'table' (text). "
-      "RuntimeError when FK fails at a configuration.");
+      "The grid: `step` (m, 1e-6 to 0.01) around `centre` (n joint values in m within the "
+      "strokes; None: the middle of the strokes). ValueError naming the argument for a bad "
+      "one; RuntimeError when FK fails at a configuration.");
 
   py::class_<VirtualRobot>(m, "VirtualRobot",
                            "A simulated robot: a truth drawn from the nominal description inside "
                            "its uncertainty intervals, measured by a noisy camera (Eq. 5).")
       .def(py::init([](const RobotDescription& nominal, std::uint64_t seed, double noise_position,
                        double noise_angle, bool misalignments, double misalignment_half_width,
-                       bool unequal_diameters, double diameter_half_width,
-                       std::optional<Eigen::Vector2d> force, double moment,
-                       const std::optional<SolverOptions>& solver) {
+                       bool unequal_diameters, double diameter_half_width, const py::object& force,
+                       double moment, const std::optional<SolverOptions>& solver) {
              VirtualRobotOptions o;
              o.seed = seed;
              o.noise_position = noise_position;
@@ -337,10 +366,9 @@ void wrap_calibration(py::module_& m) {
              o.effects.misalignment_half_width = misalignment_half_width;
              o.effects.unequal_diameters = unequal_diameters;
              o.effects.diameter_half_width = diameter_half_width;
-             if (force) {
-               o.effects.external_load = true;
-               o.effects.load = make_load(*force, moment);
-             }
+             // force None with a moment: the moment alone.
+             o.effects.load = make_load(force.is_none() ? no_force() : force, moment);
+             o.effects.external_load = !force.is_none() || moment != 0.0;
              o.solver = options_or_default(solver, SolverOptions());
              return VirtualRobot(nominal, o);
            }),
@@ -352,7 +380,7 @@ void wrap_calibration(py::module_& m) {
            py::arg("moment") = 0.0, py::arg("options") = py::none(),
            "noise_position (m) and noise_angle (rad) are standard deviations; misalignments adds "
            "U(-h, h) (rad) to beta and gamma; unequal_diameters U(-h, h) (m) to each d; force "
-           "(fx, fy) in N with moment (N m) applies a constant external load on the platform.")
+           "(fx, fy) in N and/or moment (N m) apply a constant external load on the platform.")
       .def_property_readonly(
           "nominal", [](const VirtualRobot& v) { return v.nominal(); },
           "the nominal description (a copy)")
@@ -371,28 +399,29 @@ void wrap_calibration(py::module_& m) {
 
   m.def(
       "read_dataset",
-      [](const std::string& path, int num_joints) {
-        const Dataset d = read_dataset(path, num_joints);
+      [](const std::filesystem::path& path, int num_joints) {
+        const Dataset d = read_dataset(input_path(path), num_joints);
         return py::make_tuple(joints_matrix(d.q, d.num_joints), poses_matrix(d.poses));
       },
       py::arg("path"), py::arg("num_joints") = -1,
       "Reads a calibration dataset CSV (q1..qn,x,y,theta) -> (q (N, n) m, measured (N, 3) "
-      "m, m, rad). ValueError naming the file, line and column.");
+      "m, m, rad). FileNotFoundError when it does not exist, ValueError naming the file, line "
+      "and column.");
   m.def(
       "write_dataset",
-      [](const std::string& path, const InputMatrix& q, const InputMatrix& measured) {
+      [](const std::filesystem::path& path, const InputMatrix& q, const InputMatrix& measured) {
         Dataset d;
         d.num_joints = static_cast<int>(q.cols());
         for (const CalibrationSample& s : samples(q, measured, d.num_joints))
           d.add(s.q, s.measured);
-        write_dataset(d, path);
+        write_dataset(d, output_path(path));
       },
       py::arg("path"), py::arg("q"), py::arg("measured"),
       "Writes a dataset CSV atomically (full precision).");
   m.def(
       "read_configurations",
-      [](const std::string& path, int num_joints) {
-        const std::vector<JointVector> rows = read_configurations(path, num_joints);
+      [](const std::filesystem::path& path, int num_joints) {
+        const std::vector<JointVector> rows = read_configurations(input_path(path), num_joints);
         const int n = rows.empty() ? std::max(num_joints, 0) : static_cast<int>(rows[0].size());
         return joints_matrix(rows, n);
       },
@@ -400,8 +429,8 @@ void wrap_calibration(py::module_& m) {
       "Reads joint configurations (q1..qn, m) -> (N, n) array.");
   m.def(
       "write_configurations",
-      [](const std::string& path, const InputMatrix& q) {
-        write_configurations(joint_rows(q, static_cast<int>(q.cols()), "q"), path);
+      [](const std::filesystem::path& path, const InputMatrix& q) {
+        write_configurations(joint_rows(q, static_cast<int>(q.cols()), "q"), output_path(path));
       },
       py::arg("path"), py::arg("q"), "Writes joint configurations (m) atomically.");
 
@@ -412,6 +441,7 @@ void wrap_calibration(py::module_& m) {
           throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
                                       " joint values (m)");
         }
+        checked_number(strain_limit, "strain_limit", "", 0.0);
         py::gil_scoped_release release;
         return admissible_configuration(robot.params, JointVector(q), strain_limit,
                                         sampling_solver_options());
@@ -424,14 +454,14 @@ void wrap_calibration(py::module_& m) {
       [](const RobotDescription& robot, int count, std::uint64_t seed, double min_distance,
          const std::optional<Eigen::VectorXd>& box_min,
          const std::optional<Eigen::VectorXd>& box_max, double strain_limit, int attempts,
-         const Eigen::Vector2d& force, double moment) {
+         const py::object& force, double moment) {
         SamplingOptions o;
         o.count = count;
         o.seed = seed;
-        o.min_distance = min_distance;
+        o.min_distance = checked_number(min_distance, "min_distance", "m", 0.0);
         if (box_min) o.box_min = JointVector(*box_min);
         if (box_max) o.box_max = JointVector(*box_max);
-        o.strain_limit = strain_limit;
+        o.strain_limit = checked_number(strain_limit, "strain_limit", "", 0.0);
         o.attempts = attempts;
         o.load = make_load(force, moment);
         SamplingResult r;
@@ -453,7 +483,7 @@ void wrap_calibration(py::module_& m) {
       py::arg("robot"), py::kw_only(), py::arg("count") = kDefaultCalibrationCount,
       py::arg("seed") = 1, py::arg("min_distance") = 0.0, py::arg("box_min") = py::none(),
       py::arg("box_max") = py::none(), py::arg("strain_limit") = 0.01, py::arg("attempts") = 30,
-      py::arg("force") = Eigen::Vector2d(0, 0), py::arg("moment") = 0.0,
+      py::arg("force") = no_force(), py::arg("moment") = 0.0,
       "Poisson-disc sample of `count` reachable joint configurations (Bridson), every pair at "
       "least min_distance apart (m; 0 = chosen from count). Returns a dict: configurations "
       "(count, n), min_distance, box_min, box_max, candidates, rejected_fk, rejected_strain, "
@@ -464,8 +494,12 @@ void wrap_calibration(py::module_& m) {
       "The paper's three calibration stages, as a list of dicts (name, free, bounds_scale).");
   m.def(
       "load_calibration_stages",
-      [](const std::string& path) { return stages_list(load_calibration_stages(path)); },
-      py::arg("path"), "Reads a stages JSON file (ValueError naming the file, field, value).");
+      [](const std::filesystem::path& path) {
+        return stages_list(load_calibration_stages(input_path(path)));
+      },
+      py::arg("path"),
+      "Reads a stages JSON file (FileNotFoundError when it does not exist, ValueError naming the "
+      "file, field, value).");
 
   m.def(
       "pose_errors",
@@ -490,17 +524,18 @@ void wrap_calibration(py::module_& m) {
          const std::string& derivatives, int max_iterations, bool fix_gauge,
          double gauge_prior_weight, bool compute_covariance, const py::object& progress) {
         CalibrationOptions o;
-        if (py::isinstance<py::str>(stages)) {
-          o.stages = load_calibration_stages(stages.cast<std::string>());
+        if (is_path(stages)) {
+          o.stages = load_calibration_stages(input_path(stages.cast<std::filesystem::path>()));
         } else if (!stages.is_none()) {
           o.stages = stages_from(stages.cast<py::list>());
         }
-        o.orientation_weight = orientation_weight;
-        o.residual_scale = residual_scale;
+        o.orientation_weight =
+            checked_number(orientation_weight, "orientation_weight", "m/rad", 0.0);
+        o.residual_scale = checked_number(residual_scale, "residual_scale", "m");
         o.derivatives = derivative_mode(derivatives);
         o.max_iterations = max_iterations;
         o.fix_gauge = fix_gauge;
-        o.gauge_prior_weight = gauge_prior_weight;
+        o.gauge_prior_weight = checked_number(gauge_prior_weight, "gauge_prior_weight", "", 0.0);
         o.compute_covariance = compute_covariance;
         // A Python exception in `progress` must not unwind through Ceres: it is kept, later
         // lines are dropped, and it is raised once calibrate() has returned.
@@ -535,7 +570,7 @@ void wrap_calibration(py::module_& m) {
       py::arg("progress") = py::none(),
       "Staged, bounded identification (the paper's Section 5) of `nominal` from q (N, n) (m) "
       "and the measured pattern poses ^Se T_M (N, 3) (m, m, rad). stages: None (the paper's "
-      "three), a list of dicts (name, free, bounds_scale) or a stages JSON path. "
+      "three), a list of dicts (name, free, bounds_scale) or a stages JSON file's path. "
       "orientation_weight: w of Eq. 6 (m/rad); residual_scale (m). derivatives: 'implicit', "
       "'numeric' or 'autodiff'. progress: optional callable(str). Returns (identified Robot, "
       "report dict: stages, parameters, gauge, free_count, jacobian_rank, singular_values, "

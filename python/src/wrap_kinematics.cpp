@@ -1,5 +1,4 @@
 // Robot.forward / Robot.inverse / Robot.home, pcr.SolverOptions, pcr.Solution, pcr.BatchResult.
-#include <cmath>
 #include <limits>
 #include <memory>
 #include <type_traits>
@@ -9,11 +8,9 @@
 
 namespace pcr::python {
 
-PlatformLoad<double> make_load(const Eigen::Vector2d& force, double moment) {
-  if (!force.allFinite() || !std::isfinite(moment)) {
-    throw std::invalid_argument("force/moment: expected finite numbers (N, N m)");
-  }
-  return PlatformLoad<double>{force, moment};
+PlatformLoad<double> make_load(const py::handle& force, double moment) {
+  return PlatformLoad<double>{to_vector<2>(force, "force", "fx, fy in N"),
+                              checked_number(moment, "moment", "N m")};
 }
 
 namespace {
@@ -87,44 +84,6 @@ InverseSolution as_inverse(const Solution& s) {
   return out;
 }
 
-/// Array-like -> float64 C-contiguous array of 1 or 2 dimensions with `columns` columns.
-py::array_t<double, py::array::c_style | py::array::forcecast> input_array(const py::object& object,
-                                                                           int columns,
-                                                                           const char* what,
-                                                                           const char* unit) {
-  using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
-  Array a;
-  try {
-    a = Array::ensure(object);
-  } catch (const py::error_already_set&) {
-  }
-  const std::string expected = std::string(what) + ": expected " + std::to_string(columns) +
-                               " numbers or an (N, " + std::to_string(columns) + ") array (" +
-                               unit + ")";
-  if (!a || a.ndim() < 1 || a.ndim() > 2 || a.shape(a.ndim() - 1) != columns) {
-    std::string got;
-    if (a) {
-      got = "shape (";
-      for (py::ssize_t d = 0; d < a.ndim(); ++d)
-        got += (d ? ", " : "") + std::to_string(a.shape(d));
-      got += a.ndim() == 1 ? ",)" : ")";
-    } else {
-      got = py::repr(object).cast<std::string>();
-    }
-    throw std::invalid_argument(expected + ", got " + got);
-  }
-  const double* data = a.data();
-  for (py::ssize_t k = 0; k < a.size(); ++k) {
-    if (!std::isfinite(data[k])) {
-      const py::ssize_t row = k / columns, col = k % columns;
-      throw std::invalid_argument(std::string(what) + ": non-finite value " +
-                                  std::to_string(data[k]) + " at row " + std::to_string(row) +
-                                  ", column " + std::to_string(col));
-    }
-  }
-  return a;
-}
-
 SolverOptions options_or_default(const std::optional<SolverOptions>& options) {
   return options ? *options : SolverOptions();
 }
@@ -157,9 +116,8 @@ BatchResult allocate_batch(py::ssize_t rows, int n, BatchBuffers& buffers) {
 }
 
 py::object forward(const RobotDescription& robot, const py::object& q_in,
-                   const std::optional<Solution>& warm_start, bool shapes,
-                   const Eigen::Vector2d& force, double moment,
-                   const std::optional<SolverOptions>& options_in) {
+                   const std::optional<Solution>& warm_start, bool shapes, const py::object& force,
+                   double moment, const std::optional<SolverOptions>& options_in) {
   const RobotParams<double>& params = robot.params;
   const int n = params.num_limbs;
   const auto q = input_array(q_in, n, "q", "m");
@@ -201,9 +159,8 @@ py::object forward(const RobotDescription& robot, const py::object& q_in,
 }
 
 py::object inverse(const RobotDescription& robot, const py::object& pose_in,
-                   const std::optional<Solution>& warm_start, bool shapes,
-                   const Eigen::Vector2d& force, double moment,
-                   const std::optional<SolverOptions>& options_in) {
+                   const std::optional<Solution>& warm_start, bool shapes, const py::object& force,
+                   double moment, const std::optional<SolverOptions>& options_in) {
   const RobotParams<double>& params = robot.params;
   const int n = params.num_limbs;
   if (n > 3) {
@@ -357,22 +314,22 @@ void wrap_kinematics(py::module_& m) {
   auto robot = py::reinterpret_borrow<py::class_<RobotDescription>>(m.attr("Robot"));
   robot
       .def("forward", &forward, py::arg("q"), py::kw_only(), py::arg("warm_start") = py::none(),
-           py::arg("shapes") = false, py::arg("force") = Eigen::Vector2d(0, 0),
-           py::arg("moment") = 0.0, py::arg("options") = py::none(),
+           py::arg("shapes") = false, py::arg("force") = no_force(), py::arg("moment") = 0.0,
+           py::arg("options") = py::none(),
            "Forward kinematics. q: n joint values (m) -> Solution; or an (N, n) array -> "
            "BatchResult, each row warm-started from the previous converged one (a failed warm "
            "start is retried cold from home, as `pcr fk` does). force (fx, fy) in N and moment "
            "in N m act on the platform at P's origin, in W. Releases the GIL.")
       .def("inverse", &inverse, py::arg("pose"), py::kw_only(), py::arg("warm_start") = py::none(),
-           py::arg("shapes") = false, py::arg("force") = Eigen::Vector2d(0, 0),
-           py::arg("moment") = 0.0, py::arg("options") = py::none(),
+           py::arg("shapes") = false, py::arg("force") = no_force(), py::arg("moment") = 0.0,
+           py::arg("options") = py::none(),
            "Inverse kinematics. pose: a Pose or (x m, y m, theta rad) -> Solution; or an (N, 3) "
            "array -> BatchResult, warm-started along the rows like `pcr ik`. Joints outside "
            "q_range give status out_of_range (converged False, q kept). With 2 limbs theta is "
            "solved for. Releases the GIL.")
       .def(
           "home",
-          [](const RobotDescription& r, bool shapes, const Eigen::Vector2d& force, double moment,
+          [](const RobotDescription& r, bool shapes, const py::object& force, double moment,
              const std::optional<SolverOptions>& options) {
             const PlatformLoad<double> load = make_load(force, moment);
             ForwardSolution s;
@@ -382,7 +339,7 @@ void wrap_kinematics(py::module_& m) {
             }
             return to_python(r.params, s, s.summary.converged(), shapes);
           },
-          py::kw_only(), py::arg("shapes") = false, py::arg("force") = Eigen::Vector2d(0, 0),
+          py::kw_only(), py::arg("shapes") = false, py::arg("force") = no_force(),
           py::arg("moment") = 0.0, py::arg("options") = py::none(), "The home solution q = 0 (m).");
 }
 

@@ -1,25 +1,133 @@
 // pcr.Robot (the pcr-robot description), pcr.Limb, pcr.Pose, pcr.Extrinsics, pcr.Uncertainty.
 // Attribute access returns references into the robot, so robot.limbs[0].l = 0.031 edits it.
+#include <cerrno>
 #include <cmath>
 #include <sstream>
+#include <system_error>
 
 #include "bindings.hpp"
 
 namespace pcr::python {
 
-Pose2<double> to_pose(const py::handle& object, const char* what) {
-  if (py::isinstance<Pose2<double>>(object)) return object.cast<Pose2<double>>();
-  py::array_t<double, py::array::forcecast> a;
+std::string input_path(const std::filesystem::path& path) {
+  std::error_code error;
+  const bool exists = std::filesystem::exists(std::filesystem::status(path, error));
+  if (!exists && error == std::errc::no_such_file_or_directory) {
+    errno = ENOENT;
+    PyErr_SetFromErrnoWithFilename(PyExc_FileNotFoundError, path.c_str());
+    throw py::error_already_set();
+  }
+  return path.string();
+}
+
+InputArray as_input_array(const py::handle& object) {
+  // A null array (InputArray() would be an empty one).
+  const InputArray none = py::reinterpret_steal<InputArray>(py::handle());
+  if (py::isinstance<py::str>(object) || py::isinstance<py::bytes>(object)) return none;
   try {
-    a = py::array_t<double, py::array::forcecast>::ensure(object);
+    return InputArray::ensure(object);
   } catch (const py::error_already_set&) {
+    return none;
   }
-  if (!a || a.ndim() != 1 || a.shape(0) != 3) {
-    throw std::invalid_argument(std::string(what) +
-                                ": expected a pcr.Pose or 3 numbers (x m, y m, theta rad), got " +
-                                py::repr(object).cast<std::string>());
+}
+
+namespace {
+
+std::string number_text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+/// "(1, 0, 0)": the values of a 1-D array.
+std::string values_text(const InputArray& a) {
+  std::string out = "(";
+  for (py::ssize_t k = 0; k < a.size(); ++k) out += (k ? ", " : "") + number_text(a.data()[k]);
+  return out + ")";
+}
+
+std::string describe_array(const py::handle& object, const InputArray& a) {
+  if (!a) {
+    const std::string text = py::repr(object).cast<std::string>();
+    return text.size() <= 200 ? text : text.substr(0, 200) + "...";
   }
-  return Pose2<double>{a.at(0), a.at(1), a.at(2)};
+  if (a.ndim() == 0) return "a single number " + number_text(*a.data());
+  if (a.ndim() == 1) {
+    if (a.size() == 0) return "an empty sequence";
+    const std::string count = std::to_string(a.size()) + (a.size() == 1 ? " number" : " numbers");
+    return a.size() <= 8 ? count + " " + values_text(a) : count;
+  }
+  std::string shape = "an array of shape (";
+  for (py::ssize_t d = 0; d < a.ndim(); ++d) shape += (d ? ", " : "") + std::to_string(a.shape(d));
+  return shape + ")";
+}
+
+}  // namespace
+
+std::string describe_value(const py::handle& object) {
+  if (object.is_none()) return "None";
+  return describe_array(object, as_input_array(object));
+}
+
+void read_numbers(const py::handle& object, const char* name, const std::string& expected,
+                  Eigen::Index size, double* out) {
+  const InputArray a = as_input_array(object);  // None: a 0-d NaN, refused below
+  const bool shaped = a && a.ndim() == 1 && a.shape(0) == size;
+  bool finite = shaped;
+  for (py::ssize_t k = 0; finite && k < a.size(); ++k) finite = std::isfinite(a.data()[k]);
+  if (!finite) {
+    // The right count with a NaN or an infinity: the values say it all.
+    const std::string got = shaped             ? values_text(a)
+                            : object.is_none() ? "None"
+                                               : describe_array(object, a);
+    throw std::invalid_argument(std::string(name) + ": expected " + expected + ", got " + got);
+  }
+  std::copy(a.data(), a.data() + size, out);
+}
+
+double checked_number(double value, const char* name, const char* unit, double lo, double hi) {
+  if (std::isfinite(value) && value >= lo && value <= hi) return value;
+  std::string expected = "a finite number";
+  if (std::isfinite(lo) && std::isfinite(hi)) {
+    expected = "a number from " + number_text(lo) + " to " + number_text(hi);
+  } else if (std::isfinite(lo)) {
+    expected = "a finite number >= " + number_text(lo);
+  } else if (std::isfinite(hi)) {
+    expected = "a finite number <= " + number_text(hi);
+  }
+  if (*unit != '\0') expected += std::string(" (") + unit + ")";
+  throw std::invalid_argument(std::string(name) + ": expected " + expected + ", got " +
+                              number_text(value));
+}
+
+InputArray input_array(const py::handle& object, int columns, const char* what, const char* unit) {
+  const InputArray a = as_input_array(object);
+  if (!a || a.ndim() < 1 || a.ndim() > 2 || a.shape(a.ndim() - 1) != columns) {
+    throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(columns) +
+                                " numbers or an (N, " + std::to_string(columns) + ") array (" +
+                                unit + "), got " + describe_value(object));
+  }
+  const double* data = a.data();
+  for (py::ssize_t k = 0; k < a.size(); ++k) {
+    if (!std::isfinite(data[k])) {
+      const py::ssize_t row = k / columns, col = k % columns;
+      throw std::invalid_argument(std::string(what) + ": non-finite value " + number_text(data[k]) +
+                                  " at row " + std::to_string(row) + ", column " +
+                                  std::to_string(col));
+    }
+  }
+  return a;
+}
+
+Pose2<double> to_pose(const py::handle& object, const char* what) {
+  py::object values = py::reinterpret_borrow<py::object>(object);
+  if (py::isinstance<Pose2<double>>(object)) {
+    const Pose2<double> p = object.cast<Pose2<double>>();
+    values = py::make_tuple(p.x, p.y, p.theta);
+  }
+  double v[3];
+  read_numbers(values, what, "a pcr.Pose or 3 finite numbers (x m, y m, theta rad)", 3, v);
+  return Pose2<double>{v[0], v[1], v[2]};
 }
 
 namespace {
@@ -88,7 +196,9 @@ void wrap_robot(py::module_& m) {
       .def(py::init<>())
       .def_property(
           "A", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.A; },
-          [](LimbParams<double>& l, const Eigen::Vector2d& v) { l.A = v; },
+          [](LimbParams<double>& l, const py::object& v) {
+            l.A = to_vector<2>(v, "Limb.A", "x, y in m");
+          },
           py::return_value_policy::reference_internal, "proximal clamp [x, y] in W at q = 0 (m)")
       .def_readwrite("alpha", &LimbParams<double>::alpha,
                      "rod tangent angle at the proximal clamp, in W (rad)")
@@ -96,7 +206,9 @@ void wrap_robot(py::module_& m) {
                      "actuator misalignment: the clamp moves along alpha + gamma (rad)")
       .def_property(
           "B", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.B; },
-          [](LimbParams<double>& l, const Eigen::Vector2d& v) { l.B = v; },
+          [](LimbParams<double>& l, const py::object& v) {
+            l.B = to_vector<2>(v, "Limb.B", "x, y in m");
+          },
           py::return_value_policy::reference_internal, "distal clamp [x, y] in P (m)")
       .def_readwrite("beta", &LimbParams<double>::beta,
                      "rod tangent angle at the distal clamp, in P (rad)")
@@ -146,13 +258,17 @@ void wrap_robot(py::module_& m) {
       .def(py::init<>())
       .def_property(
           "A", [](LimbUncertainty& u) -> Eigen::Vector2d& { return u.A; },
-          [](LimbUncertainty& u, const Eigen::Vector2d& v) { u.A = v; },
+          [](LimbUncertainty& u, const py::object& v) {
+            u.A = to_vector<2>(v, "LimbUncertainty.A", "half-widths on x, y in m");
+          },
           py::return_value_policy::reference_internal, "m, on [A_x, A_y]")
       .def_readwrite("alpha", &LimbUncertainty::alpha, "rad")
       .def_readwrite("gamma", &LimbUncertainty::gamma, "rad")
       .def_property(
           "B", [](LimbUncertainty& u) -> Eigen::Vector2d& { return u.B; },
-          [](LimbUncertainty& u, const Eigen::Vector2d& v) { u.B = v; },
+          [](LimbUncertainty& u, const py::object& v) {
+            u.B = to_vector<2>(v, "LimbUncertainty.B", "half-widths on x, y in m");
+          },
           py::return_value_policy::reference_internal, "m, on [B_x, B_y]")
       .def_readwrite("beta", &LimbUncertainty::beta, "rad")
       .def_readwrite("l", &LimbUncertainty::length, "m")
@@ -181,11 +297,16 @@ void wrap_robot(py::module_& m) {
           "per-limb half-widths with the overrides applied (references, like Robot.limbs)")
       .def_property(
           "camera", [](RobotUncertainty& u) -> Eigen::Vector3d& { return u.camera; },
-          [](RobotUncertainty& u, const Eigen::Vector3d& v) { u.camera = v; },
+          [](RobotUncertainty& u, const py::object& v) {
+            u.camera = to_vector<3>(v, "Uncertainty.camera", "half-widths on x m, y m, theta rad");
+          },
           py::return_value_policy::reference_internal, "on extrinsics.camera (m, m, rad)")
       .def_property(
           "pattern", [](RobotUncertainty& u) -> Eigen::Vector3d& { return u.pattern; },
-          [](RobotUncertainty& u, const Eigen::Vector3d& v) { u.pattern = v; },
+          [](RobotUncertainty& u, const py::object& v) {
+            u.pattern =
+                to_vector<3>(v, "Uncertainty.pattern", "half-widths on x m, y m, theta rad");
+          },
           py::return_value_policy::reference_internal, "on extrinsics.pattern (m, m, rad)")
       .def("__copy__", [](const RobotUncertainty& u) { return u; })
       .def(
@@ -198,13 +319,21 @@ void wrap_robot(py::module_& m) {
       .def(py::init([] { return default_robot(); }), "The default robot (same as Robot.default()).")
       .def_static("default", &default_robot,
                   "The paper's 3-PF robot (femto-3pf) with the paper's uncertainty intervals.")
-      .def_static("load", &load_robot, py::arg("path"),
-                  "Reads a pcr-robot JSON file (ValueError naming the file, field and value).")
+      .def_static(
+          "load", [](const std::filesystem::path& path) { return load_robot(input_path(path)); },
+          py::arg("path"),
+          "Reads a pcr-robot JSON file (str or os.PathLike): FileNotFoundError when it does not "
+          "exist, ValueError naming the file, field and value when it is not a valid robot.")
       .def_static("from_json", &parse_robot, py::arg("text"), py::arg("source") = "<string>",
                   "Parses pcr-robot JSON text; `source` names it in error messages.")
       .def(
-          "save", [](const RobotDescription& r, const std::string& path) { save_robot(r, path); },
-          py::arg("path"), "Validates and writes the description atomically (temp file + rename).")
+          "save",
+          [](const RobotDescription& r, const std::filesystem::path& path) {
+            save_robot(r, output_path(path));
+          },
+          py::arg("path"),
+          "Validates and writes the description atomically (temp file + rename) to `path` (str or "
+          "os.PathLike).")
       .def("to_json", &robot_to_json, "The canonical JSON text (full precision).")
       .def(
           "copy", [](const RobotDescription& r) { return r; }, "A deep copy.")

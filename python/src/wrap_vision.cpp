@@ -77,7 +77,8 @@ Scene camera_scene(const std::optional<CameraModel>& camera, double height, doub
   }
   Scene scene;
   scene.camera = camera ? *camera : default_render_camera();
-  scene.plane = PlanePose::looking_down(height, tilt_x, tilt_y);
+  scene.plane = PlanePose::looking_down(height, checked_number(tilt_x, "tilt_x", "rad"),
+                                        checked_number(tilt_y, "tilt_y", "rad"));
   return scene;
 }
 
@@ -89,9 +90,9 @@ py::array_t<float> render(const Scene& scene, int supersampling, double blur, do
   }
   RenderOptions o;
   o.supersampling = supersampling;
-  o.blur_sigma_px = blur;
-  o.noise_sigma = noise;
-  o.gradient = gradient;
+  o.blur_sigma_px = checked_number(blur, "blur", "px", 0.0);
+  o.noise_sigma = checked_number(noise, "noise", "fraction of full scale", 0.0);
+  o.gradient = checked_number(gradient, "gradient", "");
   o.seed = seed;
   GrayImage image;
   {
@@ -131,17 +132,29 @@ void wrap_vision(py::module_& m) {
       .def_readwrite("K", &CameraModel::K, "3x3 intrinsic matrix (px)")
       .def_readwrite("distortion", &CameraModel::distortion, "k1 k2 p1 p2 [k3 [k4 k5 k6]]")
       .def(
-          "project", [](const CameraModel& c, const Eigen::Vector3d& p) { return c.project(p); },
+          "project",
+          [](const CameraModel& c, const py::object& p) {
+            return c.project(to_vector<3>(p, "point_camera", "x, y, z in m"));
+          },
           py::arg("point_camera"), "A camera-frame point (m) -> pixel (u, v).")
       .def(
-          "save", [](const CameraModel& c, const std::string& path) { save_camera(c, path); },
-          py::arg("path"), "Writes OpenCV YAML (camera_matrix, distortion_coefficients, ...).")
+          "save",
+          [](const CameraModel& c, const std::filesystem::path& path) {
+            save_camera(c, output_path(path));
+          },
+          py::arg("path"),
+          "Writes OpenCV YAML (camera_matrix, distortion_coefficients, ...) to `path` (str or "
+          "os.PathLike).")
       .def("__repr__", [](const CameraModel& c) {
         return "Camera(" + std::to_string(c.width) + " x " + std::to_string(c.height) +
                " px, f = " + std::to_string(c.focal_px()) + " px)";
       });
-  m.def("load_camera", &load_camera, py::arg("path"),
-        "Reads an OpenCV camera YAML. ValueError naming the file and the field.");
+  m.def(
+      "load_camera",
+      [](const std::filesystem::path& path) { return load_camera(input_path(path)); },
+      py::arg("path"),
+      "Reads an OpenCV camera YAML. FileNotFoundError when it does not exist, ValueError naming "
+      "the file and the field.");
 
   py::class_<MountLayout>(m, "MountLayout",
                           "Where each rod mount's tag is and how its clamp sits on it (the "
@@ -182,23 +195,28 @@ void wrap_vision(py::module_& m) {
           "A copy whose offsets are exact (zero half-widths).")
       .def_static("from_json", &parse_mounts, py::arg("text"), py::arg("source") = "<string>")
       .def("__len__", [](const MountLayout& l) { return l.mounts.size(); });
-  m.def("load_mounts", &load_mounts, py::arg("path"),
-        "Reads a pcr-mounts JSON file. ValueError naming the file, field and value.");
+  m.def(
+      "load_mounts",
+      [](const std::filesystem::path& path) { return load_mounts(input_path(path)); },
+      py::arg("path"),
+      "Reads a pcr-mounts JSON file. FileNotFoundError when it does not exist, ValueError naming "
+      "the file, field and value.");
   m.def("default_mounts", &default_mounts,
         "The default robot's layout (data/mounts-femto-3pf.json).");
 
   m.def(
-      "read_image", [](const std::string& path) { return to_array(read_image(path)); },
+      "read_image",
+      [](const std::filesystem::path& path) { return to_array(read_image(input_path(path))); },
       py::arg("path"),
-      "Reads an 8/16-bit grey or colour image -> float32 (H, W) in [0, 1]. ValueError naming "
-      "the file when it cannot be read or is blank.");
+      "Reads an 8/16-bit grey or colour image -> float32 (H, W) in [0, 1]. FileNotFoundError "
+      "when it does not exist, ValueError naming the file when it cannot be read or is blank.");
   m.def(
       "write_png",
-      [](const std::string& path, const py::object& image, int bits) {
+      [](const std::filesystem::path& path, const py::object& image, int bits) {
         if (bits != 8 && bits != 16) {
           throw std::invalid_argument("bits: expected 8 or 16, got " + std::to_string(bits));
         }
-        write_png(from_array(image, "image"), path, bits);
+        write_png(from_array(image, "image"), output_path(path), bits);
       },
       py::arg("path"), py::arg("image"), py::arg("bits") = 8,
       "Writes a (H, W) array in [0, 1] as an 8- or 16-bit grey PNG (temp file, then renamed).");
@@ -220,7 +238,7 @@ void wrap_vision(py::module_& m) {
         }
         return out;
       },
-      py::arg("robot"), py::arg("mounts"), py::arg("platform") = Eigen::Vector3d(0, 0, 0),
+      py::arg("robot"), py::arg("mounts"), py::arg("platform") = py::make_tuple(0.0, 0.0, 0.0),
       py::arg("q") = py::none(),
       "The layout's tags placed on the robot (plane frame = W): a list of dicts family, id, "
       "size (m), pose (x, y, theta of the tag in W).");
@@ -243,7 +261,7 @@ void wrap_vision(py::module_& m) {
       },
       py::arg("robot"), py::arg("mounts"), py::kw_only(), py::arg("camera") = py::none(),
       py::arg("height") = 0.5, py::arg("tilt_x") = 0.0, py::arg("tilt_y") = 0.0,
-      py::arg("q") = py::none(), py::arg("platform") = Eigen::Vector3d(0, 0, 0),
+      py::arg("q") = py::none(), py::arg("platform") = py::make_tuple(0.0, 0.0, 0.0),
       py::arg("rods") = true, py::arg("supersampling") = 4, py::arg("blur") = 0.0,
       py::arg("noise") = 0.0, py::arg("gradient") = 0.0, py::arg("seed") = 1u,
       "A synthetic image (float32 (H, W) in [0, 1]) of the robot's mount tags, as `pcr "
@@ -269,7 +287,7 @@ void wrap_vision(py::module_& m) {
         return render(scene, supersampling, blur, noise, gradient, seed);
       },
       py::kw_only(), py::arg("camera") = py::none(), py::arg("cols") = 9, py::arg("rows") = 6,
-      py::arg("square") = 0.005, py::arg("board_pose") = Eigen::Vector3d(0, 0, 0),
+      py::arg("square") = 0.005, py::arg("board_pose") = py::make_tuple(0.0, 0.0, 0.0),
       py::arg("height") = 0.5, py::arg("tilt_x") = 0.0, py::arg("tilt_y") = 0.0,
       py::arg("supersampling") = 4, py::arg("blur") = 0.0, py::arg("noise") = 0.0,
       py::arg("gradient") = 0.0, py::arg("seed") = 1u,
@@ -321,9 +339,9 @@ void wrap_vision(py::module_& m) {
         const GrayImage gray = from_array(image, source);
         check_image_size(camera, gray.width, gray.height, "camera", source);
         MeasureOptions o;
-        o.coverage_factor = coverage_factor;
+        o.coverage_factor = checked_number(coverage_factor, "coverage_factor", "", 0.0);
         o.detector.family = family;
-        o.detector.min_decision_margin = min_margin;
+        o.detector.min_decision_margin = checked_number(min_margin, "min_margin", "", 0.0);
         o.detector.max_hamming = max_hamming;
         py::gil_scoped_release release;
         return measure_robot(gray, source, layout, camera, design.params, o);
@@ -372,7 +390,7 @@ void wrap_vision(py::module_& m) {
           check_image_size(camera, grays.back().width, grays.back().height, "camera", names.back());
         }
         MeasureOptions o;
-        o.coverage_factor = coverage_factor;
+        o.coverage_factor = checked_number(coverage_factor, "coverage_factor", "", 0.0);
         py::gil_scoped_release release;
         return measure_sweep(grays, names, limb, layout, camera, home, o);
       },
@@ -391,7 +409,9 @@ void wrap_vision(py::module_& m) {
       .def_readonly("rejected", &CalibrationResult::rejected, "images without a board");
   m.def(
       "calibrate_camera",
-      [](const std::vector<std::string>& paths, int cols, int rows, double square) {
+      [](const std::vector<std::filesystem::path>& images, int cols, int rows, double square) {
+        std::vector<std::string> paths;
+        for (const std::filesystem::path& image : images) paths.push_back(input_path(image));
         ChessboardSpec board;
         board.cols = cols;
         board.rows = rows;
@@ -401,9 +421,10 @@ void wrap_vision(py::module_& m) {
       },
       py::arg("images"), py::kw_only(), py::arg("cols") = 9, py::arg("rows") = 6,
       py::arg("square") = 0.005,
-      "Camera intrinsics and distortion from image files of a chessboard with cols x rows "
-      "inner corners and `square` (m) squares, as `pcr camera` -> CameraCalibration (at least "
-      "3 images with a board; ValueError naming the files otherwise). Releases the GIL.");
+      "Camera intrinsics and distortion from image files (str or os.PathLike) of a chessboard "
+      "with cols x rows inner corners and `square` (m) squares, as `pcr camera` -> "
+      "CameraCalibration (at least 3 images with a board; FileNotFoundError for a missing "
+      "file, ValueError naming the files otherwise). Releases the GIL.");
 
   m.def("measured_description", &measured_description, py::arg("design"), py::arg("measurement"),
         "`design` with the measured A, alpha, B, beta (gamma when swept) and an uncertainty "

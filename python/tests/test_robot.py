@@ -78,14 +78,14 @@ def test_save_load_round_trip(robot, tmp_path):
     assert os.listdir(tmp_path) == ["robot.json"]  # no temporary left behind
 
 
-def test_load_errors_are_value_errors(tmp_path):
+def test_load_errors_are_value_errors_or_file_not_found(tmp_path):
     bad = json.loads(pcr.Robot.default().to_json())
     bad["limbs"][2]["l"] = -0.03
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(bad))
     with pytest.raises(ValueError, match=r"bad\.json: limbs\[2\]\.l: outside its physical range .*, got -0\.03"):
         pcr.Robot.load(str(path))
-    with pytest.raises(ValueError, match="missing.json"):
+    with pytest.raises(FileNotFoundError, match="missing.json"):  # as open() raises
         pcr.Robot.load(str(tmp_path / "missing.json"))
     with pytest.raises(ValueError, match="syntax"):
         pcr.Robot.from_json("{", "text")

@@ -28,7 +28,7 @@ def test_image_round_trip(tmp_path):
         back = pcr.read_image(str(f))
         assert back.dtype == np.float32 and back.shape == (40, 60)
         assert np.max(np.abs(back - image)) <= tol
-    with pytest.raises(ValueError, match="missing.png"):
+    with pytest.raises(FileNotFoundError, match="missing.png"):
         pcr.read_image(str(tmp_path / "missing.png"))
     with pytest.raises(ValueError, match="bits"):
         pcr.write_png(str(tmp_path / "x.png"), image, bits=12)
@@ -180,5 +180,5 @@ def test_camera_from_rendered_chessboards(tmp_path):
     assert abs(cam.distortion[0] + 0.2) < 0.05
     with pytest.raises(ValueError, match="at least 3"):
         pcr.calibrate_camera(paths[:2] + [noise], cols=9, rows=6, square=0.008)
-    with pytest.raises(ValueError, match="missing.png"):
+    with pytest.raises(FileNotFoundError, match="missing.png"):
         pcr.calibrate_camera(paths + [str(tmp_path / "missing.png")], square=0.008)

@@ -160,7 +160,7 @@ SensitivityReport sensitivity_analysis(const RobotDescription& description,
     if (!platform_parameter_jacobian(robot, q, &J, options.load, options.solver)) {
       throw std::runtime_error("sensitivity: robot '" + description.name +
                                "': no forward-kinematics solution at q = " + format_q(q) +
-                               " (reduce --step)");
+                               " (a smaller step keeps the configurations closer to the centre)");
     }
     for (std::size_t r = 0; r < report.rows.size(); ++r) {
       const RowSpec& spec = kRows[r];
