@@ -222,6 +222,11 @@ TEST(RobotIo, TypeAndShapeErrors) {
 
 TEST(RobotIo, ValueRules) {
   Json j = valid();
+  j["limbs"][0]["l"] = std::string(1 << 20, 'x');  // shown as its first characters only
+  const std::string long_value = error_of(j);
+  EXPECT_LT(long_value.size(), 200u) << long_value.substr(0, 200);
+  EXPECT_MESSAGE(long_value, "limbs[0].l", "xxx...");
+  j = valid();
   j["limbs"][2]["l"] = -0.03;
   EXPECT_MESSAGE(error_of(j), "limbs[2].l", "physical range", "-0.03");
   j = valid();

@@ -4,9 +4,11 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pcr/robot_io.hpp"
@@ -209,6 +211,95 @@ TEST(VisionInputs, CameraFileRoundTripAndErrors) {
   }
 }
 
+// Whatever OpenCV's FileStorage writes around a camera (the fields of its calibration sample:
+// strings, counts, comments, per-view matrices of any element type and size, NaN) passes the
+// shape check that keeps malformed text from OpenCV's reader.
+TEST(VisionInputs, CameraFilesAsOpenCVWritesThemAreRead) {
+  cv::RNG rng(20261124);
+  for (int trial = 0; trial < 20; ++trial) {
+    const std::string path = tmp("opencv" + std::to_string(trial) + ".yaml");
+    const int views = 1 + trial;
+    const int n_distortion = std::vector<int>{0, 4, 5, 8}[trial % 4];
+    {
+      cv::FileStorage fs(path, cv::FileStorage::WRITE);
+      fs << "calibration_time"
+         << "Tue 24 Nov 2026 18:43:14 UTC";
+      fs << "nr_of_frames" << views << "image_width" << 1920 << "image_height" << 1080;
+      fs << "board_width" << 9 << "board_height" << 6 << "square_size" << 0.008;
+      fs.writeComment("flags: +fix_k3 +zero_tangent_dist", false);
+      fs << "flags" << 4096 << "fisheye_model" << 0;
+      fs << "camera_matrix"
+         << (cv::Mat_<double>(3, 3) << rng.uniform(500., 3000.), 0, 960.3, 0,
+             rng.uniform(500., 3000.), 540.7, 0, 0, 1);
+      cv::Mat distortion(1, n_distortion, CV_64F);
+      if (n_distortion > 0) rng.fill(distortion, cv::RNG::NORMAL, 0, 0.1);
+      fs << "distortion_coefficients" << distortion;
+      fs << "avg_reprojection_error" << rng.uniform(0.05, 0.5);
+      cv::Mat errors(views, 1, CV_32F), extrinsics(views, 6, CV_64F), points(views, 54, CV_32FC2);
+      rng.fill(errors, cv::RNG::UNIFORM, 0, 1);
+      rng.fill(extrinsics, cv::RNG::NORMAL, 0, std::pow(10.0, rng.uniform(-300, 300)));
+      rng.fill(points, cv::RNG::UNIFORM, 0, 1920);
+      extrinsics.at<double>(0, 0) = std::numeric_limits<double>::quiet_NaN();
+      extrinsics.at<double>(0, 1) = -std::numeric_limits<double>::infinity();
+      fs << "per_view_reprojection_errors" << errors << "extrinsic_parameters" << extrinsics
+         << "image_points" << points << "mask" << cv::Mat(2, 3, CV_8U, cv::Scalar(255));
+    }
+    const CameraModel camera = load_camera(path);
+    EXPECT_EQ(camera.width, 1920);
+    EXPECT_EQ(camera.height, 1080);
+    EXPECT_DOUBLE_EQ(camera.K(1, 2), 540.7);
+  }
+}
+
+// Text OpenCV's writer would never give is refused, naming the line, before OpenCV reads it.
+TEST(VisionInputs, CameraFilesOutOfShapeAreRefusedByLine) {
+  const std::string head = "%YAML:1.0\n---\nimage_width: 100\nimage_height: 100\n";
+  const std::string matrix =
+      "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+      "   data: [ 80., 0., 50., 0., 80.,\n       50., 0., 0., 1. ]\n";
+  const auto load_text = [](const std::string& text) {
+    const std::string path = tmp("bad.yaml");
+    std::ofstream(path, std::ios::binary) << text;
+    return load_camera(path);
+  };
+  const std::string distortion =
+      "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 0\n   dt: d\n   data: []\n";
+  ASSERT_NO_THROW(load_text(head + matrix + distortion));
+  const std::pair<std::string, std::string> cases[] = {
+      {head + "\tcols: 3\n", "bad.yaml:5: a control character"},
+      {head + "---\n" + matrix, "bad.yaml:5: only line 1"},
+      {"%YAML:1.0\n---%YAML:1.0\n--`-\n", "bad.yaml:2: only line 1"},
+      {head + "camera_matrix: !!opencv-matrix\n   rows: 3\n   data: [ 1.,\n",
+       "bad.yaml:8: the 'data'"},
+      {head + "camera_matrix: !!opencv-matrix\n   rows: 3\n   step: 3\n",
+       "bad.yaml:7: 'step' is not"},
+      {head + "camera_matrix: !!opencv-matrix\n   rows: 3\n   rows: 3\n",
+       "bad.yaml:7: 'rows' given"},
+      {head + "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+              "   data: [ 1., 2. ] x\n",
+       "bad.yaml:9: a line of the 'data' list"},
+      {head + "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+              "   data: [ 1., 2e ]\n",
+       "bad.yaml:9: '2e' is not a number"},
+      {head + "camera_matrix: !!opencv-matrix\n   rows: 3\nimage_width: 1\n",
+       "bad.yaml:7: the opencv-matrix above lacks"},
+      {head + "image_width:100\n", "bad.yaml:5: 'image_width:100' is not a 'key: value' line"},
+      {head + "image_width: [1, 2]\n", "bad.yaml:5: 'image_width' is neither"},
+      {head + "  rows: 3\n", "bad.yaml:5: an indented line outside"},
+      {head + "camera_matrix: !!opencv-matrix\n   rows: 99999999999\n", "bad.yaml:6: 'rows: 9"},
+      {head + "camera_matrix: !!opencv-matrix\n   dt: q\n", "bad.yaml:6: 'dt: q' is not"},
+  };
+  for (const auto& [text, message] : cases) {
+    try {
+      load_text(text);
+      ADD_FAILURE() << "accepted:\n" << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos)
+          << e.what() << "\nexpected: " << message;
+    }
+  }
+}
+
 TEST(VisionInputs, MountLayoutErrors) {
   const std::string base = R"({"mounts": [
     {"name": "A1", "role": "proximal", "limb": 0, "id": 0, "tag_size": 0.01, "clamp_offset": [0.014, 0],
@@ -229,6 +320,14 @@ TEST(VisionInputs, MountLayoutErrors) {
     EXPECT_NE(std::string(e.what()).find("B1"), std::string::npos) << e.what();
   }
   EXPECT_THROW(parse_mounts(with("100000"), "m.json"), InputError);  // not in tag36h11
+  // A megabyte in a field is shown as its first characters, not echoed whole.
+  try {
+    parse_mounts(with("\"" + std::string(1 << 20, '7') + "\""), "m.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_LT(std::string(e.what()).size(), 200u) << std::string(e.what()).substr(0, 200);
+    EXPECT_NE(std::string(e.what()).find("7777..."), std::string::npos) << e.what();
+  }
 }
 
 // cv::calibrateCamera on rendered chessboards recovers the camera that rendered them.

@@ -19,6 +19,10 @@ class InputError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// A value from a user's file as an error message shows it: at most 60 characters, "..." where
+/// it was cut (a field may hold megabytes).
+std::string excerpt(std::string text);
+
 /// Half-widths of the uncertainty intervals of one limb's parameters (SI units, radians).
 struct LimbUncertainty {
   Eigen::Vector2d A{0, 0};  ///< m, on A_x and A_y

@@ -46,13 +46,14 @@ std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
       throw InputError(where + ".free: expected a list of parameter kinds");
     }
     for (const json& k : e["free"]) {
-      if (!k.is_string()) throw InputError(where + ".free: expected strings, got " + k.dump());
+      if (!k.is_string())
+        throw InputError(where + ".free: expected strings, got " + excerpt(k.dump()));
       stage.free.push_back(k.get<std::string>());
     }
     if (e.contains("bounds_scale")) {
       if (!e["bounds_scale"].is_number()) {
         throw InputError(where + ".bounds_scale: expected a number, got " +
-                         e["bounds_scale"].dump());
+                         excerpt(e["bounds_scale"].dump()));
       }
       stage.bounds_scale = e["bounds_scale"].get<double>();
     }

@@ -13,6 +13,11 @@
 #include "pcr/files.hpp"
 
 namespace pcr {
+
+std::string excerpt(std::string text) {
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text;
+}
 namespace {
 
 using Json = nlohmann::json;
@@ -47,9 +52,7 @@ constexpr double kMaxYoungModulus = 2e12;  // Pa
 std::string show(const Json& value) {
   if (is_overflow(value)) return value.get<std::string>().substr(kOverflowMarker.size());
   if (value.is_number_float()) return format_double(value.get<double>());
-  std::string text = value.dump();
-  if (text.size() > 60) text = text.substr(0, 57) + "...";
-  return text;
+  return excerpt(value.dump());
 }
 
 /// Reads and validates one description; every error names the source and the field path.

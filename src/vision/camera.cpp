@@ -1,6 +1,8 @@
 #include "pcr/vision/camera.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -78,33 +80,190 @@ PlanePose PlanePose::looking_down(double height_m, double tilt_x, double tilt_y)
 
 namespace {
 
-// OpenCV 4.6's YAML reader loops forever on some malformed directives and document markers
-// (`---%YAML:1.0` then `--`-`, found by tests/fuzz/fuzz_camera). A camera file as OpenCV writes it
-// has one directive, on its first line, and at most one document marker, alone on its line:
-// anything else is refused before OpenCV sees it. And text only: no NUL or other control bytes.
-void check_camera_text(const std::string& text, const std::string& path) {
-  std::size_t line_start = 0;
-  for (int line = 1; line_start < text.size(); ++line) {
-    std::size_t end = text.find('\n', line_start);
-    if (end == std::string::npos) end = text.size();
-    const std::string_view content(text.data() + line_start, end - line_start);
-    for (const char c : content) {
-      if (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\r') {
-        throw InputError(path + ":" + std::to_string(line) +
-                         ": a control character; not a camera file");
-      }
+// OpenCV 4.6's YAML reader crashes, throws std::length_error, allocates without bound or loops
+// forever on malformed text (`---%YAML:1.0` then `--`-` hangs it; tests/fuzz/fuzz_camera found
+// these): it only ever sees a file in the shape its own writer gives a camera. That shape, line by
+// line: an optional `%YAML:1.0` on line 1 and a lone `---` on line 1 or 2; comments; top-level
+// `key: scalar` (a number, a word or a quoted string) or `key: !!opencv-matrix` followed by its
+// indented `rows`, `cols`, `dt` and `data: [ numbers ]`, the list possibly spread over lines.
+class CameraText {
+ public:
+  explicit CameraText(const std::string& path) : path_(path) {}
+
+  void check(const std::string& text) {
+    std::size_t start = 0;
+    for (line_ = 1; start < text.size(); ++line_) {
+      std::size_t end = text.find('\n', start);
+      if (end == std::string::npos) end = text.size();
+      check_line(std::string_view(text.data() + start, end - start));
+      start = end + 1;
     }
-    const bool directive = content.substr(0, 1) == "%";
-    const bool marker = content.substr(0, 3) == "---" || content.substr(0, 3) == "...";
-    const bool lone_start = content.substr(0, content.find_last_not_of(" \t\r") + 1) == "---";
-    if ((directive && line != 1) || (marker && !(lone_start && line <= 2))) {
-      throw InputError(path + ":" + std::to_string(line) +
-                       ": only the first line may be a %YAML directive and only the second a "
-                       "lone '---' (OpenCV's camera YAML)");
-    }
-    line_start = end + 1;
+    if (in_list_) fail("the 'data' list is not closed with ']'");
+    end_matrix();
   }
-}
+
+ private:
+  static constexpr std::size_t kMaxLine = 4096;
+
+  using View = std::string_view;
+
+  [[noreturn]] void fail(const std::string& why) const {
+    throw InputError(path_ + ":" + std::to_string(line_) + ": " + why +
+                     " (pcr reads the camera YAML OpenCV writes)");
+  }
+
+  static View trim(View s) {
+    const std::size_t b = s.find_first_not_of(' ');
+    if (b == View::npos) return {};
+    return s.substr(b, s.find_last_not_of(' ') - b + 1);
+  }
+
+  static bool digits(View& s) {  // consumes [0-9]+
+    std::size_t n = 0;
+    while (n < s.size() && s[n] >= '0' && s[n] <= '9') ++n;
+    s.remove_prefix(n);
+    return n > 0;
+  }
+
+  // [+-]? (digits [. digits*] | . digits) [eE [+-]? digits], or YAML's .inf / .nan.
+  static bool is_number(View s) {
+    if (!s.empty() && (s[0] == '+' || s[0] == '-')) s.remove_prefix(1);
+    std::string lower(s);
+    for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (lower == ".inf" || lower == ".nan") return true;
+    const bool whole = digits(s);
+    bool fraction = false;
+    if (!s.empty() && s[0] == '.') {
+      s.remove_prefix(1);
+      fraction = digits(s);
+    }
+    if (!whole && !fraction) return false;
+    if (!s.empty() && (s[0] == 'e' || s[0] == 'E')) {
+      s.remove_prefix(1);
+      if (!s.empty() && (s[0] == '+' || s[0] == '-')) s.remove_prefix(1);
+      if (!digits(s)) return false;
+    }
+    return s.empty();
+  }
+
+  static bool is_word(View s) {
+    if (s.empty() || s.size() > 256 ||
+        !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_'))
+      return false;
+    for (const char c : s)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '.' && c != '-' &&
+          c != '+' && c != '/')
+        return false;
+    return true;
+  }
+
+  static bool is_quoted(View s) {
+    if (s.size() < 2 || s.size() > 258 || (s[0] != '"' && s[0] != '\'') || s.back() != s[0])
+      return false;
+    for (const char c : s.substr(1, s.size() - 2))
+      if (c == '"' || c == '\'' || c == '\\') return false;
+    return true;
+  }
+
+  // The numbers of a flow list after its '[' or on a continuation line; sets in_list_.
+  void list_items(View s) {
+    for (bool first = true;; first = false) {
+      const std::size_t comma = s.find(',');
+      View item = trim(s.substr(0, comma));
+      if (comma == View::npos) {
+        if (item.empty() || item.back() != ']') fail("a line of the 'data' list ends without ','");
+        item = trim(item.substr(0, item.size() - 1));
+        if (!(item.empty() && first && list_empty_)) {
+          if (!is_number(item)) fail("'" + excerpt(std::string(item)) + "' is not a number");
+        }
+        in_list_ = false;
+        return;
+      }
+      s.remove_prefix(comma + 1);
+      if (!is_number(item)) fail("'" + excerpt(std::string(item)) + "' is not a number");
+      list_empty_ = false;
+      if (trim(s).empty()) return;  // the list goes on on the next line
+    }
+  }
+
+  void end_matrix() {
+    if (in_matrix_ && matrix_fields_ != 0xf)
+      fail("the opencv-matrix above lacks one of rows, cols, dt, data");
+    in_matrix_ = false;
+  }
+
+  void check_line(View raw) {
+    if (raw.size() > kMaxLine) fail("a line longer than " + std::to_string(kMaxLine) + " bytes");
+    if (!raw.empty() && raw.back() == '\r') raw.remove_suffix(1);
+    for (const char c : raw)
+      if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+        fail("a control character (tabs included: YAML indents with spaces)");
+    const std::size_t indent = std::min(raw.find_first_not_of(' '), raw.size());
+    const View text = trim(raw);
+    if (in_list_) {
+      if (indent == 0 || text.empty()) fail("the 'data' list is not closed with ']'");
+      list_items(text);
+      return;
+    }
+    if (text.empty() || text[0] == '#') return;
+    if (text[0] == '%' || text.substr(0, 3) == "---" || text.substr(0, 3) == "...") {
+      const bool directive = line_ == 1 && (raw == "%YAML:1.0" || raw == "%YAML 1.0");
+      const bool start = raw == "---" && line_ <= 2 && !seen_content_;
+      if (!directive && !start)
+        fail("only line 1 may be '%YAML:1.0' and only line 1 or 2 a lone '---'");
+      return;
+    }
+    seen_content_ = true;
+    const std::size_t colon = text.find(':');
+    if (colon == View::npos || colon == 0 || colon > 64 || !is_word(text.substr(0, colon)) ||
+        (colon + 1 < text.size() && text[colon + 1] != ' ')) {
+      fail("'" + excerpt(std::string(text)) + "' is not a 'key: value' line");
+    }
+    const View key = text.substr(0, colon), value = trim(text.substr(colon + 1));
+    if (indent == 0) {
+      end_matrix();
+      if (value == "!!opencv-matrix") {
+        in_matrix_ = true;
+        matrix_fields_ = 0;
+        matrix_indent_ = 0;
+      } else if (!is_number(value) && !is_word(value) && !is_quoted(value)) {
+        fail("'" + excerpt(std::string(key)) +
+             "' is neither a number, a word, a quoted string nor an opencv-matrix");
+      }
+      return;
+    }
+    if (!in_matrix_) fail("an indented line outside an opencv-matrix");
+    if (matrix_indent_ == 0) matrix_indent_ = indent;
+    if (indent != matrix_indent_) fail("the opencv-matrix's fields are not indented alike");
+    static constexpr View kFields[] = {"rows", "cols", "dt", "data"};
+    const auto field = std::find(std::begin(kFields), std::end(kFields), key) - std::begin(kFields);
+    if (field == 4) fail("'" + std::string(key) + "' is not a field of an opencv-matrix");
+    if (matrix_fields_ & (1 << field)) fail("'" + std::string(key) + "' given twice");
+    matrix_fields_ |= 1 << field;
+    View v = value;
+    if (field < 2) {
+      if (!digits(v) || !v.empty() || value.size() > 9)
+        fail("'" + std::string(key) + ": " + excerpt(std::string(value)) + "' is not a count");
+    } else if (field == 2) {
+      if (v.size() >= 2 && v[0] == '"' && v.back() == '"') v = v.substr(1, v.size() - 2);
+      digits(v);
+      if (v.size() != 1 || View("ucwsifdhr").find(v[0]) == View::npos)
+        fail("'dt: " + excerpt(std::string(value)) + "' is not an OpenCV element type");
+    } else {
+      if (v.empty() || v[0] != '[') fail("'data' does not open a list with '['");
+      in_list_ = list_empty_ = true;
+      list_items(v.substr(1));
+    }
+  }
+
+  const std::string& path_;
+  int line_ = 0;
+  bool seen_content_ = false;
+  bool in_list_ = false, list_empty_ = false;
+  bool in_matrix_ = false;
+  unsigned matrix_fields_ = 0;  // bit k: kFields[k] seen
+  std::size_t matrix_indent_ = 0;
+};
 
 CameraModel read_camera(const std::string& path) {
   // OpenCV's calibration output with every view's points is a few MB at most.
@@ -119,7 +278,7 @@ CameraModel read_camera(const std::string& path) {
     if (!in.is_open()) throw InputError(path + ": cannot read the camera file");
     text = all.str();
   }
-  check_camera_text(text, path);
+  CameraText(path).check(text);
   cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
   if (!fs.isOpened()) throw InputError(path + ": cannot parse the camera file");
   CameraModel camera;

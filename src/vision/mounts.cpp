@@ -36,7 +36,8 @@ struct Reader {
   }
   double number(const json& j, const std::string& key, const std::string& path) const {
     if (!j.contains(key)) fail(path + "." + key, "missing");
-    if (!j[key].is_number()) fail(path + "." + key, "not a number (" + j[key].dump() + ")");
+    if (!j[key].is_number())
+      fail(path + "." + key, "not a number (" + excerpt(j[key].dump()) + ")");
     const double v = j[key].get<double>();
     if (!std::isfinite(v)) fail(path + "." + key, "not finite");
     return v;
@@ -46,9 +47,7 @@ struct Reader {
                    const std::string& fallback) const {
     if (!j.is_object() || !j.contains(key)) return fallback;
     if (!j[key].is_string()) {
-      std::string shown = j[key].dump();
-      if (shown.size() > 60) shown = shown.substr(0, 57) + "...";
-      fail(path + "." + key, "expected a string, got " + shown);
+      fail(path + "." + key, "expected a string, got " + excerpt(j[key].dump()));
     }
     return j[key].get<std::string>();
   }
@@ -56,7 +55,7 @@ struct Reader {
     if (!j.contains(key)) fail(path + "." + key, "missing");
     const json& a = j[key];
     if (!a.is_array() || a.size() != 2 || !a[0].is_number() || !a[1].is_number()) {
-      fail(path + "." + key, "expected [x, y] in metres, got " + a.dump());
+      fail(path + "." + key, "expected [x, y] in metres, got " + excerpt(a.dump()));
     }
     return {a[0].get<double>(), a[1].get<double>()};
   }
@@ -75,7 +74,7 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
   const Reader r{source};
   if (!root.is_object()) r.fail("(root)", "expected an object");
   if (root.contains("format") && root["format"] != "pcr-mounts") {
-    r.fail("format", "expected \"pcr-mounts\", got " + root["format"].dump());
+    r.fail("format", "expected \"pcr-mounts\", got " + excerpt(root["format"].dump()));
   }
   const std::string family = r.text(root, "family", "(root)", "tag36h11");
   const double size = root.contains("tag_size") ? r.number(root, "tag_size", "") : 0.0;
@@ -101,14 +100,15 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
     }
     const double limb = r.number(j, "limb", where);
     if (limb < 0 || limb >= 6 || limb != std::floor(limb))
-      r.fail(where + ".limb", "expected 0..5, got " + j["limb"].dump());
+      r.fail(where + ".limb", "expected 0..5, got " + excerpt(j["limb"].dump()));
     m.limb = static_cast<int>(limb);
     m.family = r.text(j, "family", where, family);
     if (!is_known_family(m.family))
       r.fail(where + ".family", "unknown tag family \"" + m.family + "\"");
     const double id = r.number(j, "id", where);
     if (id < 0 || id > 1e6 || id != std::floor(id))
-      r.fail(where + ".id", "expected a tag id (an integer from 0), got " + j["id"].dump());
+      r.fail(where + ".id",
+             "expected a tag id (an integer from 0), got " + excerpt(j["id"].dump()));
     m.id = static_cast<int>(id);
     int total = 0, wab = 0;
     try {
