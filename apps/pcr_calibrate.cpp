@@ -14,6 +14,7 @@
 
 #include "pcr/calib/calibration_report.hpp"
 #include "pcr/calib/dataset.hpp"
+#include "pcr/commands.hpp"
 #include "pcr/csv_io.hpp"
 #include "pcr/robot_io.hpp"
 
@@ -38,7 +39,8 @@ int main(int argc, char** argv) {
       "Section 5)."};
   std::string robot_path, data_path, validation_path, stages_path, output_path, report_path;
   double weight = pcr::kDefaultOrientationWeight;
-  bool quiet = false;
+  double robust_scale = pcr::CalibrationOptions().robust_scale;
+  bool quiet = false, drop_unreachable = false, strict = false;
   app.add_option("--robot", robot_path, "nominal pcr-robot description (with uncertainty)")
       ->required();
   app.add_option("--data", data_path, "calibration dataset CSV (q1..qn,x,y,theta)")->required();
@@ -46,18 +48,19 @@ int main(int argc, char** argv) {
   app.add_option("--stages", stages_path,
                  "stages JSON: [{\"name\", \"free\": [kinds], \"bounds_scale\"}]");
   app.add_option("--weight", weight, "orientation weight w of Eq. 6 (m/rad)")
-      ->check(CLI::Validator(
-          [](std::string& text) -> std::string {
-            char* end = nullptr;
-            const double w = std::strtod(text.c_str(), &end);
-            if (text.empty() || *end != '\0' || !std::isfinite(w) || w < 0.0 || w > 10.0)
-              return "'" + text + "' is outside [0, 10] m/rad";
-            return std::string();
-          },
-          "in [0, 10] m/rad"));
+      ->check(pcr::cli::within(0.0, 10.0, "m/rad"));
+  app.add_option("--robust-scale", robust_scale,
+                 "Huber loss beyond this many times the declared noise on a row's residual "
+                 "(0: plain least squares)")
+      ->check(pcr::cli::within(0.0, 1e6))
+      ->capture_default_str();
   app.add_option("--output", output_path, "identified pcr-robot description")->required();
   app.add_option("--report", report_path, "report JSON");
   app.add_flag("--quiet", quiet, "no progress on stderr");
+  app.add_flag("--drop-unreachable", drop_unreachable,
+               "leave out (and list) the rows without an FK solution on the nominal geometry "
+               "instead of refusing the dataset");
+  app.add_flag("--strict", strict, "exit 3 when the report has a warning");
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -71,14 +74,16 @@ int main(int argc, char** argv) {
     const pcr::RobotDescription nominal = pcr::load_robot(robot_path);
     const int n = nominal.params.num_limbs;
     const std::vector<pcr::CalibrationSample> calibration =
-        pcr::calibration_samples(pcr::read_dataset(data_path, n));
+        pcr::calibration_samples(pcr::read_dataset(data_path, n), data_path);
     std::vector<pcr::CalibrationSample> validation;
     if (!validation_path.empty())
-      validation = pcr::calibration_samples(pcr::read_dataset(validation_path, n));
+      validation = pcr::calibration_samples(pcr::read_dataset(validation_path, n), validation_path);
 
     pcr::CalibrationOptions options;
     if (!stages_path.empty()) options.stages = pcr::load_calibration_stages(stages_path);
     options.orientation_weight = weight;
+    options.drop_unreachable = drop_unreachable;
+    options.robust_scale = robust_scale;
     if (!quiet) options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
 
     const pcr::CalibrationResult result = pcr::calibrate(nominal, calibration, options);
@@ -102,6 +107,9 @@ int main(int argc, char** argv) {
     outputs.commit();
     std::cout.flush();
     if (!std::cout) throw std::runtime_error("<stdout>: write error");
+    for (const std::string& warning : result.warnings)
+      std::cerr << "pcr_calibrate: warning: " << warning << "\n";
+    if (strict && !result.warnings.empty()) return 3;
   } catch (const std::exception& e) {
     std::cerr << "pcr_calibrate: " << e.what() << "\n";
     return 1;

@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -127,6 +129,101 @@ TEST_F(PcrCalibrate, IdentifiedFileReproducesTheTruthsMeasurements) {
   for (int i = 0; i < 3; ++i) {
     EXPECT_NEAR(identified.params.limb(i).length, truth_.params.limb(i).length, 2e-6) << i;
   }
+}
+
+/// Mean position error (m) of a robot file's predictions against the truth's noise-free
+/// measurements of the validation set.
+double validation_mean(const RobotDescription& robot, const std::vector<JointVector>& q,
+                       const std::vector<Pose2<double>>& exact) {
+  double mean = 0;
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    const ForwardSolution s = forward_kinematics(robot.params, q[j]);
+    if (!s.summary.converged()) return std::numeric_limits<double>::infinity();
+    const Pose2<double> p = robot.params.extrinsics.measurement_from_platform(s.pose);
+    mean += std::hypot(p.x - exact[j].x, p.y - exact[j].y) / static_cast<double>(q.size());
+  }
+  return mean;
+}
+
+// The extrinsics start from the registration of the data, not from the guess: a camera turned by
+// 0.3 rad and frames 5 mm off (far outside the declared +-50 mrad, +-1 mm) reach the same floor,
+// and the report names each guess that was wrong (--strict: exit 3).
+TEST_F(PcrCalibrate, AnyExtrinsicsGuessReachesTheFloorAndIsNamed) {
+  const std::string common = " --data " + path("calibration.csv") + " --quiet --strict";
+  const auto calibrate = [&](const std::string& robot, const std::string& out) {
+    const std::string command = kTool + " --robot " + robot + common + " --output " + out +
+                                " > /dev/null 2> " + path("err.txt");
+    const int status = std::system(command.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  EXPECT_EQ(calibrate(path("nominal.json"), path("good.json")), 0) << slurp(path("err.txt"));
+  RobotDescription wrong = nominal_;
+  wrong.params.extrinsics.camera = Pose2<double>{5e-3, 0, 0.3};
+  wrong.params.extrinsics.pattern = Pose2<double>{0, -5e-3, -0.2};
+  save_robot(wrong, path("wrong.json"));
+  EXPECT_EQ(calibrate(path("wrong.json"), path("from-wrong.json")), 3);
+  const std::string err = slurp(path("err.txt"));
+  for (const char* name : {"camera_x", "camera_theta", "pattern_y", "pattern_theta"})
+    EXPECT_NE(err.find(std::string("warning: ") + name), std::string::npos) << name << ": " << err;
+  const double good = validation_mean(load_robot(path("good.json")), validation_q_, exact_);
+  const double from_wrong =
+      validation_mean(load_robot(path("from-wrong.json")), validation_q_, exact_);
+  EXPECT_LT(good, 0.05e-6);
+  EXPECT_LT(from_wrong, 0.05e-6);
+  EXPECT_NEAR(from_wrong, good, 1e-10);
+}
+
+// A row the nominal geometry cannot reach (here q1 in millimetres) is named by file and line; with
+// --drop-unreachable it is left out, listed, and the rest is identified.
+TEST_F(PcrCalibrate, UnreachableRowsAreNamedOrDropped) {
+  std::istringstream text(slurp(path("calibration.csv")));
+  std::ostringstream edited;
+  std::string line;
+  for (int number = 1; std::getline(text, line); ++number) {
+    if (number == 5) line = "12.5" + line.substr(line.find(','));
+    edited << line << "\n";
+  }
+  std::ofstream(path("mm.csv")) << edited.str();
+  const std::string base = kTool + " --robot " + path("nominal.json") + " --data " +
+                           path("mm.csv") + " --quiet --output " + path("out.json");
+  EXPECT_NE(std::system((base + " > /dev/null 2> " + path("err.txt")).c_str()), 0);
+  EXPECT_NE(slurp(path("err.txt")).find("mm.csv:5 (q = (12.5,"), std::string::npos)
+      << slurp(path("err.txt"));
+  EXPECT_FALSE(fs::exists(path("out.json")));
+  ASSERT_EQ(
+      std::system((base + " --drop-unreachable > " + path("report.txt") + " 2> /dev/null").c_str()),
+      0);
+  const std::string report = slurp(path("report.txt"));
+  EXPECT_NE(report.find("rows left out"), std::string::npos) << report;
+  EXPECT_NE(report.find("mm.csv:5"), std::string::npos) << report;
+  EXPECT_NE(report.find("q1 = 12.5 m outside"), std::string::npos) << report;
+  EXPECT_LT(validation_mean(load_robot(path("out.json")), validation_q_, exact_), 0.05e-6);
+}
+
+// Two of 30 rows moved by 50 um (a mistyped digit, a bumped camera): the Huber loss keeps the
+// result at the floor, and the report names the two rows; plain least squares does not.
+TEST_F(PcrCalibrate, OutliersAreDownWeightedAndNamed) {
+  Dataset data = read_dataset(path("calibration.csv"));
+  data.poses[7].x += 50e-6;
+  data.poses[19].y -= 50e-6;
+  write_dataset(data, path("outliers.csv"));
+  const auto calibrate = [&](const std::string& extra, const std::string& out) {
+    const std::string command = kTool + " --robot " + path("nominal.json") + " --data " +
+                                path("outliers.csv") + " --quiet --output " + out + extra +
+                                " > /dev/null 2> " + path("err.txt");
+    EXPECT_EQ(std::system(command.c_str()), 0) << slurp(path("err.txt"));
+    return validation_mean(load_robot(out), validation_q_, exact_);
+  };
+  const double robust = calibrate("", path("robust.json"));
+  const std::string err = slurp(path("err.txt"));
+  EXPECT_NE(err.find("2 rows are outliers"), std::string::npos) << err;
+  EXPECT_NE(err.find("outliers.csv:9 "), std::string::npos) << err;  // line 9: row 8
+  EXPECT_NE(err.find("outliers.csv:21 "), std::string::npos) << err;
+  EXPECT_LT(robust, 0.05e-6);
+  const double plain = calibrate(" --robust-scale 0", path("plain.json"));
+  EXPECT_GT(plain, 2 * robust);
+  std::printf("validation mean with 2 outliers: %.4g um (Huber), %.4g um (least squares)\n",
+              robust * 1e6, plain * 1e6);
 }
 
 TEST_F(PcrCalibrate, RefusesToOverwriteAnInput) {

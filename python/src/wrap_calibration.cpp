@@ -170,6 +170,9 @@ py::dict report_dict(const CalibrationResult& r) {
   d["singular_values"] = r.singular_values;
   d["residual_variance"] = r.residual_variance;
   d["covariance_ok"] = r.covariance_ok;
+  d["dropped"] = r.dropped;
+  d["outliers"] = r.outliers;
+  d["warnings"] = r.warnings;
   return d;
 }
 
@@ -522,7 +525,8 @@ void wrap_calibration(py::module_& m) {
       [](const RobotDescription& nominal, const InputMatrix& q, const InputMatrix& measured,
          const py::object& stages, double orientation_weight, double residual_scale,
          const std::string& derivatives, int max_iterations, bool fix_gauge,
-         double gauge_prior_weight, bool compute_covariance, const py::object& progress) {
+         double gauge_prior_weight, bool compute_covariance, bool drop_unreachable,
+         double robust_scale, const py::object& progress) {
         CalibrationOptions o;
         if (is_path(stages)) {
           o.stages = load_calibration_stages(input_path(stages.cast<std::filesystem::path>()));
@@ -537,6 +541,8 @@ void wrap_calibration(py::module_& m) {
         o.fix_gauge = fix_gauge;
         o.gauge_prior_weight = checked_number(gauge_prior_weight, "gauge_prior_weight", "", 0.0);
         o.compute_covariance = compute_covariance;
+        o.drop_unreachable = drop_unreachable;
+        o.robust_scale = checked_number(robust_scale, "robust_scale", "", 0.0);
         // A Python exception in `progress` must not unwind through Ceres: it is kept, later
         // lines are dropped, and it is raised once calibrate() has returned.
         auto progress_error = std::make_shared<std::unique_ptr<py::error_already_set>>();
@@ -567,14 +573,20 @@ void wrap_calibration(py::module_& m) {
       py::arg("residual_scale") = kDefaultResidualScale, py::arg("derivatives") = "implicit",
       py::arg("max_iterations") = 100, py::arg("fix_gauge") = true,
       py::arg("gauge_prior_weight") = 1e-3, py::arg("compute_covariance") = true,
+      py::arg("drop_unreachable") = false, py::arg("robust_scale") = 5.0,
       py::arg("progress") = py::none(),
       "Staged, bounded identification (the paper's Section 5) of `nominal` from q (N, n) (m) "
       "and the measured pattern poses ^Se T_M (N, 3) (m, m, rad). stages: None (the paper's "
       "three), a list of dicts (name, free, bounds_scale) or a stages JSON file's path. "
       "orientation_weight: w of Eq. 6 (m/rad); residual_scale (m). derivatives: 'implicit', "
-      "'numeric' or 'autodiff'. progress: optional callable(str). Returns (identified Robot, "
-      "report dict: stages, parameters, gauge, free_count, jacobian_rank, singular_values, "
-      "residual_variance, covariance_ok). Releases the GIL.");
+      "'numeric' or 'autodiff'. drop_unreachable: leave out the rows without an FK solution "
+      "on the nominal geometry (else ValueError naming them). robust_scale: Huber loss beyond "
+      "this many times the declared noise (0: plain least squares). progress: optional "
+      "callable(str). "
+      "Returns (identified Robot, report dict: stages, parameters, gauge, free_count, "
+      "jacobian_rank, singular_values, residual_variance, covariance_ok, dropped, outliers, "
+      "warnings). "
+      "Releases the GIL.");
 }
 
 }  // namespace pcr::python

@@ -137,3 +137,14 @@ def test_calibration_recovers_extrinsics(robot):
         pcr.calibrate(nominal, q, measured, stages=[{"name": "x", "free": ["lenght"]}])
     with pytest.raises(ValueError, match="measured"):
         pcr.calibrate(nominal, q, measured[:3])
+    # A row a metre off has no solution on the nominal geometry: named, or left out and listed.
+    q_mm = np.array(q, copy=True)
+    q_mm[3, 0] += 1.0  # 1 m: a unit slip
+    with pytest.raises(ValueError, match="configuration 4 .* outside|configuration 4"):
+        pcr.calibrate(nominal, q_mm, measured, stages=[{"name": "ext", "free": ["extrinsics"]}])
+    _, report = pcr.calibrate(nominal, q_mm, measured, drop_unreachable=True,
+                              stages=[{"name": "ext", "free": ["extrinsics"]}],
+                              compute_covariance=False)
+    assert len(report["dropped"]) == 1 and report["dropped"][0].startswith("configuration 4 ")
+    assert any("outside the stroke" in w for w in report["warnings"])
+    assert report["outliers"] == []

@@ -32,10 +32,15 @@ std::string stats_line(const char* label, const PoseErrorStats& s) {
 
 }  // namespace
 
-std::vector<CalibrationSample> calibration_samples(const Dataset& data) {
+std::vector<CalibrationSample> calibration_samples(const Dataset& data, const std::string& source) {
   std::vector<CalibrationSample> out;
   out.reserve(data.size());
-  for (std::size_t j = 0; j < data.size(); ++j) out.push_back({data.q[j], data.poses[j]});
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    std::string origin;
+    if (!source.empty() && j < data.line_numbers.size())
+      origin = source + ":" + std::to_string(data.line_numbers[j]);
+    out.push_back({data.q[j], data.poses[j], origin});
+  }
   return out;
 }
 
@@ -119,6 +124,11 @@ std::string calibration_report_text(const CalibrationResult& result,
     }
   }
   out << "residual variance (whitened): " << result.residual_variance << "\n";
+  if (!result.dropped.empty()) {
+    out << "\nrows left out (no FK solution on the nominal geometry):\n";
+    for (const std::string& row : result.dropped) out << "  " << row << "\n";
+  }
+  for (const std::string& warning : result.warnings) out << "warning: " << warning << "\n";
   return out.str();
 }
 
@@ -174,7 +184,10 @@ std::string calibration_report_json(const CalibrationResult& result,
       {"jacobian_rank", result.jacobian_rank},
       {"free_parameters", result.free_count},
       {"residual_variance", result.residual_variance},
-      {"covariance_ok", result.covariance_ok}};
+      {"covariance_ok", result.covariance_ok},
+      {"dropped_rows", result.dropped},
+      {"outlier_rows", result.outliers},
+      {"warnings", result.warnings}};
   // NaN (a failed covariance, an empty set) is not JSON: nlohmann writes null.
   return report.dump(2) + "\n";
 }

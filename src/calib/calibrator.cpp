@@ -3,7 +3,6 @@
 #include "pcr/calib/calibrator.hpp"
 
 #include <ceres/ceres.h>
-#include <ceres/covariance.h>
 #include <ceres/manifold.h>
 #include <ceres/normal_prior.h>
 
@@ -85,6 +84,110 @@ std::string format_number(double v) {
   return s.str();
 }
 
+std::string origin_of(const std::vector<CalibrationSample>& data, std::size_t j) {
+  return data[j].origin.empty() ? "configuration " + std::to_string(j + 1) : data[j].origin;
+}
+
+std::string joints_text(const JointVector& q) {
+  std::string out = "q = (";
+  for (Eigen::Index i = 0; i < q.size(); ++i) out += (i ? ", " : "") + format_number(q[i]);
+  return out + ") m";
+}
+
+/// "a, b, c and 4 more" of the first `shown` items.
+std::string listing(const std::vector<std::string>& items, std::size_t shown = 5) {
+  std::string out;
+  for (std::size_t k = 0; k < items.size() && k < shown; ++k) out += (k ? "; " : "") + items[k];
+  if (items.size() > shown) out += "; and " + std::to_string(items.size() - shown) + " more";
+  return out;
+}
+
+/// The rows the nominal geometry reaches. Ceres cannot start from a failed evaluation, and a row
+/// that no robot near the nominal one reaches is a typo, a wrong unit or another robot's: an
+/// InputError, or with drop_unreachable left out and listed in result->dropped. Joints outside
+/// their stroke are warned of.
+std::vector<CalibrationSample> reachable_rows(const RobotParams<double>& nominal,
+                                              const std::vector<CalibrationSample>& data,
+                                              const CalibrationOptions& options,
+                                              const std::string& source, CalibrationResult* result,
+                                              std::vector<Pose2<double>>* poses) {
+  std::vector<CalibrationSample> reachable;
+  std::vector<std::string> unreachable, outside;
+  ForwardSequence sequence(nominal, options.fk);
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    const JointVector& q = data[j].q;
+    for (int i = 0; i < nominal.num_limbs; ++i) {
+      const auto& limb = nominal.limb(i);
+      if (limb.q_min < limb.q_max && (q[i] < limb.q_min || q[i] > limb.q_max)) {
+        outside.push_back(origin_of(data, j) + ": q" + std::to_string(i + 1) + " = " +
+                          format_number(q[i]) + " m outside [" + format_number(limb.q_min) + ", " +
+                          format_number(limb.q_max) + "]");
+      }
+    }
+    const ForwardSolution& solution = sequence.solve(q);
+    const SolveStatus status = solution.summary.status;
+    if (status == SolveStatus::kConverged) {
+      reachable.push_back(data[j]);
+      poses->push_back(solution.pose);
+    } else {
+      unreachable.push_back(origin_of(data, j) + " (" + joints_text(q) + "): " + to_string(status));
+    }
+  }
+  if (!outside.empty()) {
+    result->warnings.push_back(
+        std::to_string(outside.size()) +
+        " rows have joints outside the stroke (a wrong unit?): " + listing(outside));
+  }
+  if (!unreachable.empty() && !options.drop_unreachable) {
+    throw InputError(source + ": " + std::to_string(unreachable.size()) + " of " +
+                     std::to_string(data.size()) +
+                     " rows have no forward-kinematics solution on the nominal geometry (a "
+                     "wrong unit, a typo, another robot's data?): " +
+                     listing(unreachable) + ". Leave them out with drop_unreachable " +
+                     "(pcr_calibrate --drop-unreachable)");
+  }
+  result->dropped = unreachable;
+  if (reachable.empty())
+    throw InputError(source + ": no row has a solution on the nominal geometry");
+  return reachable;
+}
+
+/// The extrinsics of Eq. 5, P_j = C M_j Pm, from the platform poses P_j of the nominal geometry
+/// and the measurements M_j, whatever the guess: a 2D registration. C's rotation (c, s) and
+/// translation solve a linear least-squares problem, p_j = t_C + R_C (t_Mj + R_Mj t_Pm), with Pm's
+/// translation held at its guess (the platform turns by milliradians, so the data hardly tell it
+/// from C's translation: the stages do); Pm's rotation is the mean of theta_Pj - theta_Mj -
+/// theta_C. Too few distinct measurements to fix the rotation: the guess.
+Extrinsics<double> registered_extrinsics(const std::vector<Pose2<double>>& platform,
+                                         const std::vector<CalibrationSample>& rows,
+                                         const Extrinsics<double>& guess) {
+  const Eigen::Index m = static_cast<Eigen::Index>(rows.size());
+  Eigen::MatrixXd a(2 * m, 4);
+  Eigen::VectorXd b(2 * m);
+  const Vector2<double> g = guess.pattern.translation();
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const Pose2<double>& measured = rows[static_cast<std::size_t>(j)].measured;
+    const Vector2<double> v = measured.transform(g);  // t_Mj + R_Mj t_Pm
+    a.row(2 * j) << 1, 0, v.x(), -v.y();
+    a.row(2 * j + 1) << 0, 1, v.y(), v.x();
+    b(2 * j) = platform[static_cast<std::size_t>(j)].x;
+    b(2 * j + 1) = platform[static_cast<std::size_t>(j)].y;
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(a);
+  const Eigen::Vector4d x = qr.solve(b);
+  if (qr.rank() < 4 || !x.allFinite() || x.tail<2>().norm() == 0) return guess;
+  Extrinsics<double> out = guess;
+  out.camera = Pose2<double>{x(0), x(1), std::atan2(x(3), x(2))};
+  double sin_sum = 0, cos_sum = 0;
+  for (std::size_t j = 0; j < rows.size(); ++j) {
+    const double d = platform[j].theta - rows[j].measured.theta - out.camera.theta;
+    sin_sum += std::sin(d);
+    cos_sum += std::cos(d);
+  }
+  out.pattern.theta = std::atan2(sin_sum, cos_sum);
+  return out;
+}
+
 struct Generator {
   std::string name;
   std::string combination;
@@ -164,6 +267,10 @@ class Identification {
   }
 
   int count() const { return count_; }
+  /// The geometry is bounded (Eq. 7); the extrinsics are not: they start from the registration
+  /// of the data (registered_extrinsics), whatever the guess, and the report says when they end
+  /// outside the declared interval.
+  bool bounded(int k) const { return parameter_id(k, n_).limb >= 0; }
   const std::vector<double>& values() const { return values_; }
   void set_values(const std::vector<double>& v) { values_ = v; }
   const std::vector<double>& half_widths() const { return half_widths_; }
@@ -181,18 +288,21 @@ class Identification {
     return std::vector<int>(free.begin(), free.end());
   }
 
-  /// Adds every residual block on values_.data(); returns the number of blocks.
-  void add_residuals(ceres::Problem& problem) {
+  /// Adds every residual block on values_.data(). With `robust`, each configuration's block goes
+  /// through the Huber loss at loss_scale_ (whitened units); the problem owns it.
+  void add_residuals(ceres::Problem& problem, bool robust = true) {
+    ceres::LossFunction* loss =
+        robust && loss_scale_ > 0 ? new ceres::HuberLoss(loss_scale_) : nullptr;
     for (std::size_t j = 0; j < data_.size(); ++j) {
       problem.AddResidualBlock(
           PoseMeasurementError::Create(nominal_, data_[j].q, data_[j].measured,
                                        options_.orientation_weight, options_.residual_scale,
                                        &caches_[j], options_.fk, options_.derivatives),
-          nullptr, values_.data());
+          loss, values_.data());
     }
   }
 
-  StageReport run_stage(const CalibrationStage& stage) {
+  StageReport run_stage(const CalibrationStage& stage, int rescale = 0) {
     StageReport report;
     report.name = stage.name;
     const std::vector<int> free = free_indices(stage);
@@ -205,11 +315,13 @@ class Identification {
       return report;
     }
     for (int k : free) {  // a previous stage with wider bounds may have left a value outside
+      if (!bounded(k)) continue;
       const double h = stage.bounds_scale * half_widths_[static_cast<std::size_t>(k)];
       const double c = nominal_values_[static_cast<std::size_t>(k)];
       double& v = values_[static_cast<std::size_t>(k)];
       v = std::min(std::max(v, c - h), c + h);
     }
+    update_loss_scale();
     ceres::Problem problem;
     add_residuals(problem);
     std::vector<int> constant;
@@ -232,6 +344,7 @@ class Identification {
       problem.AddResidualBlock(new ceres::NormalPrior(a, b), nullptr, values_.data());
     }
     for (int k : free) {
+      if (!bounded(k)) continue;
       const double h = stage.bounds_scale * half_widths_[static_cast<std::size_t>(k)];
       const double c = nominal_values_[static_cast<std::size_t>(k)];
       problem.SetParameterLowerBound(values_.data(), k, c - h);
@@ -265,7 +378,8 @@ class Identification {
       for (int k : free) {
         const std::size_t uk = static_cast<std::size_t>(k);
         const double h = stage.bounds_scale * half_widths_[uk];
-        if (is_free[uk] && std::abs(values_[uk] - nominal_values_[uk]) >= h * (1 - 1e-9)) {
+        if (is_free[uk] && bounded(k) &&
+            std::abs(values_[uk] - nominal_values_[uk]) >= h * (1 - 1e-9)) {
           is_free[uk] = false;
           constant.push_back(k);
           changed = true;
@@ -288,6 +402,28 @@ class Identification {
     report.usable = summary.IsSolutionUsable();
     last_free_ = free;
     last_bounds_scale_ = stage.bounds_scale;
+    // The Huber scale follows the residuals down (a stage that starts far from the data first
+    // fits with a wide one): while it shrinks by half, the stage is solved again with it.
+    const double used = loss_scale_;
+    if (rescale < 8 && used > 0) {
+      update_loss_scale();
+      if (loss_scale_ < 0.5 * used) {
+        const StageReport again = run_stage(stage, rescale + 1);
+        report.final_cost = again.final_cost;
+        report.termination = again.termination;
+        report.usable = again.usable;
+        report.iterations += again.iterations;
+        report.time_s += again.time_s;
+        report.residual_evaluations += again.residual_evaluations;
+        report.jacobian_evaluations += again.jacobian_evaluations;
+        report.residual_time_s += again.residual_time_s;
+        report.jacobian_time_s += again.jacobian_time_s;
+        report.linear_solver_time_s += again.linear_solver_time_s;
+        report.fk_solves += again.fk_solves;
+        report.fk_warm_start_failures += again.fk_warm_start_failures;
+        report.fk_newton_iterations += again.fk_newton_iterations;
+      }
+    }
     return report;
   }
 
@@ -347,7 +483,7 @@ class Identification {
   /// Whitened residuals and the dense Jacobian over every flat parameter at the current values.
   bool jacobian(Eigen::MatrixXd* J, Eigen::VectorXd* r) {
     ceres::Problem problem;
-    add_residuals(problem);
+    add_residuals(problem, false);  // raw residuals: the loss is the stages' business
     double c = 0;
     std::vector<double> residuals;
     ceres::CRSMatrix crs;
@@ -365,37 +501,31 @@ class Identification {
     return true;
   }
 
-  /// Covariance of the flat vector (whitened units) with `held` indices constant; false on failure.
-  bool covariance(const std::vector<int>& free, const std::vector<int>& held,
-                  Eigen::MatrixXd* cov) {
+  /// The Huber scale: robust_scale declared noise units, or as many times the rows' typical
+  /// residual when the model is still far (a stage that starts from the nominal geometry sees
+  /// micrometres on every row): a row is an outlier against the others, not against a floor the
+  /// model has not reached. The median norm of a whitened 3-vector at the noise is 1.538.
+  void update_loss_scale() {
+    loss_scale_ = options_.robust_scale;
+    if (!(loss_scale_ > 0)) return;
     ceres::Problem problem;
-    add_residuals(problem);
-    std::set<int> constant;
-    for (int k = 0; k < count_; ++k) constant.insert(k);
-    for (int k : free) constant.erase(k);
-    for (int k : held) constant.insert(k);
-    if (static_cast<int>(constant.size()) == count_) return false;
-    if (!constant.empty()) {
-      problem.SetManifold(
-          values_.data(),
-          new ceres::SubsetManifold(count_, std::vector<int>(constant.begin(), constant.end())));
-    }
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    co.null_space_rank = -1;  // drop what is still unidentifiable (pseudo-inverse)
-    co.min_reciprocal_condition_number = 1e-20;
-    co.num_threads = 1;
-    ceres::Covariance covariance(co);
-    std::vector<std::pair<const double*, const double*>> blocks = {
-        {values_.data(), values_.data()}};
-    if (!covariance.Compute(blocks, &problem)) return false;
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> c(count_, count_);
-    if (!covariance.GetCovarianceBlock(values_.data(), values_.data(), c.data())) return false;
-    *cov = c;
-    return true;
+    add_residuals(problem, false);
+    double c = 0;
+    std::vector<double> r;
+    if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), &c, &r, nullptr, nullptr)) return;
+    std::vector<double> norms;
+    for (std::size_t j = 0; 3 * j + 2 < r.size(); ++j)
+      norms.push_back(std::sqrt(r[3 * j] * r[3 * j] + r[3 * j + 1] * r[3 * j + 1] +
+                                r[3 * j + 2] * r[3 * j + 2]));
+    if (norms.empty()) return;
+    std::nth_element(norms.begin(), norms.begin() + norms.size() / 2, norms.end());
+    const double median = norms[norms.size() / 2];
+    if (std::isfinite(median)) loss_scale_ *= std::max(1.0, median / 1.538);
   }
+  double loss_scale() const { return loss_scale_; }
 
   const std::vector<int>& last_free() const { return last_free_; }
+  std::size_t rows() const { return data_.size(); }
   double last_bounds_scale() const { return last_bounds_scale_; }
 
  private:
@@ -429,6 +559,7 @@ class Identification {
   std::vector<FkCache> caches_;
   std::vector<int> last_free_;
   double last_bounds_scale_ = 1.0;
+  double loss_scale_ = 0;  ///< Huber scale of the current stage (whitened units; 0: none)
 };
 
 /// Tangent vectors of the gauge orbit at `robot` (see the header).
@@ -494,6 +625,41 @@ std::vector<Generator> gauge_generators(const RobotParams<double>& robot) {
     out.push_back(g);
   }
   return out;
+}
+
+/// What makes `result` doubtful, in words: extrinsics outside their declared interval, residuals
+/// inconsistent with the declared noise, parameters held at a bound.
+void add_warnings(const Identification& id, CalibrationResult* result) {
+  for (int k = 0; k < id.count(); ++k) {
+    const ParameterEstimate& p = result->parameters[static_cast<std::size_t>(k)];
+    if (id.bounded(k) || !(p.half_width > 0)) continue;
+    const double deviation = std::abs(p.value - p.nominal) / p.half_width;
+    if (deviation > 1) {
+      result->warnings.push_back(p.name + " = " + format_number(p.value) + " lies " +
+                                 format_number(deviation) + " half-widths from its declared " +
+                                 format_number(p.nominal) + " +- " + format_number(p.half_width) +
+                                 ": the extrinsics guess or its uncertainty is wrong");
+    }
+  }
+  // Whitened residuals have unit variance at the declared noise; 5 standard deviations of the
+  // chi-square estimate of the variance above it is an inconsistency, not chance.
+  const double dof = 3.0 * static_cast<double>(id.rows() - result->outliers.size()) -
+                     static_cast<double>(result->jacobian_rank);
+  const double v = result->residual_variance;
+  if (std::isfinite(v) && dof > 0 && v > 1 + 5 * std::sqrt(2 / dof)) {
+    result->warnings.push_back(
+        "the residuals are " + format_number(std::sqrt(v)) +
+        " times the declared noise (residual_scale): an unmodelled effect, outliers, wrong "
+        "extrinsics or more noise than declared");
+  }
+  std::vector<std::string> at_bound;
+  for (const ParameterEstimate& p : result->parameters)
+    if (p.at_bound) at_bound.push_back(p.name);
+  if (!at_bound.empty()) {
+    result->warnings.push_back(
+        std::to_string(at_bound.size()) +
+        " parameters ended at a bound of their interval: " + listing(at_bound, 10));
+  }
 }
 
 }  // namespace
@@ -684,7 +850,19 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   validate_stages(options.stages, source);
 
   CalibrationResult result;
-  Identification id(nominal, data, options);
+  result.residual_variance = kNaN;
+  std::vector<Pose2<double>> nominal_poses;
+  const std::vector<CalibrationSample> rows =
+      reachable_rows(nominal.params, data, options, source, &result, &nominal_poses);
+  Identification id(nominal, rows, options);
+  {
+    RobotParams<double> start = nominal.params;
+    start.extrinsics = registered_extrinsics(nominal_poses, rows, nominal.params.extrinsics);
+    std::vector<double> v(static_cast<std::size_t>(id.count()));
+    get_parameters(start, v.data());
+    id.set_values(v);
+  }
+  const std::vector<double> registered = id.values();
   const int count = id.count();
 
   // Table 3's "nominal model": the nominal robot with the extrinsics alone identified.
@@ -695,7 +873,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   if (!first_is_extrinsics) {
     id.run_stage(CalibrationStage{"extrinsics (nominal model)", {"extrinsics"}, 1.0});
     result.extrinsics_only = id.robot();
-    id.set_values(id.nominal_values());
+    id.set_values(registered);
   }
   for (std::size_t s = 0; s < options.stages.size(); ++s) {
     result.stages.push_back(id.run_stage(options.stages[s]));
@@ -714,7 +892,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     p.nominal = id.nominal_values()[uk];
     p.half_width = id.half_widths()[uk];
     p.free = is_free[uk];
-    if (p.free) {
+    if (p.free && id.bounded(k)) {
       const double h = id.last_bounds_scale() * p.half_width;
       p.at_bound = std::abs(std::abs(id.values()[uk] - p.nominal) - h) <= 1e-6 * h;
     }
@@ -757,10 +935,43 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   result.identified = id.robot();
   result.free_count = static_cast<int>(free.size());
 
-  // Rank of the Jacobian (columns scaled by the half-widths) on the free parameters.
+  // Rank of the Jacobian (columns scaled by the half-widths) on the free parameters. A model that
+  // cannot be evaluated at the result (an FK that fails there) has no rank, variance or std.
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
-  if (!free.empty() && id.jacobian(&J, &r)) {
+  const bool evaluated = !free.empty() && id.jacobian(&J, &r) && J.allFinite() && r.allFinite();
+  if (!free.empty() && !evaluated) {
+    result.warnings.push_back(
+        "the model could not be evaluated at the identified values (an FK failed or was not "
+        "finite): no rank, residual variance or standard deviations");
+  }
+  // Outliers: rows whose whitened residual norm exceeds robust_scale. The Huber loss bounded
+  // their pull in the stages; the rank, the variance and the covariance are the other rows'.
+  id.update_loss_scale();
+  if (evaluated && id.loss_scale() > 0) {
+    std::vector<Eigen::Index> kept;
+    for (std::size_t j = 0; j < rows.size(); ++j) {
+      const Eigen::Index at = 3 * static_cast<Eigen::Index>(j);
+      const double norm = r.segment<3>(at).norm();
+      if (norm > id.loss_scale()) {
+        result.outliers.push_back(origin_of(rows, j) + " (" + format_number(norm) +
+                                  " x the noise)");
+      } else {
+        kept.insert(kept.end(), {at, at + 1, at + 2});
+      }
+    }
+    if (!result.outliers.empty()) {
+      result.warnings.push_back(
+          std::to_string(result.outliers.size()) + " rows are outliers (residual beyond " +
+          format_number(id.loss_scale()) +
+          " x the declared noise), down-weighted: " + listing(result.outliers));
+      const Eigen::MatrixXd J_kept = J(kept, Eigen::all);
+      const Eigen::VectorXd r_kept = r(kept);
+      J = J_kept;
+      r = r_kept;
+    }
+  }
+  if (evaluated) {
     Eigen::MatrixXd Js(J.rows(), static_cast<Eigen::Index>(free.size()));
     for (std::size_t c = 0; c < free.size(); ++c) {
       Js.col(static_cast<Eigen::Index>(c)) =
@@ -795,26 +1006,43 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     result.residual_variance = dof > 0 ? r.squaredNorm() / dof : kNaN;
   }
 
-  // Standard deviations in the limb-0 gauge.
+  // Standard deviations in the limb-0 gauge: the pseudo-inverse of J^T J on the free parameters
+  // that are not gauge references, in half-width units (directions below 1e-10 of the largest
+  // singular value dropped), scaled back and by the residual variance.
   for (int k : held) result.parameters[static_cast<std::size_t>(k)].gauge_reference = true;
-  Eigen::MatrixXd cov;
-  if (options.compute_covariance && !free.empty() && std::isfinite(result.residual_variance) &&
-      id.covariance(free, held, &cov)) {
-    result.covariance_ok = true;
-    for (int k : free) {
-      ParameterEstimate& p = result.parameters[static_cast<std::size_t>(k)];
-      p.std_dev =
-          p.gauge_reference ? 0.0 : std::sqrt(std::max(0.0, cov(k, k) * result.residual_variance));
+  std::vector<int> estimated;
+  for (int k : free) {
+    if (!result.parameters[static_cast<std::size_t>(k)].gauge_reference) estimated.push_back(k);
+  }
+  if (options.compute_covariance && evaluated && !estimated.empty() &&
+      std::isfinite(result.residual_variance)) {
+    Eigen::MatrixXd Je(J.rows(), static_cast<Eigen::Index>(estimated.size()));
+    for (std::size_t c = 0; c < estimated.size(); ++c) {
+      Je.col(static_cast<Eigen::Index>(c)) =
+          J.col(estimated[c]) * id.half_widths()[static_cast<std::size_t>(estimated[c])];
+    }
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Je, Eigen::ComputeThinV);
+    const Eigen::VectorXd sv = svd.singularValues();
+    Eigen::VectorXd inverse_squares = Eigen::VectorXd::Zero(sv.size());
+    for (Eigen::Index k = 0; k < sv.size(); ++k) {
+      if (sv(k) > 1e-10 * sv(0)) inverse_squares(k) = 1.0 / (sv(k) * sv(k));
+    }
+    const Eigen::MatrixXd& V = svd.matrixV();
+    result.covariance_ok = sv.size() > 0 && sv(0) > 0;
+    for (std::size_t c = 0; c < estimated.size(); ++c) {
+      const Eigen::Index i = static_cast<Eigen::Index>(c);
+      const double variance = V.row(i).cwiseAbs2().dot(inverse_squares);
+      const double h = id.half_widths()[static_cast<std::size_t>(estimated[c])];
+      result.parameters[static_cast<std::size_t>(estimated[c])].std_dev =
+          result.covariance_ok ? h * std::sqrt(variance * result.residual_variance) : kNaN;
     }
   } else {
-    for (int k : free) {
-      ParameterEstimate& p = result.parameters[static_cast<std::size_t>(k)];
-      p.std_dev = p.gauge_reference ? 0.0 : kNaN;
-    }
+    for (int k : estimated) result.parameters[static_cast<std::size_t>(k)].std_dev = kNaN;
   }
   for (int k = 0; k < count; ++k) {
     result.parameters[static_cast<std::size_t>(k)].value = id.values()[static_cast<std::size_t>(k)];
   }
+  add_warnings(id, &result);
   return result;
 }
 

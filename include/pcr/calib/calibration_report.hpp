@@ -12,8 +12,10 @@
 
 namespace pcr {
 
-/// The dataset's rows as calibration samples.
-std::vector<CalibrationSample> calibration_samples(const Dataset& data);
+/// The dataset's rows as calibration samples; `source` (the file) names them in messages as
+/// "source:line".
+std::vector<CalibrationSample> calibration_samples(const Dataset& data,
+                                                   const std::string& source = "");
 
 /// Table 3: e_p (Eq. 8) and e_theta (Eq. 9) of the nominal model (nominal geometry with the
 /// identified extrinsics, as the paper reports it) and of the identified model.

@@ -3,8 +3,11 @@
 // Section 5), with Ceres.
 //
 // - Residuals: PoseMeasurementError (pcr/calib/cost.hpp), one per configuration.
-// - Bounds (Eq. 7): nominal +- bounds_scale * half-width, from the nominal description's
-//   uncertainty section. Parameters with a zero half-width are never free.
+// - Bounds (Eq. 7) on the geometry: nominal +- bounds_scale * half-width, from the nominal
+//   description's uncertainty section. Parameters with a zero half-width are never free. The
+//   extrinsics carry no bounds: they start from a closed-form registration of the data (Eq. 5 on
+//   the nominal geometry's poses), whatever the guess; a result outside their declared interval
+//   is a warning.
 // - Stages (default: the paper's three): (1) extrinsics; (2) l, A, B, alpha + extrinsics; (3) every
 //   parameter with a nonzero half-width. Free parameters through a manifold that spans them in
 //   half-width units (all O(1) for Levenberg-Marquardt), bounds on the flat values.
@@ -29,8 +32,13 @@
 //   in that gauge (those parameters held), so every reported value and deviation is relative to
 //   limb 0's measured clamps. Gauge directions are detected (rank of the scaled Jacobian at the
 //   solution) and named in the report.
-// - Uncertainty: ceres::Covariance (dense SVD) on the free parameters with the gauge references
-//   held, scaled by the residual variance (sum of squares / (m - p)).
+// - Uncertainty: the pseudo-inverse of J^T J (Eigen's SVD of the Jacobian scaled by the
+//   half-widths) on the free parameters with the gauge references held, scaled by the residual
+//   variance (sum of squares / (m - rank)). Computed only from a Jacobian that evaluated and is
+//   finite: Ceres' own covariance crashes after a failed evaluation.
+// - Rows: every configuration is first solved on the nominal geometry. One it cannot reach (a typo,
+//   a wrong unit, another robot's row) is an InputError naming the row, or, with
+//   drop_unreachable, left out and listed; a joint value outside its stroke is a warning.
 
 #include <functional>
 #include <string>
@@ -45,6 +53,7 @@ namespace pcr {
 struct CalibrationSample {
   JointVector q;
   Pose2<double> measured;
+  std::string origin;  ///< where the row came from ("data.csv:17"); empty: "configuration j"
 };
 
 struct CalibrationStage {
@@ -91,6 +100,14 @@ struct CalibrationOptions {
   /// cost is ~ m / 2 at the noise floor, so 1e-6 is a decrease far below one noise unit.
   double function_tolerance = 1e-6;
   bool compute_covariance = true;
+  /// Huber loss on each configuration's whitened residual norm beyond this many declared noise
+  /// units (residual_scale): a row that far off pulls like one at the scale, not with its whole
+  /// error. Clean data is unaffected (a 3-dof chi-square exceeds 5^2 once in 60,000 rows). 0:
+  /// plain least squares.
+  double robust_scale = 5.0;
+  /// Rows without an FK solution on the nominal geometry are left out (and listed in
+  /// CalibrationResult::dropped) instead of being an InputError.
+  bool drop_unreachable = false;
   /// Progress lines (stage, iteration, cost); empty: silent.
   std::function<void(const std::string&)> progress;
 };
@@ -151,8 +168,17 @@ struct CalibrationResult {
   int free_count = 0;                   ///< free parameters of the last stage
   int jacobian_rank = 0;                ///< numerical rank of the scaled Jacobian on them
   std::vector<double> singular_values;  ///< of the scaled Jacobian, relative to the largest
-  double residual_variance = 0;         ///< of the whitened residuals: ~1 at the noise floor
+  /// Of the whitened residuals: ~1 at the noise floor; NaN when the model could not be
+  /// evaluated at the result.
+  double residual_variance = 0;
   bool covariance_ok = false;
+  /// Rows left out (drop_unreachable): origin, joints and the nominal FK status.
+  std::vector<std::string> dropped;
+  /// Rows whose whitened residual norm at the result exceeds robust_scale: origin and norm. The
+  /// rank, residual variance and standard deviations are the other rows'.
+  std::vector<std::string> outliers;
+  /// What makes the result doubtful, in words (joints outside the stroke, a failed evaluation).
+  std::vector<std::string> warnings;
 };
 
 /// Identifies `nominal` from `data`. Throws InputError when the description has no uncertainty
