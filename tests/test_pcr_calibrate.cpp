@@ -226,6 +226,27 @@ TEST_F(PcrCalibrate, OutliersAreDownWeightedAndNamed) {
               robust * 1e6, plain * 1e6);
 }
 
+// theta in degrees and x, y in millimetres: columns that vary ~57 and ~1000 times more than the
+// nominal model's poses are named with their likely unit.
+TEST_F(PcrCalibrate, UnitSlipsAreNamed) {
+  Dataset data = read_dataset(path("calibration.csv"));
+  for (Pose2<double>& pose : data.poses) {
+    pose.theta *= 180 / M_PI;
+    pose.x *= 1e3;
+    pose.y *= 1e3;
+  }
+  write_dataset(data, path("units.csv"));
+  const std::string command = kTool + " --robot " + path("nominal.json") + " --data " +
+                              path("units.csv") + " --quiet --output " + path("out.json") +
+                              " > /dev/null 2> " + path("err.txt");
+  EXPECT_EQ(std::system(command.c_str()), 0);
+  const std::string err = slurp(path("err.txt"));
+  EXPECT_NE(err.find("degrees instead of radians?"), std::string::npos) << err;
+  EXPECT_NE(err.find("(x) varies"), std::string::npos) << err;
+  EXPECT_NE(err.find("millimetres instead of metres?"), std::string::npos) << err;
+  EXPECT_NE(err.find("units.csv:"), std::string::npos) << err;
+}
+
 TEST_F(PcrCalibrate, RefusesToOverwriteAnInput) {
   const std::string before = slurp(path("nominal.json"));
   EXPECT_NE(run("--robot " + path("nominal.json") + " --data " + path("calibration.csv") +

@@ -102,6 +102,49 @@ std::string listing(const std::vector<std::string>& items, std::size_t shown = 5
   return out;
 }
 
+/// Measured poses vary like the nominal model's platform poses, give or take the model's errors
+/// (tens of micrometres, milliradians on a workspace of millimetres and tens of milliradians): a
+/// column that varies ten times more is in another unit (57.3: degrees; 1000: millimetres).
+void warn_of_units(const std::vector<CalibrationSample>& rows,
+                   const std::vector<Pose2<double>>& nominal, CalibrationResult* result) {
+  const std::size_t m = rows.size();
+  if (m < 3) return;
+  const auto spread = [m](const auto& value) {  // standard deviation and the farthest row
+    double mean = 0, square = 0;
+    for (std::size_t j = 0; j < m; ++j) mean += value(j) / static_cast<double>(m);
+    std::size_t farthest = 0;
+    for (std::size_t j = 0; j < m; ++j) {
+      square += (value(j) - mean) * (value(j) - mean);
+      if (std::abs(value(j) - mean) > std::abs(value(farthest) - mean)) farthest = j;
+    }
+    return std::make_pair(std::sqrt(square / static_cast<double>(m)), farthest);
+  };
+  const auto check = [&](const char* what, const char* unit, const auto& measured,
+                         const auto& model) {
+    const auto [measured_spread, farthest] = spread(measured);
+    const double model_spread = spread(model).first;
+    if (model_spread > 0 && measured_spread > 10 * model_spread) {
+      result->warnings.push_back(std::string("the measured ") + what + " varies " +
+                                 format_number(measured_spread / model_spread) +
+                                 " times more than the nominal model's (" +
+                                 origin_of(rows, farthest) + ": " +
+                                 format_number(measured(farthest)) + "): " + unit + "?");
+    }
+  };
+  check(
+      "platform angle (theta)", "degrees instead of radians",
+      [&](std::size_t j) { return rows[j].measured.theta; },
+      [&](std::size_t j) { return nominal[j].theta; });
+  check(
+      "position (x)", "millimetres instead of metres",
+      [&](std::size_t j) { return rows[j].measured.x; },
+      [&](std::size_t j) { return nominal[j].x; });
+  check(
+      "position (y)", "millimetres instead of metres",
+      [&](std::size_t j) { return rows[j].measured.y; },
+      [&](std::size_t j) { return nominal[j].y; });
+}
+
 /// The rows the nominal geometry reaches. Ceres cannot start from a failed evaluation, and a row
 /// that no robot near the nominal one reaches is a typo, a wrong unit or another robot's: an
 /// InputError, or with drop_unreachable left out and listed in result->dropped. Joints outside
@@ -133,6 +176,7 @@ std::vector<CalibrationSample> reachable_rows(const RobotParams<double>& nominal
       unreachable.push_back(origin_of(data, j) + " (" + joints_text(q) + "): " + to_string(status));
     }
   }
+  warn_of_units(reachable, *poses, result);
   if (!outside.empty()) {
     result->warnings.push_back(
         std::to_string(outside.size()) +
