@@ -37,7 +37,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Identify a pcr-robot description from measured platform poses (Mauze et al. 2021, "
       "Section 5)."};
-  std::string robot_path, data_path, validation_path, stages_path, output_path, report_path;
+  std::string robot_path, data_path, validation_path, stages_path, output_path, report_path,
+      residuals_path;
   double weight = pcr::kDefaultOrientationWeight;
   double robust_scale = pcr::CalibrationOptions().robust_scale;
   bool quiet = false, drop_unreachable = false, strict = false;
@@ -56,6 +57,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--output", output_path, "identified pcr-robot description")->required();
   app.add_option("--report", report_path, "report JSON");
+  app.add_option("--residuals", residuals_path,
+                 "per-configuration residuals CSV (row,line,q1..qn,e_p,e_theta,residual_norm,"
+                 "outlier)");
   app.add_flag("--quiet", quiet, "no progress on stderr");
   app.add_flag("--drop-unreachable", drop_unreachable,
                "leave out (and list) the rows without an FK solution on the nominal geometry "
@@ -67,7 +71,8 @@ int main(int argc, char** argv) {
     for (const std::string& input : {robot_path, data_path, validation_path, stages_path}) {
       if (input.empty()) continue;
       if (same_file(input, output_path) ||
-          (!report_path.empty() && same_file(input, report_path))) {
+          (!report_path.empty() && same_file(input, report_path)) ||
+          (!residuals_path.empty() && same_file(input, residuals_path))) {
         throw pcr::InputError("refusing to overwrite the input " + input);
       }
     }
@@ -103,6 +108,10 @@ int main(int argc, char** argv) {
                           {"stages", stages_path},
                           {"orientation_weight_m_per_rad", weight}};
       pcr::write_file_atomically(report_path, report.dump(2) + "\n");
+    }
+    if (!residuals_path.empty()) {
+      pcr::write_file_atomically(residuals_path,
+                                 pcr::residuals_csv(result, table, calibration, options));
     }
     outputs.commit();
     std::cout.flush();

@@ -214,12 +214,24 @@ TEST_F(PcrCalibrate, OutliersAreDownWeightedAndNamed) {
     EXPECT_EQ(std::system(command.c_str()), 0) << slurp(path("err.txt"));
     return validation_mean(load_robot(out), validation_q_, exact_);
   };
-  const double robust = calibrate("", path("robust.json"));
+  const double robust = calibrate(" --residuals " + path("residuals.csv"), path("robust.json"));
   const std::string err = slurp(path("err.txt"));
   EXPECT_NE(err.find("2 rows are outliers"), std::string::npos) << err;
   EXPECT_NE(err.find("outliers.csv:9 "), std::string::npos) << err;  // line 9: row 8
   EXPECT_NE(err.find("outliers.csv:21 "), std::string::npos) << err;
   EXPECT_LT(robust, 0.05e-6);
+  // The residuals file flags exactly those rows, with their lines.
+  CsvReadOptions columns;
+  columns.columns = {"row", "line", "residual_norm", "outlier"};
+  columns.ignore_other_columns = true;
+  const CsvTable residuals = read_csv(path("residuals.csv"), columns);
+  ASSERT_EQ(residuals.rows.size(), data.size());
+  for (const std::vector<double>& row : residuals.rows) {
+    const bool moved = row[0] == 8 || row[0] == 20;
+    EXPECT_EQ(row[1], row[0] + 1);  // the header is line 1
+    EXPECT_EQ(row[3], moved ? 1.0 : 0.0) << "row " << row[0] << " norm " << row[2];
+    if (moved) EXPECT_GT(row[2], 1000);  // 50 um over 9.13 nm
+  }
   const double plain = calibrate(" --robust-scale 0", path("plain.json"));
   EXPECT_GT(plain, 2 * robust);
   std::printf("validation mean with 2 outliers: %.4g um (Huber), %.4g um (least squares)\n",
@@ -245,6 +257,31 @@ TEST_F(PcrCalibrate, UnitSlipsAreNamed) {
   EXPECT_NE(err.find("(x) varies"), std::string::npos) << err;
   EXPECT_NE(err.find("millimetres instead of metres?"), std::string::npos) << err;
   EXPECT_NE(err.find("units.csv:"), std::string::npos) << err;
+}
+
+// 30 measurements of one configuration identify 3 combinations of the 9 free parameters: the
+// other 6 are named, and no parameter they involve gets a standard deviation (not 0, not a number).
+TEST_F(PcrCalibrate, UnidentifiableCombinationsAreNamed) {
+  const Dataset data = read_dataset(path("calibration.csv"));
+  Dataset same;
+  for (std::size_t j = 0; j < data.size(); ++j) same.add(data.q[0], data.poses[0]);
+  write_dataset(same, path("same.csv"));
+  const std::string command = kTool + " --robot " + path("nominal.json") + " --data " +
+                              path("same.csv") + " --quiet --output " + path("out.json") + " > " +
+                              path("report.txt") + " 2> " + path("err.txt");
+  ASSERT_EQ(std::system(command.c_str()), 0) << slurp(path("err.txt"));
+  const std::string report = slurp(path("report.txt"));
+  EXPECT_NE(report.find("combinations of parameters (in half-widths) are not identifiable"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("std not identifiable"), std::string::npos) << report;
+  EXPECT_EQ(report.find("std 0.000e+00"), std::string::npos) << report;
+  ASSERT_NE(report.find("not identifiable from these data"), std::string::npos) << report;
+  std::istringstream lines(report);
+  int combinations = 0;
+  for (std::string line; std::getline(lines, line);)
+    combinations += line.rfind("  + ", 0) == 0 || line.rfind("  - ", 0) == 0;
+  EXPECT_EQ(combinations, 6) << report;
 }
 
 TEST_F(PcrCalibrate, RefusesToOverwriteAnInput) {

@@ -150,6 +150,7 @@ py::dict report_dict(const CalibrationResult& r) {
     d["free"] = p.free;
     d["gauge_reference"] = p.gauge_reference;
     d["at_bound"] = p.at_bound;
+    d["identifiable"] = p.identifiable;
     parameters.append(d);
   }
   py::list gauge;
@@ -172,6 +173,7 @@ py::dict report_dict(const CalibrationResult& r) {
   d["covariance_ok"] = r.covariance_ok;
   d["dropped"] = r.dropped;
   d["outliers"] = r.outliers;
+  d["unidentifiable"] = r.unidentifiable;
   d["warnings"] = r.warnings;
   return d;
 }
@@ -585,7 +587,7 @@ void wrap_calibration(py::module_& m) {
       "callable(str). "
       "Returns (identified Robot, report dict: stages, parameters, gauge, free_count, "
       "jacobian_rank, singular_values, residual_variance, covariance_ok, dropped, outliers, "
-      "warnings). "
+      "unidentifiable, warnings). "
       "Releases the GIL.");
 }
 

@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "pcr/csv_io.hpp"
+
 namespace pcr {
 namespace {
 
@@ -39,7 +41,8 @@ std::vector<CalibrationSample> calibration_samples(const Dataset& data, const st
     std::string origin;
     if (!source.empty() && j < data.line_numbers.size())
       origin = source + ":" + std::to_string(data.line_numbers[j]);
-    out.push_back({data.q[j], data.poses[j], origin});
+    const int line = j < data.line_numbers.size() ? data.line_numbers[j] : 0;
+    out.push_back({data.q[j], data.poses[j], origin, line});
   }
   return out;
 }
@@ -101,9 +104,11 @@ std::string calibration_report_text(const CalibrationResult& result,
   for (const ParameterEstimate& p : result.parameters) {
     if (p.free) {
       char buf[256];
-      std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  std %.3e%s%s\n", p.name.c_str(),
-                    p.value, p.nominal, p.std_dev, p.gauge_reference ? "  (gauge reference)" : "",
-                    p.at_bound ? "  AT BOUND" : "");
+      char std_text[32];
+      std::snprintf(std_text, sizeof std_text, "%.3e", p.std_dev);
+      std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  std %s%s%s\n", p.name.c_str(),
+                    p.value, p.nominal, p.identifiable ? std_text : "not identifiable",
+                    p.gauge_reference ? "  (gauge reference)" : "", p.at_bound ? "  AT BOUND" : "");
       out << buf;
     }
     if (p.at_bound) at_bound.push_back(p.name);
@@ -128,8 +133,35 @@ std::string calibration_report_text(const CalibrationResult& result,
     out << "\nrows left out (no FK solution on the nominal geometry):\n";
     for (const std::string& row : result.dropped) out << "  " << row << "\n";
   }
+  if (!result.unidentifiable.empty()) {
+    out << "\nnot identifiable from these data (combinations in half-widths, beyond the gauge):\n";
+    for (const std::string& combination : result.unidentifiable) out << "  " << combination << "\n";
+  }
   for (const std::string& warning : result.warnings) out << "warning: " << warning << "\n";
   return out.str();
+}
+
+std::string residuals_csv(const CalibrationResult& result, const CalibrationTable& table,
+                          const std::vector<CalibrationSample>& calibration,
+                          const CalibrationOptions& options) {
+  const ConfigurationErrors& errors = table.identified_calibration_errors;
+  const int n = calibration.empty() ? 0 : static_cast<int>(calibration.front().q.size());
+  std::string out = "row,line";
+  for (int i = 1; i <= n; ++i) out += ",q" + std::to_string(i);
+  out += ",e_p,e_theta,residual_norm,outlier\n";
+  for (std::size_t j = 0; j < calibration.size() && j < errors.e_p.size(); ++j) {
+    // The whitened residual of Eq. 6: rigid transforms keep e_p, so its norm follows from e_p
+    // and e_theta.
+    const double weighted = options.orientation_weight * errors.e_theta[j];
+    const double norm =
+        std::sqrt(errors.e_p[j] * errors.e_p[j] + weighted * weighted) / options.residual_scale;
+    out += std::to_string(j + 1) + "," + std::to_string(calibration[j].line);
+    for (int i = 0; i < n; ++i) out += "," + format_double(calibration[j].q[i]);
+    out += "," + format_double(errors.e_p[j]) + "," + format_double(errors.e_theta[j]) + "," +
+           format_double(norm) + "," +
+           (result.outlier_threshold > 0 && norm > result.outlier_threshold ? "1" : "0") + "\n";
+  }
+  return out;
 }
 
 std::string calibration_report_json(const CalibrationResult& result,
@@ -163,7 +195,8 @@ std::string calibration_report_json(const CalibrationResult& result,
                           {"half_width", p.half_width},
                           {"free", p.free},
                           {"gauge_reference", p.gauge_reference},
-                          {"at_bound", p.at_bound}});
+                          {"at_bound", p.at_bound},
+                          {"identifiable", p.identifiable}});
   }
   ordered_json gauge = ordered_json::array();
   for (const GaugeDirection& g : result.gauge) {
@@ -187,6 +220,7 @@ std::string calibration_report_json(const CalibrationResult& result,
       {"covariance_ok", result.covariance_ok},
       {"dropped_rows", result.dropped},
       {"outlier_rows", result.outliers},
+      {"unidentifiable_combinations", result.unidentifiable},
       {"warnings", result.warnings}};
   // NaN (a failed covariance, an empty set) is not JSON: nlohmann writes null.
   return report.dump(2) + "\n";

@@ -20,6 +20,9 @@ namespace pcr {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// A singular value of the scaled Jacobian below this fraction of the largest is a direction the
+/// data do not identify (rounding in the exact Jacobian is ~1e-12 of it).
+constexpr double kRankThreshold = 1e-7;
 
 /// Flat indices of a parameter kind name ("A" covers A_x and A_y, "camera" three values...).
 std::vector<int> indices_of_kind(const std::string& kind, int n) {
@@ -992,6 +995,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   // Outliers: rows whose whitened residual norm exceeds robust_scale. The Huber loss bounded
   // their pull in the stages; the rank, the variance and the covariance are the other rows'.
   id.update_loss_scale();
+  result.outlier_threshold = id.loss_scale();
   if (evaluated && id.loss_scale() > 0) {
     std::vector<Eigen::Index> kept;
     for (std::size_t j = 0; j < rows.size(); ++j) {
@@ -1026,7 +1030,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     const double smax = sv.size() > 0 ? sv(0) : 0.0;
     for (Eigen::Index k = 0; k < sv.size(); ++k) {
       result.singular_values.push_back(smax > 0 ? sv(k) / smax : 0.0);
-      if (smax > 0 && sv(k) > 1e-7 * smax) ++result.jacobian_rank;
+      if (smax > 0 && sv(k) > kRankThreshold * smax) ++result.jacobian_rank;
     }
     const std::vector<Generator> final_generators = gauge_generators(id.robot());
     for (std::size_t g = 0; g < final_generators.size(); ++g) {
@@ -1051,8 +1055,9 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   }
 
   // Standard deviations in the limb-0 gauge: the pseudo-inverse of J^T J on the free parameters
-  // that are not gauge references, in half-width units (directions below 1e-10 of the largest
-  // singular value dropped), scaled back and by the residual variance.
+  // that are not gauge references, in half-width units, scaled back and by the residual
+  // variance. Directions below the rank threshold are what the data cannot identify: named in
+  // words, and every parameter with a share in one is "not identifiable" (std NaN), not 0.
   for (int k : held) result.parameters[static_cast<std::size_t>(k)].gauge_reference = true;
   std::vector<int> estimated;
   for (int k : free) {
@@ -1060,25 +1065,62 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   }
   if (options.compute_covariance && evaluated && !estimated.empty() &&
       std::isfinite(result.residual_variance)) {
-    Eigen::MatrixXd Je(J.rows(), static_cast<Eigen::Index>(estimated.size()));
-    for (std::size_t c = 0; c < estimated.size(); ++c) {
-      Je.col(static_cast<Eigen::Index>(c)) =
-          J.col(estimated[c]) * id.half_widths()[static_cast<std::size_t>(estimated[c])];
+    const Eigen::Index p = static_cast<Eigen::Index>(estimated.size());
+    Eigen::MatrixXd Je(J.rows(), p);
+    for (Eigen::Index c = 0; c < p; ++c) {
+      const std::size_t k = static_cast<std::size_t>(estimated[static_cast<std::size_t>(c)]);
+      Je.col(c) = J.col(static_cast<Eigen::Index>(k)) * id.half_widths()[k];
     }
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Je, Eigen::ComputeThinV);
-    const Eigen::VectorXd sv = svd.singularValues();
-    Eigen::VectorXd inverse_squares = Eigen::VectorXd::Zero(sv.size());
-    for (Eigen::Index k = 0; k < sv.size(); ++k) {
-      if (sv(k) > 1e-10 * sv(0)) inverse_squares(k) = 1.0 / (sv(k) * sv(k));
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Je, Eigen::ComputeFullV);
+    const Eigen::VectorXd sv = svd.singularValues();  // min(rows, p) of them; the rest are 0
+    const Eigen::MatrixXd& V = svd.matrixV();         // p x p
+    const double smax = sv.size() > 0 ? sv(0) : 0.0;
+    result.covariance_ok = smax > 0;
+    Eigen::VectorXd inverse_squares = Eigen::VectorXd::Zero(p);
+    std::vector<bool> identifiable(static_cast<std::size_t>(p), true);
+    for (Eigen::Index d = 0; d < p; ++d) {
+      if (d < sv.size() && sv(d) > kRankThreshold * smax) {
+        inverse_squares(d) = 1.0 / (sv(d) * sv(d));
+        continue;
+      }
+      std::vector<std::pair<double, Eigen::Index>> terms;
+      for (Eigen::Index c = 0; c < p; ++c) {
+        if (std::abs(V(c, d)) >= 0.1) {
+          terms.emplace_back(V(c, d), c);
+          identifiable[static_cast<std::size_t>(c)] = false;
+        }
+      }
+      std::sort(terms.begin(), terms.end(),
+                [](const auto& a, const auto& b) { return std::abs(a.first) > std::abs(b.first); });
+      std::string words;
+      for (std::size_t t = 0; t < terms.size() && t < 6; ++t) {
+        char coefficient[16];
+        std::snprintf(coefficient, sizeof coefficient, "%s%.2f ", terms[t].first < 0 ? "- " : "+ ",
+                      std::abs(terms[t].first));
+        words += (t ? " " : "") + std::string(coefficient) +
+                 result
+                     .parameters[static_cast<std::size_t>(
+                         estimated[static_cast<std::size_t>(terms[t].second)])]
+                     .name;
+      }
+      if (terms.size() > 6) words += " ...";
+      result.unidentifiable.push_back(words);
     }
-    const Eigen::MatrixXd& V = svd.matrixV();
-    result.covariance_ok = sv.size() > 0 && sv(0) > 0;
-    for (std::size_t c = 0; c < estimated.size(); ++c) {
-      const Eigen::Index i = static_cast<Eigen::Index>(c);
-      const double variance = V.row(i).cwiseAbs2().dot(inverse_squares);
-      const double h = id.half_widths()[static_cast<std::size_t>(estimated[c])];
-      result.parameters[static_cast<std::size_t>(estimated[c])].std_dev =
-          result.covariance_ok ? h * std::sqrt(variance * result.residual_variance) : kNaN;
+    for (Eigen::Index c = 0; c < p; ++c) {
+      ParameterEstimate& e =
+          result.parameters[static_cast<std::size_t>(estimated[static_cast<std::size_t>(c)])];
+      e.identifiable = identifiable[static_cast<std::size_t>(c)];
+      const double variance = V.row(c).cwiseAbs2().dot(inverse_squares);
+      e.std_dev = result.covariance_ok && e.identifiable
+                      ? e.half_width * std::sqrt(variance * result.residual_variance)
+                      : kNaN;
+    }
+    if (!result.unidentifiable.empty()) {
+      result.warnings.push_back(
+          std::to_string(result.unidentifiable.size()) +
+          " combinations of parameters (in half-widths) are not identifiable from these data, "
+          "beyond the gauge: " +
+          listing(result.unidentifiable, 3));
     }
   } else {
     for (int k : estimated) result.parameters[static_cast<std::size_t>(k)].std_dev = kNaN;

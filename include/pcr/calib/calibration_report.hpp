@@ -41,6 +41,14 @@ std::string calibration_table_text(const CalibrationTable& table);
 /// a bound, gauge directions, residual variance.
 std::string calibration_report_text(const CalibrationResult& result, const CalibrationTable& table);
 
+/// The per-configuration residuals of the identified model on the calibration set, as CSV:
+/// `row,line,q1..qn,e_p,e_theta,residual_norm,outlier` (row: 1-based in the dataset; line: in its
+/// file, 0 if unknown; e_p in m, e_theta in rad, NaN where FK failed; residual_norm: the whitened
+/// residual of Eq. 6 in declared-noise units; outlier: 1 beyond result.outlier_threshold).
+std::string residuals_csv(const CalibrationResult& result, const CalibrationTable& table,
+                          const std::vector<CalibrationSample>& calibration,
+                          const CalibrationOptions& options = CalibrationOptions());
+
 /// The whole report as JSON text (SI units, field names carry them: e_p_m, e_theta_rad, ...).
 std::string calibration_report_json(const CalibrationResult& result, const CalibrationTable& table);
 

@@ -54,6 +54,7 @@ struct CalibrationSample {
   JointVector q;
   Pose2<double> measured;
   std::string origin;  ///< where the row came from ("data.csv:17"); empty: "configuration j"
+  int line = 0;        ///< 1-based line in its file (0: not from a file)
 };
 
 struct CalibrationStage {
@@ -145,11 +146,14 @@ struct ParameterEstimate {
   std::string name;  ///< "l[1]", "camera_x" ...
   double nominal = 0;
   double value = 0;    ///< identified, in the final gauge
-  double std_dev = 0;  ///< 0 when not free or gauge reference; NaN when the covariance failed
+  double std_dev = 0;  ///< 0 when not free or gauge reference; NaN when not identifiable or failed
   double half_width = 0;
   bool free = false;             ///< free in the last stage
   bool gauge_reference = false;  ///< held by the gauge fix
   bool at_bound = false;         ///< ended (before the gauge fix) within 1e-6 of its bound range
+  /// False when it has a share (>= 0.1) in a direction the data cannot identify (see
+  /// CalibrationResult::unidentifiable); its std_dev is then NaN.
+  bool identifiable = true;
 };
 
 struct GaugeDirection {
@@ -177,6 +181,13 @@ struct CalibrationResult {
   /// Rows whose whitened residual norm at the result exceeds robust_scale: origin and norm. The
   /// rank, residual variance and standard deviations are the other rows'.
   std::vector<std::string> outliers;
+  /// The whitened residual norm beyond which a row is an outlier (robust_scale, or more while
+  /// the rows' median is above the noise); 0 without a robust loss.
+  double outlier_threshold = 0;
+  /// The parameter combinations the data cannot identify beyond the gauge, in words, in
+  /// half-width units ("+ 0.71 l[1] - 0.70 A_x[1]"): right singular vectors of the scaled
+  /// Jacobian (gauge references held) below the rank threshold.
+  std::vector<std::string> unidentifiable;
   /// What makes the result doubtful, in words (joints outside the stroke, a failed evaluation).
   std::vector<std::string> warnings;
 };
