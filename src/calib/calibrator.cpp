@@ -20,9 +20,6 @@ namespace pcr {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-/// A singular value of the scaled Jacobian below this fraction of the largest is a direction the
-/// data do not identify (rounding in the exact Jacobian is ~1e-12 of it).
-constexpr double kRankThreshold = 1e-7;
 
 /// Flat indices of a parameter kind name ("A" covers A_x and A_y, "camera" three values...).
 std::vector<int> indices_of_kind(const std::string& kind, int n) {
@@ -235,16 +232,8 @@ Extrinsics<double> registered_extrinsics(const std::vector<Pose2<double>>& platf
   return out;
 }
 
-struct Generator {
-  std::string name;
-  std::string combination;
-  std::vector<double> direction;  // flat, unscaled
-};
-
-std::vector<Generator> gauge_generators(const RobotParams<double>& robot);
-
 /// Generators whose every moved parameter is in `is_free` (and that move at least one).
-std::vector<bool> present_generators(const std::vector<Generator>& generators,
+std::vector<bool> present_generators(const std::vector<GaugeGenerator>& generators,
                                      const std::vector<bool>& is_free) {
   std::vector<bool> present(generators.size(), false);
   for (std::size_t g = 0; g < generators.size(); ++g) {
@@ -492,7 +481,7 @@ class Identification {
     const Eigen::Index f = static_cast<Eigen::Index>(free.size());
     Eigen::MatrixXd g(f, 0);
     if (remove_gauge) {
-      const std::vector<Generator> generators = gauge_generators(robot());
+      const std::vector<GaugeGenerator> generators = gauge_generators(robot());
       const std::vector<bool> present = present_generators(generators, is_free);
       for (std::size_t j = 0; j < generators.size(); ++j) {
         if (!present[j]) continue;
@@ -609,71 +598,6 @@ class Identification {
   double loss_scale_ = 0;  ///< Huber scale of the current stage (whitened units; 0: none)
 };
 
-/// Tangent vectors of the gauge orbit at `robot` (see the header).
-std::vector<Generator> gauge_generators(const RobotParams<double>& robot) {
-  const int n = robot.num_limbs;
-  const int count = num_parameters(n);
-  auto idx = [n](ParameterKind kind, int limb) {
-    return parameter_index(ParameterId{kind, limb}, n);
-  };
-  auto blank = [count]() { return std::vector<double>(static_cast<std::size_t>(count), 0.0); };
-  std::vector<Generator> out;
-  const Pose2<double>& camera = robot.extrinsics.camera;
-  const Pose2<double>& pattern = robot.extrinsics.pattern;
-  for (int axis = 0; axis < 2; ++axis) {
-    Generator g{std::string("proximal clamps + camera: translation ") + (axis ? "y" : "x"),
-                std::string(axis ? "A_y[*] + camera_y" : "A_x[*] + camera_x"), blank()};
-    for (int i = 0; i < n; ++i)
-      g.direction[idx(axis ? ParameterKind::kAy : ParameterKind::kAx, i)] = 1;
-    g.direction[idx(axis ? ParameterKind::kCameraY : ParameterKind::kCameraX, -1)] = 1;
-    out.push_back(g);
-  }
-  {
-    Generator g{"proximal clamps + camera: rotation",
-                "(A_x, A_y)[*] rotated about W + alpha[*] + camera", blank()};
-    for (int i = 0; i < n; ++i) {
-      g.direction[idx(ParameterKind::kAx, i)] = -robot.limb(i).A.y();
-      g.direction[idx(ParameterKind::kAy, i)] = robot.limb(i).A.x();
-      g.direction[idx(ParameterKind::kAlpha, i)] = 1;
-    }
-    g.direction[idx(ParameterKind::kCameraX, -1)] = -camera.y;
-    g.direction[idx(ParameterKind::kCameraY, -1)] = camera.x;
-    g.direction[idx(ParameterKind::kCameraTheta, -1)] = 1;
-    out.push_back(g);
-  }
-  for (int axis = 0; axis < 2; ++axis) {
-    Generator g{
-        std::string("distal clamps + pattern: translation ") + (axis ? "y" : "x"),
-        std::string(axis ? "B_y[*] - R(pattern_theta) e_y" : "B_x[*] - R(pattern_theta) e_x"),
-        blank()};
-    for (int i = 0; i < n; ++i)
-      g.direction[idx(axis ? ParameterKind::kBy : ParameterKind::kBx, i)] = 1;
-    const Vector2<double> e = axis ? Vector2<double>(0, 1) : Vector2<double>(1, 0);
-    const Vector2<double> d = -pattern.rotate(e);
-    g.direction[idx(ParameterKind::kPatternX, -1)] = d.x();
-    g.direction[idx(ParameterKind::kPatternY, -1)] = d.y();
-    out.push_back(g);
-  }
-  {
-    Generator g{"distal clamps + pattern: rotation",
-                "(B_x, B_y)[*] rotated about P + beta[*] - pattern_theta", blank()};
-    for (int i = 0; i < n; ++i) {
-      g.direction[idx(ParameterKind::kBx, i)] = -robot.limb(i).B.y();
-      g.direction[idx(ParameterKind::kBy, i)] = robot.limb(i).B.x();
-      g.direction[idx(ParameterKind::kBeta, i)] = 1;
-    }
-    g.direction[idx(ParameterKind::kPatternTheta, -1)] = -1;
-    out.push_back(g);
-  }
-  {
-    Generator g{"bending stiffness: common scale", "d[*] scaled together", blank()};
-    for (int i = 0; i < n; ++i)
-      g.direction[idx(ParameterKind::kDiameter, i)] = robot.limb(i).diameter;
-    out.push_back(g);
-  }
-  return out;
-}
-
 /// What makes `result` doubtful, in words: extrinsics outside their declared interval, residuals
 /// inconsistent with the declared noise, parameters held at a bound.
 void add_warnings(const Identification& id, CalibrationResult* result) {
@@ -710,6 +634,89 @@ void add_warnings(const Identification& id, CalibrationResult* result) {
 }
 
 }  // namespace
+
+std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot) {
+  const int n = robot.num_limbs;
+  const int count = num_parameters(n);
+  auto idx = [n](ParameterKind kind, int limb) {
+    return parameter_index(ParameterId{kind, limb}, n);
+  };
+  auto blank = [count]() { return std::vector<double>(static_cast<std::size_t>(count), 0.0); };
+  std::vector<GaugeGenerator> out;
+  const Pose2<double>& camera = robot.extrinsics.camera;
+  const Pose2<double>& pattern = robot.extrinsics.pattern;
+  for (int axis = 0; axis < 2; ++axis) {
+    GaugeGenerator g{std::string("proximal clamps + camera: translation ") + (axis ? "y" : "x"),
+                     std::string(axis ? "A_y[*] + camera_y" : "A_x[*] + camera_x"), blank()};
+    for (int i = 0; i < n; ++i)
+      g.direction[idx(axis ? ParameterKind::kAy : ParameterKind::kAx, i)] = 1;
+    g.direction[idx(axis ? ParameterKind::kCameraY : ParameterKind::kCameraX, -1)] = 1;
+    out.push_back(g);
+  }
+  {
+    GaugeGenerator g{"proximal clamps + camera: rotation",
+                     "(A_x, A_y)[*] rotated about W + alpha[*] + camera", blank()};
+    for (int i = 0; i < n; ++i) {
+      g.direction[idx(ParameterKind::kAx, i)] = -robot.limb(i).A.y();
+      g.direction[idx(ParameterKind::kAy, i)] = robot.limb(i).A.x();
+      g.direction[idx(ParameterKind::kAlpha, i)] = 1;
+    }
+    g.direction[idx(ParameterKind::kCameraX, -1)] = -camera.y;
+    g.direction[idx(ParameterKind::kCameraY, -1)] = camera.x;
+    g.direction[idx(ParameterKind::kCameraTheta, -1)] = 1;
+    out.push_back(g);
+  }
+  for (int axis = 0; axis < 2; ++axis) {
+    GaugeGenerator g{
+        std::string("distal clamps + pattern: translation ") + (axis ? "y" : "x"),
+        std::string(axis ? "B_y[*] - R(pattern_theta) e_y" : "B_x[*] - R(pattern_theta) e_x"),
+        blank()};
+    for (int i = 0; i < n; ++i)
+      g.direction[idx(axis ? ParameterKind::kBy : ParameterKind::kBx, i)] = 1;
+    const Vector2<double> e = axis ? Vector2<double>(0, 1) : Vector2<double>(1, 0);
+    const Vector2<double> d = -pattern.rotate(e);
+    g.direction[idx(ParameterKind::kPatternX, -1)] = d.x();
+    g.direction[idx(ParameterKind::kPatternY, -1)] = d.y();
+    out.push_back(g);
+  }
+  {
+    GaugeGenerator g{"distal clamps + pattern: rotation",
+                     "(B_x, B_y)[*] rotated about P + beta[*] - pattern_theta", blank()};
+    for (int i = 0; i < n; ++i) {
+      g.direction[idx(ParameterKind::kBx, i)] = -robot.limb(i).B.y();
+      g.direction[idx(ParameterKind::kBy, i)] = robot.limb(i).B.x();
+      g.direction[idx(ParameterKind::kBeta, i)] = 1;
+    }
+    g.direction[idx(ParameterKind::kPatternTheta, -1)] = -1;
+    out.push_back(g);
+  }
+  {
+    GaugeGenerator g{"bending stiffness: common scale", "d[*] scaled together", blank()};
+    for (int i = 0; i < n; ++i)
+      g.direction[idx(ParameterKind::kDiameter, i)] = robot.limb(i).diameter;
+    out.push_back(g);
+  }
+  return out;
+}
+
+bool measurement_jacobian(const RobotParams<double>& robot, const JointVector& q,
+                          double orientation_weight, double residual_scale,
+                          Eigen::MatrixXd* jacobian, const SolverOptions& fk) {
+  const int count = num_parameters(robot.num_limbs);
+  FkCache cache;
+  const std::unique_ptr<ceres::CostFunction> cost(
+      PoseMeasurementError::Create(robot, q, Pose2<double>(), orientation_weight, residual_scale,
+                                   &cache, fk, DerivativeMode::kImplicit));
+  std::vector<double> values(static_cast<std::size_t>(count));
+  get_parameters(robot, values.data());
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> J(3, count);
+  double residuals[3];
+  const double* parameters[] = {values.data()};
+  double* jacobians[] = {J.data()};
+  if (!cost->Evaluate(parameters, residuals, jacobians)) return false;
+  *jacobian = J;
+  return true;
+}
 
 std::vector<CalibrationStage> default_stages() {
   return {
@@ -946,7 +953,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   }
 
   // Gauge: which generators only move free parameters.
-  const std::vector<Generator> generators = gauge_generators(id.robot());
+  const std::vector<GaugeGenerator> generators = gauge_generators(id.robot());
   std::vector<bool> present(generators.size(), false);
   for (std::size_t g = 0; g < generators.size(); ++g) {
     bool ok = true, any = false;
@@ -1032,7 +1039,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
       result.singular_values.push_back(smax > 0 ? sv(k) / smax : 0.0);
       if (smax > 0 && sv(k) > kRankThreshold * smax) ++result.jacobian_rank;
     }
-    const std::vector<Generator> final_generators = gauge_generators(id.robot());
+    const std::vector<GaugeGenerator> final_generators = gauge_generators(id.robot());
     for (std::size_t g = 0; g < final_generators.size(); ++g) {
       GaugeDirection d;
       d.name = final_generators[g].name;

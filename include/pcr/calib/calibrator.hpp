@@ -192,6 +192,30 @@ struct CalibrationResult {
   std::vector<std::string> warnings;
 };
 
+/// A singular value of the scaled Jacobian below this fraction of the largest is a direction the
+/// data do not identify (rounding in the exact Jacobian is ~1e-12 of it).
+inline constexpr double kRankThreshold = 1e-7;
+
+/// A tangent vector of the gauge orbit (see the header comment): moving the parameters along it
+/// changes no prediction when the platform carries no load.
+struct GaugeGenerator {
+  std::string name;               ///< e.g. "proximal clamps + camera: rotation"
+  std::string combination;        ///< the parameters it moves, in words
+  std::vector<double> direction;  ///< flat (parameters.hpp order), unscaled
+};
+
+/// The seven generators at `robot`: proximal translation x, y and rotation, distal translation
+/// x, y and rotation, common scale of the bending stiffness.
+std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot);
+
+/// The whitened residual Jacobian of one configuration at `robot`, as the stages see it (Eq. 6
+/// divided by residual_scale): 3 x num_parameters, rows (w theta, x, y) / residual_scale, columns
+/// in flat order, extrinsics included; exact (DerivativeMode::kImplicit, FK from home). Returns
+/// false when FK does not converge at q.
+bool measurement_jacobian(const RobotParams<double>& robot, const JointVector& q,
+                          double orientation_weight, double residual_scale,
+                          Eigen::MatrixXd* jacobian, const SolverOptions& fk = SolverOptions());
+
 /// Identifies `nominal` from `data`. Throws InputError when the description has no uncertainty
 /// section, the data does not match the limb count, or a stage is invalid.
 CalibrationResult calibrate(const RobotDescription& nominal,
