@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -366,6 +367,39 @@ TEST(CalibCli, SampleSimulateSensitivity) {
     EXPECT_EQ(numbers, 7) << line;
   }
   EXPECT_EQ(rows, 11);
+}
+
+TEST(CalibCli, SampleDesign) {
+  const std::string dir = std::string(PCR_BINARY_DIR) + "/test_calib_cli_design_";
+  const std::string common = "sample --count 6 --validation-count 3 --seed 2 --box -3e-3,3e-3 ";
+  ASSERT_EQ(run(common + "--design poisson-disc --output " + dir + "pd.csv --validation-output " +
+                dir + "pd_val.csv"),
+            0);
+  ASSERT_EQ(run(common + "--design d-optimal --candidates 30 --output " + dir +
+                "do.csv --validation-output " + dir + "do_val.csv"),
+            0);
+  const std::vector<JointVector> cfg = read_configurations(dir + "do.csv", 3);
+  const std::vector<JointVector> val = read_configurations(dir + "do_val.csv", 3);
+  ASSERT_EQ(cfg.size(), 6u);
+  // The validation set is the Poisson-disc one of the same seed, disjoint from the design.
+  EXPECT_EQ(val, read_configurations(dir + "pd_val.csv", 3));
+  EXPECT_NE(cfg, read_configurations(dir + "pd.csv", 3));
+  for (const JointVector& a : cfg) {
+    EXPECT_LE(a.cwiseAbs().maxCoeff(), 3e-3);
+    for (const JointVector& b : val) EXPECT_GT((a - b).norm(), 0.0);
+  }
+
+  // A design CLI11 does not know: bad usage, its name in the message, nothing written.
+  std::remove((dir + "bad.csv").c_str());
+  const std::string command = std::string(PCR_CLI_PATH) + " sample --design optimal --output " +
+                              dir + "bad.csv 2> " + dir + "bad.txt";
+  EXPECT_NE(std::system(command.c_str()), 0);
+  EXPECT_FALSE(std::ifstream(dir + "bad.csv").good());
+  std::ifstream err(dir + "bad.txt");
+  const std::string message((std::istreambuf_iterator<char>(err)),
+                            std::istreambuf_iterator<char>());
+  EXPECT_NE(message.find("--design"), std::string::npos) << message;
+  EXPECT_NE(message.find("optimal"), std::string::npos) << message;
 }
 #endif
 

@@ -1,6 +1,9 @@
-// pcr sample: joint configurations by Poisson-disc sampling of the reachable joint box.
-// With --validation-output, count + validation-count points are drawn together and split, so the
-// calibration and validation sets are disjoint and spaced by the same radius.
+// pcr sample: joint configurations by Poisson-disc sampling of the reachable joint box, or (with
+// --design d-optimal) calibration configurations chosen for identifiability among Poisson-disc
+// candidates (pcr/calib/sampling.hpp). With --validation-output, count + validation-count points
+// are drawn together and split, so the calibration and validation sets are disjoint and spaced
+// by the same radius; the D-optimal design keeps that validation set and chooses the calibration
+// set among candidates away from it.
 #include <iostream>
 #include <memory>
 
@@ -11,9 +14,10 @@
 namespace {
 
 struct SampleArguments {
-  std::string robot, output, validation_output;
+  std::string robot, output, validation_output, design = "poisson-disc";
   int count = pcr::kDefaultCalibrationCount;
   int validation_count = pcr::kDefaultValidationCount;
+  int candidates = 0;
   std::uint64_t seed = 1;
   double min_distance = 0;
   double strain_limit = 0.01;
@@ -25,7 +29,9 @@ void run_sample(const SampleArguments& args) {
   const RobotDescription robot = load_robot_or_default(args.robot);
   const int n = robot.params.num_limbs;
   SamplingOptions options;
-  options.count = args.count + (args.validation_output.empty() ? 0 : args.validation_count);
+  options.count = args.count;
+  options.design = parse_sampling_design(args.design);
+  options.candidates = args.candidates;
   options.seed = args.seed;
   options.min_distance = args.min_distance;
   options.strain_limit = args.strain_limit;
@@ -58,24 +64,28 @@ void run_sample(const SampleArguments& args) {
       }
     }
   }
-  const SamplingResult result = poisson_disc_sample(robot.params, options);
-  if (!result.complete) {
-    throw std::runtime_error("only " + std::to_string(result.configurations.size()) +
-                             " admissible configurations are " +
-                             std::to_string(result.min_distance) + " m apart; asked for " +
-                             std::to_string(options.count) + " (lower --min-distance)");
-  }
-  std::vector<JointVector> calibration, validation;
-  split_configurations(result.configurations, args.count, &calibration, &validation);
+  const ConfigurationSets sets = sample_configurations(
+      robot, options, args.validation_output.empty() ? 0 : args.validation_count);
   OutputTransaction outputs;  // all or none
-  write_configurations(calibration, args.output);
-  if (!args.validation_output.empty()) write_configurations(validation, args.validation_output);
+  write_configurations(sets.calibration, args.output);
+  if (!args.validation_output.empty())
+    write_configurations(sets.validation, args.validation_output);
   outputs.commit();
-  std::cerr << "pcr sample: " << calibration.size() << " configurations";
-  if (!args.validation_output.empty()) std::cerr << " + " << validation.size() << " validation";
-  std::cerr << ", pairwise >= " << result.min_distance * 1e3 << " mm; " << result.candidates
-            << " FK solves in the last run (" << result.rejected_fk << " without solution, "
-            << result.rejected_strain << " over the strain limit)\n";
+  std::cerr << "pcr sample: " << sets.calibration.size() << " configurations";
+  if (options.design == SamplingDesign::kDOptimal) {
+    std::cerr << " (d-optimal among " << sets.candidates.configurations.size()
+              << " candidates pairwise >= " << sets.candidates.min_distance * 1e3
+              << " mm; identifiable dimension " << sets.design.dimension << ", rank "
+              << sets.design.rank << ", log det " << sets.design.log_det << ")";
+  }
+  if (!args.validation_output.empty())
+    std::cerr << " + " << sets.validation.size() << " validation";
+  const SamplingResult& last = sets.spread.configurations.empty() ? sets.candidates : sets.spread;
+  if (!sets.spread.configurations.empty()) {
+    std::cerr << ", pairwise >= " << sets.spread.min_distance * 1e3 << " mm";
+  }
+  std::cerr << "; " << last.candidates << " FK solves in the last run (" << last.rejected_fk
+            << " without solution, " << last.rejected_strain << " over the strain limit)\n";
 }
 
 }  // namespace
@@ -83,7 +93,9 @@ void run_sample(const SampleArguments& args) {
 void register_sample_command(CLI::App& app) {
   auto args = std::make_shared<SampleArguments>();
   CLI::App* cmd = app.add_subcommand(
-      "sample", "joint configurations by Poisson-disc sampling (FK converged, strain-limited)");
+      "sample",
+      "joint configurations by Poisson-disc sampling (FK converged, strain-limited) or D-optimal "
+      "design");
   pcr::cli::add_robot_option(*cmd, args->robot);
   using pcr::cli::within;
   cmd->add_option("--count", args->count, "calibration configurations")
@@ -96,6 +108,15 @@ void register_sample_command(CLI::App& app) {
   cmd->add_option("--validation-count", args->validation_count, "validation configurations")
       ->check(within(1, 1000000))
       ->capture_default_str();
+  cmd->add_option("--design", args->design,
+                  "calibration configurations: poisson-disc (spread) or d-optimal (greedy max "
+                  "log det of the scaled information on the identifiable subspace, among "
+                  "Poisson-disc candidates; the validation set stays Poisson-disc)")
+      ->check(CLI::IsMember({"poisson-disc", "d-optimal"}))
+      ->capture_default_str();
+  cmd->add_option("--candidates", args->candidates,
+                  "d-optimal: Poisson-disc candidates to choose from (default: 10 x count)")
+      ->check(within(1, 10000000));
   cmd->add_option("--min-distance", args->min_distance,
                   "Poisson-disc radius in joint space (m; default: chosen from the count)")
       ->check(within(0.0, 0.1, "m"));

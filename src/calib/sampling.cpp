@@ -1,10 +1,15 @@
 #include "pcr/calib/sampling.hpp"
 
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 
+#include "pcr/calib/calibrator.hpp"
+#include "pcr/csv_io.hpp"
 #include "pcr/robot_io.hpp"
 
 namespace pcr {
@@ -223,6 +228,176 @@ SamplingResult poisson_disc_sample(const RobotParams<double>& robot,
   if (result.complete) points.resize(static_cast<std::size_t>(options.count));
   result.configurations = std::move(points);
   return result;
+}
+
+std::string sampling_design_name(SamplingDesign design) {
+  return design == SamplingDesign::kDOptimal ? "d-optimal" : "poisson-disc";
+}
+
+SamplingDesign parse_sampling_design(const std::string& name) {
+  for (SamplingDesign design : {SamplingDesign::kPoissonDisc, SamplingDesign::kDOptimal}) {
+    if (name == sampling_design_name(design)) return design;
+  }
+  throw InputError("sampling design: expected poisson-disc or d-optimal, got '" +
+                   name.substr(0, 60) + "'");
+}
+
+DesignResult d_optimal_design(const RobotDescription& robot,
+                              const std::vector<JointVector>& candidates, int count,
+                              const SamplingOptions& options) {
+  if (!robot.uncertainty) {
+    throw InputError("d-optimal design: robot '" + robot.name +
+                     "' has no uncertainty section (the half-widths scale the parameters)");
+  }
+  if (!(options.noise_position > 0) || !(options.noise_angle > 0) ||
+      !std::isfinite(options.noise_position) || !std::isfinite(options.noise_angle)) {
+    throw InputError("d-optimal design: the noise must be finite and > 0");
+  }
+  const RobotParams<double>& nominal = robot.params;
+  const std::vector<double> h = parameter_half_widths(*robot.uncertainty, nominal.num_limbs);
+  std::vector<int> free;
+  for (std::size_t k = 0; k < h.size(); ++k) {
+    if (h[k] > 0) free.push_back(static_cast<int>(k));
+  }
+  const Eigen::Index f = static_cast<Eigen::Index>(free.size());
+  DesignResult result;
+  result.parameters = static_cast<int>(f);
+
+  // Scaled, whitened rows of every candidate FK reaches on the nominal robot.
+  std::vector<int> usable;
+  Eigen::MatrixXd stacked(3 * static_cast<Eigen::Index>(candidates.size()), f);
+  Eigen::MatrixXd J;
+  for (std::size_t j = 0; j < candidates.size(); ++j) {
+    if (!measurement_jacobian(nominal, candidates[j], options.noise_position / options.noise_angle,
+                              options.noise_position, &J) ||
+        !J.allFinite()) {
+      ++result.failed;
+      continue;
+    }
+    const Eigen::Index row = 3 * static_cast<Eigen::Index>(usable.size());
+    for (Eigen::Index c = 0; c < f; ++c) {
+      const int k = free[static_cast<std::size_t>(c)];
+      stacked.block(row, c, 3, 1) = J.col(k) * h[static_cast<std::size_t>(k)];
+    }
+    usable.push_back(static_cast<int>(j));
+  }
+  stacked.conservativeResize(3 * static_cast<Eigen::Index>(usable.size()), f);
+  if (count < 1 || count > static_cast<int>(usable.size())) {
+    throw InputError("d-optimal design: cannot choose " + std::to_string(count) + " of " +
+                     std::to_string(usable.size()) + " usable candidates (" +
+                     std::to_string(result.failed) + " without an FK solution)");
+  }
+
+  // Identifiable subspace, in coordinates where the candidates' information is the identity:
+  // T = V_r S_r^-1, rows U_j = J_j T.
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(stacked, Eigen::ComputeThinV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  const double smax = sv.size() > 0 ? sv(0) : 0.0;
+  Eigen::Index r = 0;
+  while (r < sv.size() && smax > 0 && sv(r) > kRankThreshold * smax) ++r;
+  result.dimension = static_cast<int>(r);
+  const Eigen::MatrixXd basis = svd.matrixV().leftCols(r);
+  const Eigen::MatrixXd U = stacked * basis * sv.head(r).cwiseInverse().asDiagonal();
+
+  // Greedy choice: A = eps I + sum of the chosen U_j^T U_j, A^-1 kept up to date.
+  Eigen::MatrixXd A_inv = Eigen::MatrixXd::Identity(r, r) / kDesignRegularisation;
+  std::vector<bool> chosen(usable.size(), false);
+  for (int step = 0; step < count; ++step) {
+    double best_gain = -INFINITY;
+    std::size_t best = usable.size();
+    for (std::size_t j = 0; j < usable.size(); ++j) {
+      if (chosen[j]) continue;
+      const auto Uj = U.middleRows(3 * static_cast<Eigen::Index>(j), 3);
+      const Eigen::Matrix3d G = Eigen::Matrix3d::Identity() + Uj * A_inv * Uj.transpose();
+      const Eigen::LLT<Eigen::Matrix3d> llt(G);
+      if (llt.info() != Eigen::Success) continue;
+      const double gain = 2.0 * llt.matrixLLT().diagonal().array().log().sum();
+      if (gain > best_gain) {
+        best_gain = gain;
+        best = j;
+      }
+    }
+    if (best == usable.size()) break;  // no candidate left with a finite gain
+    chosen[best] = true;
+    result.selected.push_back(usable[best]);
+    const auto Ub = U.middleRows(3 * static_cast<Eigen::Index>(best), 3);
+    const Eigen::MatrixXd W = Ub * A_inv;  // 3 x r
+    const Eigen::Matrix3d G = Eigen::Matrix3d::Identity() + W * Ub.transpose();
+    A_inv -= W.transpose() * G.ldlt().solve(W);
+    A_inv = 0.5 * (A_inv + A_inv.transpose()).eval();
+  }
+
+  // The chosen set's criterion afresh, in an orthonormal basis of the subspace.
+  Eigen::MatrixXd rows(3 * static_cast<Eigen::Index>(result.selected.size()), r);
+  for (std::size_t j = 0, k = 0; j < usable.size(); ++j) {
+    if (!chosen[j]) continue;
+    rows.middleRows(3 * static_cast<Eigen::Index>(k++), 3) =
+        stacked.middleRows(3 * static_cast<Eigen::Index>(j), 3) * basis;
+  }
+  const Eigen::VectorXd chosen_sv = Eigen::BDCSVD<Eigen::MatrixXd>(rows).singularValues();
+  result.rank = 0;
+  result.log_det = 0;
+  for (Eigen::Index k = 0; k < r; ++k) {
+    const double s = k < chosen_sv.size() ? chosen_sv(k) : 0.0;
+    if (chosen_sv.size() > 0 && s > kRankThreshold * chosen_sv(0)) ++result.rank;
+    result.log_det += 2.0 * std::log(s);
+  }
+  return result;
+}
+
+ConfigurationSets sample_configurations(const RobotDescription& robot,
+                                        const SamplingOptions& options, int validation_count) {
+  if (validation_count < 0) {
+    throw InputError("sample_configurations: validation count must be >= 0, got " +
+                     std::to_string(validation_count));
+  }
+  const bool designed = options.design == SamplingDesign::kDOptimal;
+  ConfigurationSets sets;
+  if (!designed || validation_count > 0) {
+    // D-optimal too draws count + validation_count, so that its validation set is the one the
+    // Poisson-disc design gets with the same seed (a paired comparison of the designs).
+    SamplingOptions spread = options;
+    spread.count = options.count + validation_count;
+    sets.spread = poisson_disc_sample(robot.params, spread);
+    if (!sets.spread.complete) {
+      throw std::runtime_error("only " + std::to_string(sets.spread.configurations.size()) +
+                               " admissible configurations are " +
+                               format_double(sets.spread.min_distance) + " m apart; asked for " +
+                               std::to_string(spread.count) + " (a smaller minimum distance)");
+    }
+    split_configurations(sets.spread.configurations, spread.count - validation_count,
+                         &sets.calibration, &sets.validation);
+  }
+  if (!designed) return sets;
+
+  if (options.count < 1) {
+    throw InputError("sample_configurations: count must be >= 1, got " +
+                     std::to_string(options.count));
+  }
+  SamplingOptions pool = options;
+  pool.count = options.candidates > 0 ? options.candidates : kDesignCandidateFactor * options.count;
+  pool.min_distance = 0.0;  // from the candidate count
+  sets.candidates = poisson_disc_sample(robot.params, pool);
+  // Disjoint from the validation set, and the union still a Poisson-disc set of the candidates'
+  // radius.
+  std::vector<JointVector> candidates;
+  const double r2 = sets.candidates.min_distance * sets.candidates.min_distance;
+  for (const JointVector& q : sets.candidates.configurations) {
+    bool far = true;
+    for (const JointVector& v : sets.validation) far = far && (q - v).squaredNorm() >= r2;
+    if (far) candidates.push_back(q);
+  }
+  if (static_cast<int>(candidates.size()) < options.count) {
+    throw std::runtime_error("d-optimal design: only " + std::to_string(candidates.size()) +
+                             " candidates away from the validation set; asked for " +
+                             std::to_string(options.count));
+  }
+  sets.design = d_optimal_design(robot, candidates, options.count, options);
+  sets.calibration.clear();
+  for (int j : sets.design.selected) {
+    sets.calibration.push_back(candidates[static_cast<std::size_t>(j)]);
+  }
+  return sets;
 }
 
 void split_configurations(const std::vector<JointVector>& all, int first_count,

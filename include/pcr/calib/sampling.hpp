@@ -12,11 +12,37 @@
 // seeded shuffle then keeps `count` of them (a subset of a Poisson-disc set is still one).
 // Calibration and validation sets are made disjoint by drawing them together (count = 99 + 56)
 // and splitting the shuffled set (split_configurations).
+//
+// D-optimal design (SamplingDesign::kDOptimal): the calibration configurations are chosen for
+// identifiability instead of spread. From a Poisson-disc candidate set (kDesignCandidateFactor x
+// count points, radius chosen from that count), the greedy choice maximises
+//   log det(F_S + eps F_C)   on the identifiable subspace,
+// F_S = sum over the chosen configurations of J_j^T J_j, J_j the identification Jacobian of
+// configuration j at the nominal robot: the calibrator's whitened residual (measurement_jacobian:
+// rows divided by the position noise, the angle row by the angle noise), columns scaled by the
+// parameter's uncertainty half-width (the sensitivity analysis' units), restricted to the
+// parameters with a nonzero half-width (those the default last stage frees). The identifiable
+// subspace is the span of the right singular vectors of the stacked candidate Jacobian above
+// kRankThreshold of the largest: the seven gauge directions (gauge_generators) and any other
+// combination no candidate sees drop out. F_C is the whole candidate set's information and
+// eps = kDesignRegularisation: it makes the criterion finite while fewer than dim / 3
+// configurations are chosen (three rows each), so the first picks open as many directions as they
+// can; with 30 of 300 candidates chosen it weighs ~1e-5 of F_S. In coordinates of the subspace
+// where F_C = I (so eps F_C = eps I), with U_j the rows of candidate j and A = eps I + F_S, each
+// step adds the candidate with the largest gain log det(I_3 + U_j A^-1 U_j^T) (matrix determinant
+// lemma) and updates A^-1 by the Woodbury identity (three Sherman-Morrison rank-one updates at
+// once). The log det reported is the chosen set's, computed afresh. Ties go to the lower
+// candidate index, so the choice is deterministic for a seed. With a validation set, that set is
+// the Poisson-disc one (the same as for kPoissonDisc with the same seed: it measures accuracy
+// over the workspace) and candidates closer to it than the candidates' own radius are left out.
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include "pcr/calib/virtual_robot.hpp"
 #include "pcr/kinematics.hpp"
+#include "pcr/robot_io.hpp"
 
 namespace pcr {
 
@@ -35,6 +61,22 @@ inline SolverOptions sampling_solver_options() {
   return options;
 }
 
+/// How the calibration configurations are chosen (see above).
+enum class SamplingDesign {
+  kPoissonDisc,  ///< spread: a Poisson-disc sample of the reachable joint box
+  kDOptimal,     ///< identifiability: greedy D-optimal choice among Poisson-disc candidates
+};
+
+/// "poisson-disc" or "d-optimal".
+std::string sampling_design_name(SamplingDesign design);
+/// Throws InputError naming the value and the accepted names.
+SamplingDesign parse_sampling_design(const std::string& name);
+
+/// D-optimal: candidates per chosen configuration.
+inline constexpr int kDesignCandidateFactor = 10;
+/// D-optimal: eps of the criterion, relative to the whole candidate set's information.
+inline constexpr double kDesignRegularisation = 1e-6;
+
 struct SamplingOptions {
   int count = kDefaultCalibrationCount;
   std::uint64_t seed = 1;
@@ -46,6 +88,13 @@ struct SamplingOptions {
   int attempts = 30;           ///< Bridson's k: candidates per active point
   SolverOptions solver = sampling_solver_options();
   PlatformLoad<double> load;
+  /// Calibration configurations: spread or D-optimal (sample_configurations).
+  SamplingDesign design = SamplingDesign::kPoissonDisc;
+  /// D-optimal: size of the candidate set; <= 0: kDesignCandidateFactor x count.
+  int candidates = 0;
+  /// D-optimal: measurement noise (standard deviations) that weighs the rows.
+  double noise_position = kDefaultNoisePosition;  ///< m
+  double noise_angle = kDefaultNoiseAngle;        ///< rad
 };
 
 struct SamplingResult {
@@ -67,6 +116,41 @@ bool admissible_configuration(const RobotParams<double>& robot, const JointVecto
 /// Throws InputError on a bad box, count or radius.
 SamplingResult poisson_disc_sample(const RobotParams<double>& robot,
                                    const SamplingOptions& options);
+
+/// The D-optimal choice among candidates (see above).
+struct DesignResult {
+  std::vector<int> selected;  ///< indices into the candidates, in the order chosen
+  int parameters = 0;         ///< parameters with a nonzero half-width
+  int dimension = 0;          ///< of the identifiable subspace (rank of all the candidates)
+  int rank = 0;               ///< of the chosen set on that subspace (= dimension: all identified)
+  /// log det of the chosen set's scaled information on the identifiable subspace (orthonormal
+  /// basis), computed afresh from the chosen rows (not the running value of the greedy choice).
+  double log_det = 0;
+  int failed = 0;  ///< candidates without an FK solution on the nominal robot (never chosen)
+};
+
+/// Chooses `count` of `candidates` for options.noise_position and noise_angle. Throws InputError
+/// when the description has no uncertainty section, or count exceeds the usable candidates.
+DesignResult d_optimal_design(const RobotDescription& robot,
+                              const std::vector<JointVector>& candidates, int count,
+                              const SamplingOptions& options = SamplingOptions());
+
+/// Calibration configurations by options.design and, with validation_count > 0, a disjoint
+/// Poisson-disc validation set.
+struct ConfigurationSets {
+  std::vector<JointVector> calibration;  ///< options.count configurations
+  std::vector<JointVector> validation;   ///< validation_count configurations
+  /// The Poisson-disc draw of count + validation_count (D-optimal: of validation_count; not
+  /// drawn when D-optimal without validation).
+  SamplingResult spread;
+  SamplingResult candidates;  ///< D-optimal: the candidate draw
+  DesignResult design;        ///< D-optimal: the choice
+};
+
+/// Throws InputError on bad options and std::runtime_error when the box does not hold enough
+/// admissible configurations.
+ConfigurationSets sample_configurations(const RobotDescription& robot,
+                                        const SamplingOptions& options, int validation_count = 0);
 
 /// First `first_count` configurations and the rest (the sampler's order is already shuffled).
 void split_configurations(const std::vector<JointVector>& all, int first_count,
