@@ -233,8 +233,16 @@ TEST(Sampling, DOptimalBeatsPoissonDiscOnTheIdentifiableSubspace) {
       EXPECT_GE((a - b).norm(), designed.candidates.min_distance);
     }
   }
-  EXPECT_EQ(designed.candidates.configurations.size(),
+  // Of the 10 x 30 candidates, those near the validation set are left out.
+  EXPECT_LE(designed.candidates.configurations.size(),
             static_cast<std::size_t>(kDesignCandidateFactor * 30));
+  EXPECT_GT(designed.candidates.configurations.size(), 200u);
+  ASSERT_EQ(designed.design.selected.size(), 30u);
+  for (std::size_t k = 0; k < 30; ++k) {
+    EXPECT_EQ(
+        designed.calibration[k],
+        designed.candidates.configurations[static_cast<std::size_t>(designed.design.selected[k])]);
+  }
   for (std::size_t a = 0; a < designed.calibration.size(); ++a) {
     for (std::size_t b = a + 1; b < designed.calibration.size(); ++b)
       EXPECT_NE(designed.calibration[a], designed.calibration[b]);

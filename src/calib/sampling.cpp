@@ -392,10 +392,11 @@ ConfigurationSets sample_configurations(const RobotDescription& robot,
                              " candidates away from the validation set; asked for " +
                              std::to_string(options.count));
   }
-  sets.design = d_optimal_design(robot, candidates, options.count, options);
+  sets.candidates.configurations = std::move(candidates);
+  sets.design = d_optimal_design(robot, sets.candidates.configurations, options.count, options);
   sets.calibration.clear();
   for (int j : sets.design.selected) {
-    sets.calibration.push_back(candidates[static_cast<std::size_t>(j)]);
+    sets.calibration.push_back(sets.candidates.configurations[static_cast<std::size_t>(j)]);
   }
   return sets;
 }

@@ -143,8 +143,10 @@ struct ConfigurationSets {
   /// The Poisson-disc draw of count + validation_count (D-optimal: of validation_count; not
   /// drawn when D-optimal without validation).
   SamplingResult spread;
-  SamplingResult candidates;  ///< D-optimal: the candidate draw
-  DesignResult design;        ///< D-optimal: the choice
+  /// D-optimal: the candidate draw, less the candidates near the validation set (the
+  /// configurations the design chose from: design.selected indexes them).
+  SamplingResult candidates;
+  DesignResult design;  ///< D-optimal: the choice
 };
 
 /// Throws InputError on bad options and std::runtime_error when the box does not hold enough
