@@ -39,6 +39,7 @@ if has_calibration:
         pose_errors,
         read_configurations,
         read_dataset,
+        sample_configurations,
         sensitivity,
         sensitivity_configurations,
         write_configurations,

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Optional, Sequence, Union, overload
+from typing import Any, Callable, Literal, Optional, Sequence, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -237,6 +237,12 @@ def poisson_disc_sample(robot: Robot, *, count: int = 99, seed: int = 1,
                         box_max: Optional[ArrayLike] = None, strain_limit: float = 0.01,
                         attempts: int = 30, force: Vector = (0.0, 0.0),
                         moment: float = 0.0) -> dict[str, Any]: ...
+def sample_configurations(robot: Robot, *, count: int = 99, validation_count: int = 0,
+                          design: Literal["poisson-disc", "d-optimal"] = "poisson-disc",
+                          candidates: int = 0, seed: int = 1, min_distance: float = 0.0,
+                          box_min: Optional[ArrayLike] = None, box_max: Optional[ArrayLike] = None,
+                          strain_limit: float = 0.01, attempts: int = 30,
+                          force: Vector = (0.0, 0.0), moment: float = 0.0) -> dict[str, Any]: ...
 def default_stages() -> list[dict[str, Any]]: ...
 def load_calibration_stages(path: StrPath) -> list[dict[str, Any]]: ...
 def pose_errors(robot: Robot, q: ArrayLike, measured: ArrayLike) -> dict[str, float]: ...

@@ -1,5 +1,5 @@
-// Calibration (pcr::calib): sensitivity table, virtual robot, datasets, Poisson-disc sampling,
-// staged identification. Reports come back as dicts, arrays as NumPy arrays.
+// Calibration (pcr::calib): sensitivity table, virtual robot, datasets, Poisson-disc sampling and
+// D-optimal design, staged identification. Reports come back as dicts, arrays as NumPy arrays.
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -25,6 +25,35 @@ RowMatrix joints_matrix(const std::vector<JointVector>& rows, int n) {
   for (std::size_t r = 0; r < rows.size(); ++r)
     out.row(static_cast<Eigen::Index>(r)) = rows[r].transpose();
   return out;
+}
+
+SamplingOptions sampling_options(int count, std::uint64_t seed, double min_distance,
+                                 const std::optional<Eigen::VectorXd>& box_min,
+                                 const std::optional<Eigen::VectorXd>& box_max, double strain_limit,
+                                 int attempts, const py::object& force, double moment) {
+  SamplingOptions o;
+  o.count = count;
+  o.seed = seed;
+  o.min_distance = checked_number(min_distance, "min_distance", "m", 0.0);
+  if (box_min) o.box_min = JointVector(*box_min);
+  if (box_max) o.box_max = JointVector(*box_max);
+  o.strain_limit = checked_number(strain_limit, "strain_limit", "", 0.0);
+  o.attempts = attempts;
+  o.load = make_load(force, moment);
+  return o;
+}
+
+py::dict sampling_dict(const SamplingResult& r, int n) {
+  py::dict d;
+  d["configurations"] = joints_matrix(r.configurations, n);
+  d["min_distance"] = r.min_distance;
+  d["box_min"] = Eigen::VectorXd(r.box_min);
+  d["box_max"] = Eigen::VectorXd(r.box_max);
+  d["candidates"] = r.candidates;
+  d["rejected_fk"] = r.rejected_fk;
+  d["rejected_strain"] = r.rejected_strain;
+  d["complete"] = r.complete;
+  return d;
 }
 
 RowMatrix poses_matrix(const std::vector<Pose2<double>>& poses) {
@@ -460,30 +489,14 @@ void wrap_calibration(py::module_& m) {
          const std::optional<Eigen::VectorXd>& box_min,
          const std::optional<Eigen::VectorXd>& box_max, double strain_limit, int attempts,
          const py::object& force, double moment) {
-        SamplingOptions o;
-        o.count = count;
-        o.seed = seed;
-        o.min_distance = checked_number(min_distance, "min_distance", "m", 0.0);
-        if (box_min) o.box_min = JointVector(*box_min);
-        if (box_max) o.box_max = JointVector(*box_max);
-        o.strain_limit = checked_number(strain_limit, "strain_limit", "", 0.0);
-        o.attempts = attempts;
-        o.load = make_load(force, moment);
+        const SamplingOptions o = sampling_options(count, seed, min_distance, box_min, box_max,
+                                                   strain_limit, attempts, force, moment);
         SamplingResult r;
         {
           py::gil_scoped_release release;
           r = poisson_disc_sample(robot.params, o);
         }
-        py::dict d;
-        d["configurations"] = joints_matrix(r.configurations, robot.params.num_limbs);
-        d["min_distance"] = r.min_distance;
-        d["box_min"] = Eigen::VectorXd(r.box_min);
-        d["box_max"] = Eigen::VectorXd(r.box_max);
-        d["candidates"] = r.candidates;
-        d["rejected_fk"] = r.rejected_fk;
-        d["rejected_strain"] = r.rejected_strain;
-        d["complete"] = r.complete;
-        return d;
+        return sampling_dict(r, robot.params.num_limbs);
       },
       py::arg("robot"), py::kw_only(), py::arg("count") = kDefaultCalibrationCount,
       py::arg("seed") = 1, py::arg("min_distance") = 0.0, py::arg("box_min") = py::none(),
@@ -493,6 +506,51 @@ void wrap_calibration(py::module_& m) {
       "least min_distance apart (m; 0 = chosen from count). Returns a dict: configurations "
       "(count, n), min_distance, box_min, box_max, candidates, rejected_fk, rejected_strain, "
       "complete. Releases the GIL.");
+
+  m.def(
+      "sample_configurations",
+      [](const RobotDescription& robot, int count, int validation_count, const std::string& design,
+         int candidates, std::uint64_t seed, double min_distance,
+         const std::optional<Eigen::VectorXd>& box_min,
+         const std::optional<Eigen::VectorXd>& box_max, double strain_limit, int attempts,
+         const py::object& force, double moment) {
+        SamplingOptions o = sampling_options(count, seed, min_distance, box_min, box_max,
+                                             strain_limit, attempts, force, moment);
+        o.design = parse_sampling_design(design);  // InputError: ValueError naming the value
+        o.candidates = candidates;
+        ConfigurationSets sets;
+        {
+          py::gil_scoped_release release;
+          sets = sample_configurations(robot, o, validation_count);
+        }
+        const int n = robot.params.num_limbs;
+        py::dict d;
+        d["calibration"] = joints_matrix(sets.calibration, n);
+        d["validation"] = joints_matrix(sets.validation, n);
+        d["design"] = sampling_design_name(o.design);
+        if (!sets.spread.configurations.empty()) d["spread"] = sampling_dict(sets.spread, n);
+        if (o.design == SamplingDesign::kDOptimal) {
+          d["candidates"] = sampling_dict(sets.candidates, n);
+          d["selected"] = sets.design.selected;
+          d["parameters"] = sets.design.parameters;
+          d["dimension"] = sets.design.dimension;
+          d["rank"] = sets.design.rank;
+          d["log_det"] = sets.design.log_det;
+        }
+        return d;
+      },
+      py::arg("robot"), py::kw_only(), py::arg("count") = kDefaultCalibrationCount,
+      py::arg("validation_count") = 0, py::arg("design") = "poisson-disc",
+      py::arg("candidates") = 0, py::arg("seed") = 1, py::arg("min_distance") = 0.0,
+      py::arg("box_min") = py::none(), py::arg("box_max") = py::none(),
+      py::arg("strain_limit") = 0.01, py::arg("attempts") = 30, py::arg("force") = no_force(),
+      py::arg("moment") = 0.0,
+      "Calibration configurations by design ('poisson-disc': spread; 'd-optimal': greedy max "
+      "log det of the scaled information on the identifiable subspace among `candidates` "
+      "Poisson-disc candidates, 0 = 10 x count) and a disjoint Poisson-disc validation set of "
+      "validation_count. Returns a dict: calibration (count, n), validation, design, and for "
+      "d-optimal candidates, selected (indices into candidates['configurations']), parameters, "
+      "dimension, rank, log_det. Releases the GIL.");
 
   m.def(
       "default_stages", [] { return stages_list(default_stages()); },

@@ -1,5 +1,5 @@
 """Calibration bindings: sensitivity, Jacobian vs finite differences, virtual robot vs FK of its
-truth, datasets, Poisson-disc sampling, a small identification."""
+truth, datasets, Poisson-disc sampling and D-optimal design, a small identification."""
 import math
 
 import numpy as np
@@ -92,6 +92,20 @@ def test_poisson_disc_sample_spacing(robot):
     assert pcr.admissible_configuration(robot, q[0])
     with pytest.raises(ValueError):
         pcr.poisson_disc_sample(robot, count=0)
+
+
+def test_d_optimal_sample(robot):
+    box = dict(box_min=[-3e-3] * 3, box_max=[3e-3] * 3, seed=2)
+    spread = pcr.sample_configurations(robot, count=6, validation_count=3, **box)
+    out = pcr.sample_configurations(robot, count=6, validation_count=3, design="d-optimal",
+                                    candidates=30, **box)
+    assert out["design"] == "d-optimal" and out["calibration"].shape == (6, 3)
+    assert np.array_equal(out["validation"], spread["validation"])  # the same Poisson-disc set
+    chosen = out["candidates"]["configurations"][out["selected"]]
+    assert np.array_equal(chosen, out["calibration"])
+    assert out["rank"] <= out["dimension"] < out["parameters"]
+    with pytest.raises(ValueError, match="d_optimal"):
+        pcr.sample_configurations(robot, count=6, design="d_optimal")
 
 
 def test_calibration_recovers_extrinsics(robot):
