@@ -363,7 +363,8 @@ ConfigurationSets sample_configurations(const RobotDescription& robot,
       throw std::runtime_error("only " + std::to_string(sets.spread.configurations.size()) +
                                " admissible configurations are " +
                                format_double(sets.spread.min_distance) + " m apart; asked for " +
-                               std::to_string(spread.count) + " (a smaller minimum distance)");
+                               std::to_string(spread.count) +
+                               " (lower min_distance: pcr sample --min-distance)");
     }
     split_configurations(sets.spread.configurations, spread.count - validation_count,
                          &sets.calibration, &sets.validation);
