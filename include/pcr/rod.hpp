@@ -47,23 +47,28 @@ struct NoVisitor {
   void operator()(const S&, const State&) const {}
 };
 
-/// RK4 on (x, y, c, s, theta, m), c = cos(theta) and s = sin(theta), one step at a time. Only
-/// (c, s, m) are coupled; x, y and theta are quadratures of the stage values, written with the
-/// same arithmetic as one RK4 update of the whole vector. With Sens, the tangents w.r.t. the
-/// proximal (n_x, n_y, m) are RK4 applied to the variational equations, which is exactly the
-/// derivative of the discrete map: Newton sees the true Jacobian. Scalar locals rather than Eigen
-/// blocks: the recurrence is latency-bound, and this keeps the three tangent columns (and, in
-/// integrate_rods_lockstep, the rods) independent chains the CPU can overlap.
-template <class T, bool Sens>
-struct RodStepper {
-  T nx, ny, x, y, c, s, th, m;
-  T inv_ei, h, half_h, sixth_h, max_abs_moment;
-  // Tangents, column j: d / d wrench_j, as one padded 4-vector per state (column 3 stays zero)
-  // so that in double the three columns step together in SIMD registers.
-  using Cols = Eigen::Array<T, 4, 1>;
-  Cols tx, ty, tc, ts, tth, tm;
+/// `if (v > max) max = v` (NaN never replaces max).
+template <class T>
+void keep_larger(T& max, const T& v) {
+  if (v > max) max = v;
+}
 
-  void init(const RodState<T>& start, const T& ei, const T& length, int steps) {
+/// RK4 on (x, y, c, s, theta, m), c = cos(theta) and s = sin(theta), one step at a time, of one
+/// rod; L is the scalar (double or a Jet), or any type with its arithmetic, abs and keep_larger.
+/// Only (c, s, m) are coupled; x, y and theta are quadratures of the stage values,
+/// written with the same arithmetic as one RK4 update of the whole vector. With Sens, the tangents
+/// w.r.t. the proximal (n_x, n_y, m) are RK4 applied to the variational equations, which is
+/// exactly the derivative of the discrete map: Newton sees the true Jacobian. Plain locals rather
+/// than Eigen blocks: the recurrence is latency-bound, and this keeps the three tangent columns
+/// (and, in integrate_rods_lockstep, the rods) independent chains the CPU can overlap.
+template <class L, bool Sens>
+struct RodStepper {
+  L nx, ny, x, y, c, s, th, m;
+  L inv_ei, h, half_h, sixth_h, max_abs_moment;
+  L tx[3], ty[3], tc[3], ts[3], tth[3], tm[3];  ///< tangents, [j]: d / d wrench_j (with Sens)
+
+  /// One rod (L a scalar): its proximal state, EI (N m^2), length (m) and RK4 step count.
+  void init(const RodState<L>& start, const L& ei, const L& length, int steps) {
     using std::abs;
     using std::cos;
     using std::sin;
@@ -76,33 +81,30 @@ struct RodStepper {
     th = start.theta;
     m = start.m;
     if constexpr (Sens) {
-      tx.setZero();
-      ty.setZero();
-      tc.setZero();
-      ts.setZero();
-      tth.setZero();
-      tm.setZero();
-      tm[2] = T(1);  // only dm/dm0 starts non-zero
+      for (int j = 0; j < 3; ++j) {
+        tx[j] = ty[j] = tc[j] = ts[j] = tth[j] = tm[j] = L(0);
+      }
+      tm[2] = L(1);  // only dm/dm0 starts non-zero
     }
-    inv_ei = T(1) / ei;
-    h = length / T(steps);
-    half_h = h / T(2);
-    sixth_h = h / T(6);
+    inv_ei = L(1) / ei;
+    h = length / L(steps);
+    half_h = h / L(2);
+    sixth_h = h / L(6);
     max_abs_moment = abs(m);
   }
 
   void step() {
     using std::abs;
-    // Stage values (the rhs of x, y, theta are c, s, k) and slopes of (c, s, m).
-    T sc[4], ss[4], sk[4], dc[4], ds[4], dm[4];
-    Cols gc[4], gs[4], gk[4], gdc[4], gds[4], gdm[4];
+    // Stage values (the rhs of x, y, theta are c, s, k) and slopes of (c, s, m); g: tangents.
+    L sc[4], ss[4], sk[4], dc[4], ds[4], dm[4];
+    L gc[3][4], gs[3][4], gk[3][4], gdc[3][4], gds[3][4], gdm[3][4];  // [column][stage]
     for (int st = 0; st < 4; ++st) {
-      const T a = st == 3 ? h : half_h;
+      const L& a = st == 3 ? h : half_h;
       const int p = st == 0 ? 0 : st - 1;
-      const T cc = st == 0 ? c : c + a * dc[p];
-      const T sv = st == 0 ? s : s + a * ds[p];
-      const T mm = st == 0 ? m : m + a * dm[p];
-      const T k = mm * inv_ei;
+      const L cc = st == 0 ? c : L(c + a * dc[p]);
+      const L sv = st == 0 ? s : L(s + a * ds[p]);
+      const L mm = st == 0 ? m : L(m + a * dm[p]);
+      const L k = mm * inv_ei;
       sc[st] = cc;
       ss[st] = sv;
       sk[st] = k;
@@ -110,26 +112,24 @@ struct RodStepper {
       ds[st] = cc * k;
       dm[st] = nx * sv - ny * cc;
       if constexpr (Sens) {
-        if (st == 0) {
-          gc[0] = tc;
-          gs[0] = ts;
-          gk[0] = tm * inv_ei;
-        } else {
-          gc[st] = tc + a * gdc[p];
-          gs[st] = ts + a * gds[p];
-          gk[st] = (tm + a * gdm[p]) * inv_ei;
+        for (int j = 0; j < 3; ++j) {
+          if (st == 0) {
+            gc[j][0] = tc[j];
+            gs[j][0] = ts[j];
+            gk[j][0] = tm[j] * inv_ei;
+          } else {
+            gc[j][st] = tc[j] + a * gdc[j][p];
+            gs[j][st] = ts[j] + a * gds[j][p];
+            gk[j][st] = (tm[j] + a * gdm[j][p]) * inv_ei;
+          }
+          gdc[j][st] = -gs[j][st] * k - sv * gk[j][st];
+          gds[j][st] = gc[j][st] * k + cc * gk[j][st];
+          gdm[j][st] = nx * gs[j][st] - ny * gc[j][st];
         }
-        gdc[st] = -gs[st] * k - sv * gk[st];
-        gds[st] = gc[st] * k + cc * gk[st];
-        gdm[st] = nx * gs[st] - ny * gc[st];
-        gdm[st][0] += sv;  // d/dn_x of n_x s
-        gdm[st][1] -= cc;  // d/dn_y of -n_y c
+        gdm[0][st] += sv;  // d/dn_x of n_x s
+        gdm[1][st] -= cc;  // d/dn_y of -n_y c
       }
     }
-    // One RK4 update, of a state (T) or of its tangent columns (Cols).
-    const auto rk4 = [this](auto& v, const auto& k) {
-      v += sixth_h * (k[0] + T(2) * (k[1] + k[2]) + k[3]);
-    };
     rk4(x, sc);
     rk4(y, ss);
     rk4(c, dc);
@@ -137,18 +137,23 @@ struct RodStepper {
     rk4(th, sk);
     rk4(m, dm);
     if constexpr (Sens) {
-      rk4(tx, gc);
-      rk4(ty, gs);
-      rk4(tc, gdc);
-      rk4(ts, gds);
-      rk4(tth, gk);
-      rk4(tm, gdm);
+      for (int j = 0; j < 3; ++j) {
+        rk4(tx[j], gc[j]);
+        rk4(ty[j], gs[j]);
+        rk4(tc[j], gdc[j]);
+        rk4(ts[j], gds[j]);
+        rk4(tth[j], gk[j]);
+        rk4(tm[j], gdm[j]);
+      }
     }
-    const T abs_m = abs(m);
-    if (abs_m > max_abs_moment) max_abs_moment = abs_m;
+    keep_larger(max_abs_moment, L(abs(m)));
   }
 
-  RodState<T> state() const { return RodState<T>{x, y, th, nx, ny, m}; }
+  RodState<L> state() const { return RodState<L>{x, y, th, nx, ny, m}; }
+
+ private:
+  /// One RK4 update of a state or a tangent column from its four slopes.
+  void rk4(L& v, const L (&k)[4]) const { v += sixth_h * (k[0] + L(2) * (k[1] + k[2]) + k[3]); }
 };
 
 /// Integrates up to MaxRods rods over their lengths in `steps` steps each, in lockstep (bit for
