@@ -1,6 +1,9 @@
 // Speed of the header-only core on the default robot at the default accuracy.
 //   build/benchmarks/bench_kinematics [--benchmark_repetitions=5
 //   --benchmark_report_aggregates_only]
+// Configured with -DPCR_BENCHMARK_NATIVE=ON, the benchmarks are compiled with -march=native (the
+// vector code then uses AVX2/FMA where the machine has them); the default is the plain x86-64
+// flags that the library, tests and tools are built with.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>

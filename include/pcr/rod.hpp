@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <type_traits>
 
 namespace pcr {
 
@@ -47,23 +48,86 @@ struct NoVisitor {
   void operator()(const S&, const State&) const {}
 };
 
-/// RK4 on (x, y, c, s, theta, m), c = cos(theta) and s = sin(theta), one step at a time. Only
-/// (c, s, m) are coupled; x, y and theta are quadratures of the stage values, written with the
-/// same arithmetic as one RK4 update of the whole vector. With Sens, the tangents w.r.t. the
-/// proximal (n_x, n_y, m) are RK4 applied to the variational equations, which is exactly the
-/// derivative of the discrete map: Newton sees the true Jacobian. Scalar locals rather than Eigen
-/// blocks: the recurrence is latency-bound, and this keeps the three tangent columns (and, in
-/// integrate_rods_lockstep, the rods) independent chains the CPU can overlap.
-template <class T, bool Sens>
-struct RodStepper {
-  T nx, ny, x, y, c, s, th, m;
-  T inv_ei, h, half_h, sixth_h, max_abs_moment;
-  // Tangents, column j: d / d wrench_j, as one padded 4-vector per state (column 3 stays zero)
-  // so that in double the three columns step together in SIMD registers.
-  using Cols = Eigen::Array<T, 4, 1>;
-  Cols tx, ty, tc, ts, tth, tm;
+/// N doubles, one per rod of a bundle (RodBundle), with the arithmetic RodStepper uses done lane
+/// by lane in plain loops over a fixed N, unrolled, which the optimiser turns into SIMD
+/// instructions (SSE2 by default, AVX with -march=native; GCC at -O2 as at -O3). Not Eigen::Array:
+/// in a function as long as RodStepper::step, GCC leaves layers of Eigen's expression templates as
+/// calls, which cost more than the lanes save. Forced inline, for the same reason. (GCC's vector
+/// extension was tried too: no faster on the Jacobian, 10% slower on the residual and warm FK.)
+template <int N>
+struct LaneArray {
+  double v[N];
 
-  void init(const RodState<T>& start, const T& ei, const T& length, int steps) {
+  LaneArray() = default;
+  /// Every lane x.
+  EIGEN_ALWAYS_INLINE explicit LaneArray(double x) {
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) v[i] = x;
+  }
+  EIGEN_ALWAYS_INLINE double& operator[](int i) { return v[i]; }
+  EIGEN_ALWAYS_INLINE const double& operator[](int i) const { return v[i]; }
+
+  EIGEN_ALWAYS_INLINE LaneArray& operator+=(const LaneArray& b) {
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) v[i] += b.v[i];
+    return *this;
+  }
+  EIGEN_ALWAYS_INLINE LaneArray& operator-=(const LaneArray& b) {
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) v[i] -= b.v[i];
+    return *this;
+  }
+  EIGEN_ALWAYS_INLINE LaneArray& operator*=(const LaneArray& b) {
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) v[i] *= b.v[i];
+    return *this;
+  }
+  EIGEN_ALWAYS_INLINE friend LaneArray operator+(LaneArray a, const LaneArray& b) { return a += b; }
+  EIGEN_ALWAYS_INLINE friend LaneArray operator-(LaneArray a, const LaneArray& b) { return a -= b; }
+  EIGEN_ALWAYS_INLINE friend LaneArray operator*(LaneArray a, const LaneArray& b) { return a *= b; }
+  EIGEN_ALWAYS_INLINE friend LaneArray operator-(LaneArray a) {
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) a.v[i] = -a.v[i];
+    return a;
+  }
+  EIGEN_ALWAYS_INLINE friend LaneArray abs(LaneArray a) {
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) a.v[i] = std::abs(a.v[i]);
+    return a;
+  }
+  /// Lane by lane, `if (v > max) max = v`.
+  EIGEN_ALWAYS_INLINE friend void keep_larger(LaneArray& max, const LaneArray& v) {
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) max.v[i] = v.v[i] > max.v[i] ? v.v[i] : max.v[i];
+  }
+};
+
+/// `if (v > max) max = v` (NaN never replaces max); LaneArray has its own, lane by lane.
+template <class T>
+void keep_larger(T& max, const T& v) {
+  if (v > max) max = v;
+}
+
+/// RK4 on (x, y, c, s, theta, m), c = cos(theta) and s = sin(theta), one step at a time, of one
+/// rod (L a scalar T, Jets included) or of a bundle of rods, one per SIMD lane (L = LaneArray<N>,
+/// see RodBundle). Only (c, s, m) are coupled; x, y and theta are quadratures of the stage values,
+/// written with the same arithmetic as one RK4 update of the whole vector. With Sens, the tangents
+/// w.r.t. the proximal (n_x, n_y, m) are RK4 applied to the variational equations, which is
+/// exactly the derivative of the discrete map: Newton sees the true Jacobian. Plain locals rather
+/// than Eigen blocks: the recurrence is latency-bound, and this keeps the three tangent columns
+/// and the lanes independent chains the CPU can overlap. A lane does the scalar stepper's
+/// operations in the same order, so a bundle's lane is bit for bit the rod stepped alone (unless
+/// the compiler contracts multiply-adds into FMAs differently in the two, as -march=native lets
+/// it).
+template <class L, bool Sens>
+struct RodStepper {
+  static constexpr bool kSens = Sens;
+  L nx, ny, x, y, c, s, th, m;
+  L inv_ei, h, half_h, sixth_h, max_abs_moment;
+  L tx[3], ty[3], tc[3], ts[3], tth[3], tm[3];  ///< tangents, [j]: d / d wrench_j (with Sens)
+
+  /// One rod (L a scalar): its proximal state, EI (N m^2), length (m) and RK4 step count.
+  void init(const RodState<L>& start, const L& ei, const L& length, int steps) {
     using std::abs;
     using std::cos;
     using std::sin;
@@ -76,33 +140,33 @@ struct RodStepper {
     th = start.theta;
     m = start.m;
     if constexpr (Sens) {
-      tx.setZero();
-      ty.setZero();
-      tc.setZero();
-      ts.setZero();
-      tth.setZero();
-      tm.setZero();
-      tm[2] = T(1);  // only dm/dm0 starts non-zero
+      for (int j = 0; j < 3; ++j) {
+        tx[j] = ty[j] = tc[j] = ts[j] = tth[j] = tm[j] = L(0);
+      }
+      tm[2] = L(1);  // only dm/dm0 starts non-zero
     }
-    inv_ei = T(1) / ei;
-    h = length / T(steps);
-    half_h = h / T(2);
-    sixth_h = h / T(6);
+    inv_ei = L(1) / ei;
+    h = length / L(steps);
+    half_h = h / L(2);
+    sixth_h = h / L(6);
     max_abs_moment = abs(m);
   }
 
   void step() {
     using std::abs;
-    // Stage values (the rhs of x, y, theta are c, s, k) and slopes of (c, s, m).
-    T sc[4], ss[4], sk[4], dc[4], ds[4], dm[4];
-    Cols gc[4], gs[4], gk[4], gdc[4], gds[4], gdm[4];
+    // Stage values (the rhs of x, y, theta are c, s, k) and slopes of (c, s, m); g: tangents.
+    L sc[4], ss[4], sk[4], dc[4], ds[4], dm[4];
+    L gc[3][4], gs[3][4], gk[3][4], gdc[3][4], gds[3][4], gdm[3][4];  // [column][stage]
+    // The loops over stages and columns are unrolled, so that the branches fold away and the
+    // values stay in registers (with lanes GCC kept them rolled, going through memory).
+#pragma GCC unroll 4
     for (int st = 0; st < 4; ++st) {
-      const T a = st == 3 ? h : half_h;
+      const L& a = st == 3 ? h : half_h;
       const int p = st == 0 ? 0 : st - 1;
-      const T cc = st == 0 ? c : c + a * dc[p];
-      const T sv = st == 0 ? s : s + a * ds[p];
-      const T mm = st == 0 ? m : m + a * dm[p];
-      const T k = mm * inv_ei;
+      const L cc = st == 0 ? c : L(c + a * dc[p]);
+      const L sv = st == 0 ? s : L(s + a * ds[p]);
+      const L mm = st == 0 ? m : L(m + a * dm[p]);
+      const L k = mm * inv_ei;
       sc[st] = cc;
       ss[st] = sv;
       sk[st] = k;
@@ -110,26 +174,25 @@ struct RodStepper {
       ds[st] = cc * k;
       dm[st] = nx * sv - ny * cc;
       if constexpr (Sens) {
-        if (st == 0) {
-          gc[0] = tc;
-          gs[0] = ts;
-          gk[0] = tm * inv_ei;
-        } else {
-          gc[st] = tc + a * gdc[p];
-          gs[st] = ts + a * gds[p];
-          gk[st] = (tm + a * gdm[p]) * inv_ei;
+#pragma GCC unroll 3
+        for (int j = 0; j < 3; ++j) {
+          if (st == 0) {
+            gc[j][0] = tc[j];
+            gs[j][0] = ts[j];
+            gk[j][0] = tm[j] * inv_ei;
+          } else {
+            gc[j][st] = tc[j] + a * gdc[j][p];
+            gs[j][st] = ts[j] + a * gds[j][p];
+            gk[j][st] = (tm[j] + a * gdm[j][p]) * inv_ei;
+          }
+          gdc[j][st] = -gs[j][st] * k - sv * gk[j][st];
+          gds[j][st] = gc[j][st] * k + cc * gk[j][st];
+          gdm[j][st] = nx * gs[j][st] - ny * gc[j][st];
         }
-        gdc[st] = -gs[st] * k - sv * gk[st];
-        gds[st] = gc[st] * k + cc * gk[st];
-        gdm[st] = nx * gs[st] - ny * gc[st];
-        gdm[st][0] += sv;  // d/dn_x of n_x s
-        gdm[st][1] -= cc;  // d/dn_y of -n_y c
+        gdm[0][st] += sv;  // d/dn_x of n_x s
+        gdm[1][st] -= cc;  // d/dn_y of -n_y c
       }
     }
-    // One RK4 update, of a state (T) or of its tangent columns (Cols).
-    const auto rk4 = [this](auto& v, const auto& k) {
-      v += sixth_h * (k[0] + T(2) * (k[1] + k[2]) + k[3]);
-    };
     rk4(x, sc);
     rk4(y, ss);
     rk4(c, dc);
@@ -137,26 +200,98 @@ struct RodStepper {
     rk4(th, sk);
     rk4(m, dm);
     if constexpr (Sens) {
-      rk4(tx, gc);
-      rk4(ty, gs);
-      rk4(tc, gdc);
-      rk4(ts, gds);
-      rk4(tth, gk);
-      rk4(tm, gdm);
+#pragma GCC unroll 3
+      for (int j = 0; j < 3; ++j) {
+        rk4(tx[j], gc[j]);
+        rk4(ty[j], gs[j]);
+        rk4(tc[j], gdc[j]);
+        rk4(ts[j], gds[j]);
+        rk4(tth[j], gk[j]);
+        rk4(tm[j], gdm[j]);
+      }
     }
-    const T abs_m = abs(m);
-    if (abs_m > max_abs_moment) max_abs_moment = abs_m;
+    keep_larger(max_abs_moment, L(abs(m)));
   }
 
-  RodState<T> state() const { return RodState<T>{x, y, th, nx, ny, m}; }
+  RodState<L> state() const { return RodState<L>{x, y, th, nx, ny, m}; }
+
+ private:
+  /// One RK4 update of a state or a tangent column from its four slopes (forced inline: with
+  /// lanes, in a large translation unit, GCC made it a call).
+  EIGEN_ALWAYS_INLINE void rk4(L& v, const L (&k)[4]) const {
+    v += sixth_h * (k[0] + L(2) * (k[1] + k[2]) + k[3]);
+  }
 };
 
-/// Integrates up to MaxRods rods over their lengths in `steps` steps each, in lockstep (bit for
-/// bit the same as one at a time: each rod is a serial chain, interleaving them overlaps them).
-template <int MaxRods, bool Sens, class T>
-void integrate_rods_lockstep(RodStepper<T, Sens>* rods, int n, int steps) {
-  for (int i = 0; i < steps; ++i) {
-    for (int r = 0; r < n && r < MaxRods; ++r) rods[r].step();
+/// Up to N rods stepped together, one per lane.
+template <int N, bool Sens>
+using RodBundle = RodStepper<LaneArray<N>, Sens>;
+
+/// Calls f(bundle's field, rod's field) for every field of a bundle and a one-rod stepper (either
+/// may be const).
+template <class Bundle, class Rod, class F>
+void zip_lane_fields(Bundle& bundle, Rod& rod, F&& f) {
+  f(bundle.nx, rod.nx);
+  f(bundle.ny, rod.ny);
+  f(bundle.x, rod.x);
+  f(bundle.y, rod.y);
+  f(bundle.c, rod.c);
+  f(bundle.s, rod.s);
+  f(bundle.th, rod.th);
+  f(bundle.m, rod.m);
+  f(bundle.inv_ei, rod.inv_ei);
+  f(bundle.h, rod.h);
+  f(bundle.half_h, rod.half_h);
+  f(bundle.sixth_h, rod.sixth_h);
+  f(bundle.max_abs_moment, rod.max_abs_moment);
+  if constexpr (std::decay_t<Rod>::kSens) {
+    for (int j = 0; j < 3; ++j) {
+      f(bundle.tx[j], rod.tx[j]);
+      f(bundle.ty[j], rod.ty[j]);
+      f(bundle.tc[j], rod.tc[j]);
+      f(bundle.ts[j], rod.ts[j]);
+      f(bundle.tth[j], rod.tth[j]);
+      f(bundle.tm[j], rod.tm[j]);
+    }
+  }
+}
+
+/// Puts an initialised one-rod stepper into lane `lane` of a bundle.
+template <int N, bool Sens>
+void set_lane(RodBundle<N, Sens>& bundle, int lane, const RodStepper<double, Sens>& rod) {
+  zip_lane_fields(bundle, rod, [lane](auto& lanes, const double& v) { lanes[lane] = v; });
+}
+
+/// The one-rod stepper in lane `lane` of a bundle.
+template <int N, bool Sens>
+RodStepper<double, Sens> get_lane(const RodBundle<N, Sens>& bundle, int lane) {
+  RodStepper<double, Sens> rod;
+  zip_lane_fields(bundle, rod, [lane](const auto& lanes, double& v) { v = lanes[lane]; });
+  return rod;
+}
+
+/// Integrates n <= N initialised rods over `steps` steps in one bundle of N lanes, and writes
+/// their final states back (bit for bit what one at a time gives, see RodStepper). Lanes beyond n
+/// carry a copy of rod 0.
+template <int N, bool Sens>
+void integrate_rods_bundled(RodStepper<double, Sens>* rods, int n, int steps) {
+  RodBundle<N, Sens> bundle;
+  for (int r = 0; r < N; ++r) set_lane(bundle, r, rods[r < n ? r : 0]);
+  for (int i = 0; i < steps; ++i) bundle.step();
+  for (int r = 0; r < n; ++r) rods[r] = get_lane(bundle, r);
+}
+
+/// Integrates n initialised rods (n <= 8) over `steps` steps in SIMD lanes: in a bundle of 2, 4 or
+/// 8 lanes, the smallest that holds them.
+template <bool Sens>
+void integrate_rods_in_lanes(RodStepper<double, Sens>* rods, int n, int steps) {
+  if (n <= 0) return;
+  if (n <= 2) {
+    integrate_rods_bundled<2>(rods, n, steps);
+  } else if (n <= 4) {
+    integrate_rods_bundled<4>(rods, n, steps);
+  } else {
+    integrate_rods_bundled<8>(rods, n, steps);
   }
 }
 

@@ -17,6 +17,7 @@
 
 namespace pcr {
 
+static_assert(kMaxLimbs <= 8, "shooting_residual integrates the rods in at most 8 SIMD lanes");
 inline constexpr int kMaxResiduals = 3 * kMaxLimbs + 3;
 /// Columns of the full partial-derivative matrix: wrenches (3n), pose (3), joints (n).
 inline constexpr int kMaxPartials = 4 * kMaxLimbs + 3;
@@ -188,8 +189,9 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
                     const PlatformLoad<T>& load, const ShootingScale& scale, int rod_steps,
                     ResidualVector<T>& residual, ShootingMatrix* partials = nullptr) {
   const int n = robot.num_limbs;
-  // Rod tips (and sensitivities with partials). In double the rods are integrated in lockstep:
-  // each is a serial chain of dependent multiplies, interleaved they overlap.
+  // Rod tips (and sensitivities with partials). In double the rods are integrated together, one
+  // per SIMD lane: each is a serial chain of dependent multiplies, side by side they share the
+  // instructions (and the results are bit for bit those of one rod at a time).
   RodTip<T> tips[kMaxLimbs];
   const auto proximal_state = [&](int i) {
     return proximal_rod_state(robot.limb(i), point.q[i], point.wrenches[i]);
@@ -201,7 +203,7 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
       rods[i].init(proximal_state(i), robot.limb(i).bending_stiffness(), robot.limb(i).length,
                    rod_steps);
     }
-    internal::integrate_rods_lockstep<kMaxLimbs>(rods, n, rod_steps);
+    internal::integrate_rods_in_lanes(rods, n, rod_steps);
     for (int i = 0; i < n; ++i) {
       tips[i].state = rods[i].state();
       tips[i].max_abs_moment = rods[i].max_abs_moment;
