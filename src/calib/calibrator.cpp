@@ -350,42 +350,14 @@ class Identification {
       report.usable = true;
       return report;
     }
-    for (int k : free) {  // a previous stage with wider bounds may have left a value outside
-      if (!bounded(k)) continue;
-      const double h = stage.bounds_scale * half_widths_[static_cast<std::size_t>(k)];
-      const double c = nominal_values_[static_cast<std::size_t>(k)];
-      double& v = values_[static_cast<std::size_t>(k)];
-      v = std::min(std::max(v, c - h), c + h);
-    }
-    update_loss_scale();
-    ceres::Problem problem;
-    add_residuals(problem);
-    std::vector<int> constant;
-    std::vector<bool> is_free(static_cast<std::size_t>(count_), false);
-    for (int k : free) is_free[static_cast<std::size_t>(k)] = true;
-    for (int k = 0; k < count_; ++k) {
-      if (!is_free[static_cast<std::size_t>(k)]) constant.push_back(k);
-    }
+    std::vector<bool> stage_free(static_cast<std::size_t>(count_), false);
+    for (int k : free) stage_free[static_cast<std::size_t>(k)] = true;
     const bool subspace = options_.stage_gauge == StageGauge::kSubspace;
-    problem.SetManifold(values_.data(), make_manifold(is_free, subspace));
-    if (!subspace && options_.gauge_prior_weight > 0) {
-      // Weak pull towards the nominal values, in half-width units: it only matters along the
-      // gauge directions (where the data says nothing), which it fixes to the representative
-      // closest to the nominal, away from the bounds.
-      Eigen::MatrixXd a = Eigen::MatrixXd::Zero(count_, count_);
-      for (int k : free) {
-        a(k, k) = options_.gauge_prior_weight / half_widths_[static_cast<std::size_t>(k)];
-      }
-      const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(nominal_values_.data(), count_);
-      problem.AddResidualBlock(new ceres::NormalPrior(a, b), nullptr, values_.data());
-    }
-    for (int k : free) {
-      if (!bounded(k)) continue;
-      const double h = stage.bounds_scale * half_widths_[static_cast<std::size_t>(k)];
-      const double c = nominal_values_[static_cast<std::size_t>(k)];
-      problem.SetParameterLowerBound(values_.data(), k, c - h);
-      problem.SetParameterUpperBound(values_.data(), k, c + h);
-    }
+    const auto at_bound = [&](int k) {
+      const std::size_t uk = static_cast<std::size_t>(k);
+      return bounded(k) && std::abs(values_[uk] - nominal_values_[uk]) >=
+                               stage.bounds_scale * half_widths_[uk] * (1 - 1e-9);
+    };
 
     ceres::Solver::Options solver;
     solver.linear_solver_type = ceres::DENSE_QR;
@@ -397,35 +369,81 @@ class Identification {
     // look negligible. The function and gradient tolerances (whitened residuals) decide.
     solver.parameter_tolerance = 0.0;
     solver.logging_type = ceres::SILENT;
-
     ProgressCallback callback(stage.name, to_m2, options_.progress);
     if (options_.progress) solver.callbacks.push_back(&callback);
     ceres::Solver::Summary summary;
     const auto start = std::chrono::steady_clock::now();
     for (FkCache& c : caches_) c.evaluations = c.warm_start_failures = c.newton_iterations = 0;
-    ceres::Solve(solver, &problem, &summary);
-    report.initial_cost = summary.initial_cost * to_m2;
-    report.iterations = static_cast<int>(summary.iterations.size()) - 1;
-    add_counters(summary, &report);
-    // Ceres projects the unconstrained step onto the box, which stalls once a parameter sits on a
-    // bound the step pushes against. Active set: hold the parameters at a bound, solve again.
-    for (int pass = 0; pass < 3; ++pass) {
-      bool changed = false;
-      for (int k : free) {
-        const std::size_t uk = static_cast<std::size_t>(k);
-        const double h = stage.bounds_scale * half_widths_[uk];
-        if (is_free[uk] && bounded(k) &&
-            std::abs(values_[uk] - nominal_values_[uk]) >= h * (1 - 1e-9)) {
-          is_free[uk] = false;
-          constant.push_back(k);
-          changed = true;
-        }
+
+    // Rounds: each starts from the representative of the gauge orbit deepest inside the box
+    // (recentre_in_gauge) with every parameter of the stage free. A round that ends with
+    // parameters at a bound is followed by another while the rounds still lower the cost by 1%:
+    // a bound met in the gauge a round started in may not be met in the next one's, and a
+    // parameter held at a bound is released. A truth inside the box has a representative inside
+    // it, which the rounds reach (the sweep in tests/test_calibration.cpp).
+    constexpr int kMaxRounds = 4;
+    recentre_in_gauge(stage_free, stage.bounds_scale);
+    double previous_round_cost = std::numeric_limits<double>::infinity();
+    for (int round = 0; round < kMaxRounds; ++round) {
+      for (int k : free) {  // a previous stage with wider bounds may have left a value outside
+        if (!bounded(k)) continue;
+        const double h = stage.bounds_scale * half_widths_[static_cast<std::size_t>(k)];
+        const double c = nominal_values_[static_cast<std::size_t>(k)];
+        double& v = values_[static_cast<std::size_t>(k)];
+        v = std::min(std::max(v, c - h), c + h);
       }
-      if (!changed || static_cast<int>(constant.size()) >= count_) break;
+      if (round == 0) update_loss_scale();
+      ceres::Problem problem;
+      add_residuals(problem);
+      std::vector<bool> is_free = stage_free;
       problem.SetManifold(values_.data(), make_manifold(is_free, subspace));
+      if (!subspace && options_.gauge_prior_weight > 0) {
+        // Weak pull towards the nominal values, in half-width units: it only matters along the
+        // gauge directions (where the data says nothing), which it fixes to the representative
+        // closest to the nominal, away from the bounds.
+        Eigen::MatrixXd a = Eigen::MatrixXd::Zero(count_, count_);
+        for (int k : free) {
+          a(k, k) = options_.gauge_prior_weight / half_widths_[static_cast<std::size_t>(k)];
+        }
+        const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(nominal_values_.data(), count_);
+        problem.AddResidualBlock(new ceres::NormalPrior(a, b), nullptr, values_.data());
+      }
+      for (int k : free) {
+        if (!bounded(k)) continue;
+        const double h = stage.bounds_scale * half_widths_[static_cast<std::size_t>(k)];
+        const double c = nominal_values_[static_cast<std::size_t>(k)];
+        problem.SetParameterLowerBound(values_.data(), k, c - h);
+        problem.SetParameterUpperBound(values_.data(), k, c + h);
+      }
       ceres::Solve(solver, &problem, &summary);
+      if (round == 0) report.initial_cost = summary.initial_cost * to_m2;
       report.iterations += static_cast<int>(summary.iterations.size()) - 1;
       add_counters(summary, &report);
+      // Ceres projects the unconstrained step onto the box, which stalls once a parameter sits on
+      // a bound the step pushes against. Active set: hold the parameters at a bound, solve again,
+      // briefly (the next round frees them again, from a recentred start).
+      int held = count_ - static_cast<int>(free.size());
+      ceres::Solver::Options held_solver = solver;
+      held_solver.max_num_iterations = std::max(1, options_.max_iterations / 5);
+      for (int pass = 0; pass < 3; ++pass) {
+        bool changed = false;
+        for (int k : free) {
+          if (is_free[static_cast<std::size_t>(k)] && at_bound(k)) {
+            is_free[static_cast<std::size_t>(k)] = false;
+            ++held;
+            changed = true;
+          }
+        }
+        if (!changed || held >= count_) break;
+        problem.SetManifold(values_.data(), make_manifold(is_free, subspace));
+        ceres::Solve(held_solver, &problem, &summary);
+        report.iterations += static_cast<int>(summary.iterations.size()) - 1;
+        add_counters(summary, &report);
+      }
+      const bool any_at_bound = std::any_of(free.begin(), free.end(), at_bound);
+      if (!any_at_bound || !(summary.final_cost < (1 - 1e-2) * previous_round_cost)) break;
+      previous_round_cost = summary.final_cost;
+      recentre_in_gauge(stage_free, stage.bounds_scale);
     }
     report.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     for (const FkCache& c : caches_) {
@@ -469,6 +487,69 @@ class Identification {
     report->residual_time_s += summary.residual_evaluation_time_in_seconds;
     report->jacobian_time_s += summary.jacobian_evaluation_time_in_seconds;
     report->linear_solver_time_s += summary.linear_solver_time_in_seconds;
+  }
+
+  /// Moves the values along the gauge orbit (which changes no prediction), by the generators of
+  /// `is_free` whose parameters are all free, to the representative that lies deepest inside the
+  /// box nominal +- bounds_scale half-widths: the minimum over the motion of
+  /// sum_k (dev_k / h_k)^16 on the bounded free parameters, a smooth stand-in for the largest
+  /// |dev_k| / h_k (convex: the deviations are affine in the generators' coefficients, then
+  /// mapped onto the exact finite motions). A stage restricted to the complement of the gauge
+  /// keeps its start's gauge component, so a start near a bound would pin it there; a truth
+  /// inside the box has a representative inside it, and this start reaches it.
+  void recentre_in_gauge(const std::vector<bool>& is_free, double bounds_scale) {
+    const std::vector<GaugeGenerator> generators = gauge_generators(robot());
+    const std::vector<bool> present = present_generators(generators, is_free);
+    std::vector<int> rows, cols;
+    for (int k = 0; k < count_; ++k) {
+      if (is_free[static_cast<std::size_t>(k)] && bounded(k)) rows.push_back(k);
+    }
+    for (std::size_t j = 0; j < generators.size(); ++j) {
+      if (present[j]) cols.push_back(static_cast<int>(j));
+    }
+    if (rows.empty() || cols.empty()) return;
+    const Eigen::Index m = static_cast<Eigen::Index>(rows.size());
+    const Eigen::Index c = static_cast<Eigen::Index>(cols.size());
+    Eigen::MatrixXd a(m, c);
+    Eigen::VectorXd e0(m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+      const std::size_t k = static_cast<std::size_t>(rows[static_cast<std::size_t>(i)]);
+      const double h = bounds_scale * half_widths_[k];
+      e0(i) = (values_[k] - nominal_values_[k]) / h;
+      for (Eigen::Index j = 0; j < c; ++j)
+        a(i, j) =
+            generators[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])].direction[k] /
+            h;
+    }
+    // Newton on f(g) = sum e^p, e = e0 + a g, from the least-squares (p = 2) minimum.
+    constexpr int p = 16;
+    const auto f = [&](const Eigen::VectorXd& g) { return (e0 + a * g).array().pow(p).sum(); };
+    Eigen::VectorXd g = a.colPivHouseholderQr().solve(-e0);
+    if (!g.allFinite()) g.setZero();
+    double fg = f(g);
+    for (int iter = 0; iter < 50; ++iter) {
+      const Eigen::ArrayXd e = (e0 + a * g).array();
+      const Eigen::VectorXd gradient = a.transpose() * (p * e.pow(p - 1)).matrix();
+      const Eigen::MatrixXd hessian =
+          a.transpose() * (p * (p - 1) * e.pow(p - 2)).matrix().asDiagonal() * a;
+      const Eigen::VectorXd step = -hessian.ldlt().solve(gradient);
+      if (!step.allFinite()) break;
+      double t = 1.0, ft = f(g + step);
+      for (int ls = 0; ls < 30 && !(ft < fg); ++ls) ft = f(g + (t *= 0.5) * step);
+      if (!(ft < fg)) break;
+      g += t * step;
+      const bool done = fg - ft <= 1e-12 * fg;
+      fg = ft;
+      if (done) break;
+    }
+    double coefficient[7] = {0, 0, 0, 0, 0, 0, 0};  // in gauge_generators' order
+    for (Eigen::Index j = 0; j < c; ++j) {
+      coefficient[cols[static_cast<std::size_t>(j)]] = g(j);
+    }
+    const RobotParams<double> moved = move_along_gauge(
+        robot(), Pose2<double>{coefficient[0], coefficient[1], coefficient[2]},
+        Pose2<double>{coefficient[3], coefficient[4], coefficient[5]}, 1.0 + coefficient[6]);
+    get_parameters(moved, values_.data());
   }
 
   /// The stage's manifold: the free parameters in half-width units, minus (with `remove_gauge`)
@@ -789,40 +870,42 @@ std::vector<double> parameter_half_widths(const RobotUncertainty& u, int num_lim
   return h;
 }
 
+RobotParams<double> move_along_gauge(const RobotParams<double>& params, const Pose2<double>& G,
+                                     const Pose2<double>& H, double stiffness_scale) {
+  RobotParams<double> out = params;
+  for (int i = 0; i < params.num_limbs; ++i) {
+    LimbParams<double>& limb = out.limb(i);
+    limb.A = G.transform(params.limb(i).A);
+    limb.alpha = params.limb(i).alpha + G.theta;
+    limb.B = H.transform(params.limb(i).B);
+    limb.beta = params.limb(i).beta + H.theta;
+    limb.diameter = params.limb(i).diameter * stiffness_scale;
+  }
+  out.extrinsics.camera = G * params.extrinsics.camera;
+  out.extrinsics.pattern = params.extrinsics.pattern * H.inverse();
+  return out;
+}
+
 RobotParams<double> fix_gauge(const RobotParams<double>& params,
                               const RobotParams<double>& reference, bool proximal_translation,
                               bool proximal_rotation, bool distal_translation, bool distal_rotation,
                               bool stiffness) {
-  RobotParams<double> out = params;
-  const int n = params.num_limbs;
-  if (proximal_translation) {
-    // G maps limb 0's estimated proximal clamp frame onto its reference one.
-    const double rot = proximal_rotation ? reference.limb(0).alpha - params.limb(0).alpha : 0.0;
-    const Pose2<double> r{0, 0, rot};
-    const Vector2<double> t = reference.limb(0).A - r.rotate(params.limb(0).A);
-    const Pose2<double> G{t.x(), t.y(), rot};
-    for (int i = 0; i < n; ++i) {
-      out.limb(i).A = G.transform(params.limb(i).A);
-      out.limb(i).alpha = params.limb(i).alpha + rot;
-    }
-    out.extrinsics.camera = G * params.extrinsics.camera;
-  }
-  if (distal_translation) {
-    const double rot = distal_rotation ? reference.limb(0).beta - params.limb(0).beta : 0.0;
-    const Pose2<double> r{0, 0, rot};
-    const Vector2<double> t = reference.limb(0).B - r.rotate(params.limb(0).B);
-    const Pose2<double> H{t.x(), t.y(), rot};
-    for (int i = 0; i < n; ++i) {
-      out.limb(i).B = H.transform(params.limb(i).B);
-      out.limb(i).beta = params.limb(i).beta + rot;
-    }
-    out.extrinsics.pattern = params.extrinsics.pattern * H.inverse();
-  }
-  if (stiffness) {
-    const double s = reference.limb(0).diameter / params.limb(0).diameter;
-    for (int i = 0; i < n; ++i) out.limb(i).diameter = params.limb(i).diameter * s;
-  }
-  return out;
+  // The motion that maps limb 0's estimated clamp frame onto its reference one.
+  const auto onto_reference = [](bool translation, bool rotation, const Vector2<double>& estimated,
+                                 double estimated_angle, const Vector2<double>& wanted,
+                                 double wanted_angle) {
+    if (!translation) return Pose2<double>{0, 0, 0};
+    const double rot = rotation ? wanted_angle - estimated_angle : 0.0;
+    const Vector2<double> t = wanted - Pose2<double>{0, 0, rot}.rotate(estimated);
+    return Pose2<double>{t.x(), t.y(), rot};
+  };
+  const LimbParams<double>& limb = params.limb(0);
+  const LimbParams<double>& ref = reference.limb(0);
+  const Pose2<double> G =
+      onto_reference(proximal_translation, proximal_rotation, limb.A, limb.alpha, ref.A, ref.alpha);
+  const Pose2<double> H =
+      onto_reference(distal_translation, distal_rotation, limb.B, limb.beta, ref.B, ref.beta);
+  return move_along_gauge(params, G, H, stiffness ? ref.diameter / limb.diameter : 1.0);
 }
 
 ConfigurationErrors configuration_errors(const RobotParams<double>& robot,

@@ -7,11 +7,14 @@
 namespace pcr {
 namespace {
 
-/// nominal + U(-h, h); h = 0 leaves the value unchanged (and still consumes one draw, so the
-/// stream does not depend on which half-widths are zero).
-double draw(std::mt19937_64& rng, double nominal, double half_width) {
+/// nominal + U(-h, h), or nominal +- fraction h with the sign drawn when fraction > 0; h = 0
+/// leaves the value unchanged (and still consumes one draw, so the stream does not depend on which
+/// half-widths are zero).
+double draw(std::mt19937_64& rng, double nominal, double half_width, double fraction = 0.0) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  return nominal + half_width * u(rng);
+  const double x = u(rng);
+  if (fraction > 0.0) return nominal + half_width * (x < 0.0 ? -fraction : fraction);
+  return nominal + half_width * x;
 }
 
 void check_non_negative(double value, const char* name) {
@@ -44,6 +47,13 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
   check_non_negative(options.noise_angle, "noise_angle");
   check_non_negative(options.effects.misalignment_half_width, "effects.misalignment_half_width");
   check_non_negative(options.effects.diameter_half_width, "effects.diameter_half_width");
+  if (!(options.truth_at_fraction >= 0.0 && options.truth_at_fraction <= 1.0)) {
+    std::ostringstream msg;
+    msg << "VirtualRobotOptions: truth_at_fraction must lie in [0, 1], got "
+        << options.truth_at_fraction;
+    throw InputError(msg.str());
+  }
+  const double f = options.truth_at_fraction;
 
   // Two independent streams from one seed: the truth, and the measurement noise.
   std::seed_seq truth_seq{options.seed, std::uint64_t{0x7472757468}};  // "truth"
@@ -59,31 +69,31 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
   RobotParams<double>& p = truth_.params;
   // One material and one wire: E and d are drawn once for all limbs (relative to limb 0's
   // nominal offset, so per-limb nominal differences are kept).
-  const double e_offset = draw(rng, 0.0, u.global.young_modulus);
-  const double d_offset = draw(rng, 0.0, u.global.diameter);
+  const double e_offset = draw(rng, 0.0, u.global.young_modulus, f);
+  const double d_offset = draw(rng, 0.0, u.global.diameter, f);
   truth_.young_modulus = nominal.young_modulus + e_offset;
   for (int i = 0; i < n; ++i) {
     const LimbUncertainty& h = u.limbs[static_cast<std::size_t>(i)];
     LimbParams<double>& limb = p.limb(i);
     limb.young_modulus += e_offset;
     limb.diameter += d_offset;
-    limb.length = draw(rng, limb.length, h.length);
-    limb.A.x() = draw(rng, limb.A.x(), h.A.x());
-    limb.A.y() = draw(rng, limb.A.y(), h.A.y());
-    limb.alpha = draw(rng, limb.alpha, h.alpha);
-    limb.B.x() = draw(rng, limb.B.x(), h.B.x());
-    limb.B.y() = draw(rng, limb.B.y(), h.B.y());
-    limb.beta = draw(rng, limb.beta, h.beta);
-    limb.gamma = draw(rng, limb.gamma, h.gamma);
+    limb.length = draw(rng, limb.length, h.length, f);
+    limb.A.x() = draw(rng, limb.A.x(), h.A.x(), f);
+    limb.A.y() = draw(rng, limb.A.y(), h.A.y(), f);
+    limb.alpha = draw(rng, limb.alpha, h.alpha, f);
+    limb.B.x() = draw(rng, limb.B.x(), h.B.x(), f);
+    limb.B.y() = draw(rng, limb.B.y(), h.B.y(), f);
+    limb.beta = draw(rng, limb.beta, h.beta, f);
+    limb.gamma = draw(rng, limb.gamma, h.gamma, f);
   }
   Pose2<double>& camera = p.extrinsics.camera;
   Pose2<double>& pattern = p.extrinsics.pattern;
-  camera.x = draw(rng, camera.x, u.camera.x());
-  camera.y = draw(rng, camera.y, u.camera.y());
-  camera.theta = draw(rng, camera.theta, u.camera.z());
-  pattern.x = draw(rng, pattern.x, u.pattern.x());
-  pattern.y = draw(rng, pattern.y, u.pattern.y());
-  pattern.theta = draw(rng, pattern.theta, u.pattern.z());
+  camera.x = draw(rng, camera.x, u.camera.x(), f);
+  camera.y = draw(rng, camera.y, u.camera.y(), f);
+  camera.theta = draw(rng, camera.theta, u.camera.z(), f);
+  pattern.x = draw(rng, pattern.x, u.pattern.x(), f);
+  pattern.y = draw(rng, pattern.y, u.pattern.y(), f);
+  pattern.theta = draw(rng, pattern.theta, u.pattern.z(), f);
 
   // Unmodelled effects: each from its own stream, so switching one on does not change the others
   // nor the base truth above.

@@ -26,6 +26,13 @@
 //   the data) left LM crawling along near-gauge valleys. Holding limb 0 at its nominal values
 //   during the stages is not an option: a rotation of up to 5 mrad about limb 0's clamp moves the
 //   other clamps by up to 0.5 mm, outside their +-0.16 mm boxes.
+//   Bounds and gauge: a truth inside the box may have, in the gauge a stage starts in, a
+//   representative outside it (the gauge components of its deviations are not those of the
+//   start), which a stage restricted to the complement of the gauge cannot reach: it stalls on
+//   the bounds. So each stage first moves the values along the gauge orbit (no prediction
+//   changes) to the representative deepest inside the box, and runs in rounds: a round that ends
+//   with parameters at a bound (held there by an active set) is followed by another from the
+//   recentred values with every parameter free, while the rounds lower the cost by 1%.
 //   After the last stage the gauge is fixed exactly, without changing any prediction: limb 0
 //   defines the frames, so A_0, alpha_0 (and, distally, B_0, beta_0) and d_0 get back their nominal
 //   (measured) values, the others and the extrinsics follow. The standard deviations are computed
@@ -241,6 +248,13 @@ PoseErrorStats pose_errors(const RobotParams<double>& robot,
 
 /// The flat half-widths of `uncertainty` for a robot with `num_limbs` limbs.
 std::vector<double> parameter_half_widths(const RobotUncertainty& uncertainty, int num_limbs);
+
+/// Moves `params` along the gauge orbit (predictions with no load are unchanged): the proximal
+/// clamps and the camera frame by the rigid motion G (A -> G A, alpha -> alpha + G.theta,
+/// camera -> G camera), the distal clamps and the pattern frame by H (B -> H B,
+/// beta -> beta + H.theta, pattern -> pattern H^-1), every diameter times stiffness_scale.
+RobotParams<double> move_along_gauge(const RobotParams<double>& params, const Pose2<double>& G,
+                                     const Pose2<double>& H, double stiffness_scale);
 
 /// Moves `params` along the gauge orbit so that limb 0's clamps (A_0, alpha_0 when
 /// `proximal` = 0b111 bits x/y/rotation present, B_0, beta_0 for `distal`) and d_0 (`stiffness`)

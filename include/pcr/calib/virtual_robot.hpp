@@ -5,7 +5,9 @@
 //
 // How the truth is drawn (seeded, std::mt19937_64, reproducible across runs of the same build):
 // - every limb parameter and every extrinsic parameter = nominal + U(-h, h), h its half-width in
-//   the nominal description's RobotUncertainty (a missing uncertainty means h = 0);
+//   the nominal description's RobotUncertainty (a missing uncertainty means h = 0); or, with
+//   VirtualRobotOptions::truth_at_fraction f > 0, nominal +- f h with the sign drawn (a truth in
+//   the corners of the intervals, where a bounded identification is hardest);
 // - E and d are drawn once for all limbs (one material, one wire): per-limb differences are an
 //   unmodelled effect, switched on by UnmodelledEffects::unequal_diameters.
 // Unmodelled effects, each independent of the others:
@@ -43,6 +45,9 @@ struct UnmodelledEffects {
 
 struct VirtualRobotOptions {
   std::uint64_t seed = 1;
+  /// 0: the truth is drawn uniformly inside the intervals; f in (0, 1]: every parameter at
+  /// nominal +- f half-widths, the sign drawn.
+  double truth_at_fraction = 0.0;
   double noise_position = kDefaultNoisePosition;  ///< m, std of x and of y (independent)
   double noise_angle = kDefaultNoiseAngle;        ///< rad, std of theta
   UnmodelledEffects effects;
