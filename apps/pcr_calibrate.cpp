@@ -116,9 +116,10 @@ int main(int argc, char** argv) {
     outputs.commit();
     std::cout.flush();
     if (!std::cout) throw std::runtime_error("<stdout>: write error");
-    for (const std::string& warning : result.warnings)
+    const std::vector<std::string> warnings = pcr::calibration_warnings(result, table);
+    for (const std::string& warning : warnings)
       std::cerr << "pcr_calibrate: warning: " << warning << "\n";
-    if (strict && !result.warnings.empty()) return 3;
+    if (strict && !warnings.empty()) return 3;
   } catch (const std::exception& e) {
     std::cerr << "pcr_calibrate: " << e.what() << "\n";
     return 1;

@@ -259,6 +259,45 @@ TEST_F(PcrCalibrate, UnitSlipsAreNamed) {
   EXPECT_NE(err.find("units.csv:"), std::string::npos) << err;
 }
 
+// Two rows pasted twice and a validation set of another robot (its poses 0.5 mm off): warnings
+// name the copies by line and the validation set by its error, and --strict makes them an exit 3.
+TEST_F(PcrCalibrate, CopiedRowsAndAForeignValidationSetAreNamed) {
+  Dataset data = read_dataset(path("calibration.csv"));
+  const std::size_t rows = data.size();
+  data.add(data.q[2], data.poses[2]);
+  data.add(data.q[9], data.poses[9]);
+  write_dataset(data, path("copies.csv"));
+  Dataset foreign = read_dataset(path("validation.csv"));
+  for (Pose2<double>& pose : foreign.poses) pose.x += 0.5e-3;
+  write_dataset(foreign, path("foreign.csv"));
+  const std::string command = kTool + " --robot " + path("nominal.json") + " --data " +
+                              path("copies.csv") + " --validation " + path("foreign.csv") +
+                              " --quiet --output " + path("out.json") + " --report " +
+                              path("report.json") + " > /dev/null 2> " + path("err.txt");
+  ASSERT_EQ(std::system(command.c_str()), 0) << slurp(path("err.txt"));
+  const std::string err = slurp(path("err.txt"));
+  // Row j is on line j + 1 (the header is line 1).
+  const std::string copies = path("copies.csv");
+  const std::string first = copies + ":" + std::to_string(rows + 2) + " = " + copies + ":4";
+  const std::string second = copies + ":" + std::to_string(rows + 3) + " = " + copies + ":11";
+  EXPECT_NE(err.find("2 rows repeat an earlier row"), std::string::npos) << err;
+  EXPECT_NE(err.find(first), std::string::npos) << err;
+  EXPECT_NE(err.find(second), std::string::npos) << err;
+  EXPECT_NE(err.find("mean e_p on the validation set"), std::string::npos) << err;
+  EXPECT_NE(slurp(path("report.json")).find("mean e_p on the validation set"), std::string::npos);
+  // A clean run has neither warning; --strict turns them into exit status 3.
+  const std::string clean = kTool + " --robot " + path("nominal.json") + " --data " +
+                            path("calibration.csv") + " --validation " + path("validation.csv") +
+                            " --quiet --output " + path("clean.json") + " > /dev/null 2> " +
+                            path("clean.txt");
+  ASSERT_EQ(std::system(clean.c_str()), 0);
+  EXPECT_EQ(slurp(path("clean.txt")).find("repeat an earlier row"), std::string::npos);
+  EXPECT_EQ(slurp(path("clean.txt")).find("validation set ("), std::string::npos);
+  const int strict = std::system((command + " --strict").c_str());
+  ASSERT_TRUE(WIFEXITED(strict));
+  EXPECT_EQ(WEXITSTATUS(strict), 3);
+}
+
 // 30 measurements of one configuration identify 3 combinations of the 9 free parameters: the
 // other 6 are named, and no parameter they involve gets a standard deviation (not 0, not a number).
 TEST_F(PcrCalibrate, UnidentifiableCombinationsAreNamed) {

@@ -2,6 +2,7 @@
 
 #include "pcr/calib/calibration_report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -11,6 +12,27 @@
 
 namespace pcr {
 namespace {
+
+/// The unit a reader of the paper's Table 1 thinks of a parameter's deviation in.
+struct DisplayUnit {
+  double factor;  ///< from SI
+  const char* name;
+};
+
+DisplayUnit display_unit(ParameterKind kind) {
+  switch (kind) {
+    case ParameterKind::kYoungModulus:
+      return {1e-6, "MPa"};
+    case ParameterKind::kAlpha:
+    case ParameterKind::kBeta:
+    case ParameterKind::kGamma:
+    case ParameterKind::kCameraTheta:
+    case ParameterKind::kPatternTheta:
+      return {1e3, "mrad"};
+    default:
+      return {1e6, "um"};
+  }
+}
 
 using nlohmann::ordered_json;
 
@@ -68,8 +90,34 @@ CalibrationTable calibration_table(const CalibrationResult& result,
              table.nominal_validation);
     evaluate(result.identified, validation, table.identified_validation_errors,
              table.identified_validation);
+    const double calibration_mean = table.nominal_calibration.mean_p;
+    const double validation_mean = table.nominal_validation.mean_p;
+    if (validation_mean > 5 * calibration_mean) {
+      char text[320];
+      std::snprintf(text, sizeof text,
+                    "the nominal model's mean e_p on the validation set (%.3g um) is %.3g times "
+                    "that on the calibration set (%.3g um): another robot's data, another unit or "
+                    "another frame?",
+                    validation_mean * 1e6, validation_mean / calibration_mean,
+                    calibration_mean * 1e6);
+      table.warnings.push_back(text);
+    }
+    const int failed =
+        std::max(table.nominal_validation.failed, table.identified_validation.failed);
+    if (failed > 0) {
+      table.warnings.push_back(std::to_string(failed) + " of " + std::to_string(validation.size()) +
+                               " validation configurations have no FK solution on the nominal or "
+                               "the identified model (left out of Table 3)");
+    }
   }
   return table;
+}
+
+std::vector<std::string> calibration_warnings(const CalibrationResult& result,
+                                              const CalibrationTable& table) {
+  std::vector<std::string> all = result.warnings;
+  all.insert(all.end(), table.warnings.begin(), table.warnings.end());
+  return all;
 }
 
 std::string calibration_table_text(const CalibrationTable& table) {
@@ -99,15 +147,18 @@ std::string calibration_report_text(const CalibrationResult& result,
                   s.iterations, s.time_s);
     out << buf;
   }
-  out << "\nparameters (value, nominal, std; limb-0 gauge):\n";
+  out << "\nparameters (value, nominal, deviation from nominal, std; limb-0 gauge; SI, the "
+         "deviation in um, mrad or MPa):\n";
   std::vector<std::string> at_bound;
   for (const ParameterEstimate& p : result.parameters) {
     if (p.free) {
-      char buf[256];
+      const DisplayUnit unit = display_unit(p.kind);
+      char buf[320];
       char std_text[32];
       std::snprintf(std_text, sizeof std_text, "%.3e", p.std_dev);
-      std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  std %s%s%s\n", p.name.c_str(),
-                    p.value, p.nominal, p.identifiable ? std_text : "not identifiable",
+      std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  %+9.3f %-4s  std %s%s%s\n",
+                    p.name.c_str(), p.value, p.nominal, (p.value - p.nominal) * unit.factor,
+                    unit.name, p.identifiable ? std_text : "not identifiable",
                     p.gauge_reference ? "  (gauge reference)" : "", p.at_bound ? "  AT BOUND" : "");
       out << buf;
     }
@@ -137,7 +188,8 @@ std::string calibration_report_text(const CalibrationResult& result,
     out << "\nnot identifiable from these data (combinations in half-widths, beyond the gauge):\n";
     for (const std::string& combination : result.unidentifiable) out << "  " << combination << "\n";
   }
-  for (const std::string& warning : result.warnings) out << "warning: " << warning << "\n";
+  for (const std::string& warning : calibration_warnings(result, table))
+    out << "warning: " << warning << "\n";
   return out.str();
 }
 
@@ -221,7 +273,7 @@ std::string calibration_report_json(const CalibrationResult& result,
       {"dropped_rows", result.dropped},
       {"outlier_rows", result.outliers},
       {"unidentifiable_combinations", result.unidentifiable},
-      {"warnings", result.warnings}};
+      {"warnings", calibration_warnings(result, table)}};
   // NaN (a failed covariance, an empty set) is not JSON: nlohmann writes null.
   return report.dump(2) + "\n";
 }

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -145,6 +146,30 @@ void warn_of_units(const std::vector<CalibrationSample>& rows,
       [&](std::size_t j) { return nominal[j].y; });
 }
 
+/// Rows that repeat an earlier row to the last digit, joints and measurement: two measurements of
+/// one configuration never agree to every digit, so such a row is a copy (pasted twice, a file
+/// appended to itself), which counts one measurement as two. A repeated configuration with its own
+/// measurement is a repeatability measurement, and no warning.
+void warn_of_copies(const std::vector<CalibrationSample>& rows, CalibrationResult* result) {
+  const auto key = [](const CalibrationSample& row) {
+    std::vector<double> k(row.q.data(), row.q.data() + row.q.size());
+    k.insert(k.end(), {row.measured.x, row.measured.y, row.measured.theta});
+    return k;
+  };
+  std::map<std::vector<double>, std::size_t> first;
+  std::vector<std::string> copies;
+  for (std::size_t j = 0; j < rows.size(); ++j) {
+    const auto [at, inserted] = first.emplace(key(rows[j]), j);
+    if (!inserted) copies.push_back(origin_of(rows, j) + " = " + origin_of(rows, at->second));
+  }
+  if (!copies.empty()) {
+    result->warnings.push_back(std::to_string(copies.size()) +
+                               " rows repeat an earlier row to the last digit, joints and "
+                               "measurement (a copy counts one measurement twice): " +
+                               listing(copies));
+  }
+}
+
 /// The rows the nominal geometry reaches. Ceres cannot start from a failed evaluation, and a row
 /// that no robot near the nominal one reaches is a typo, a wrong unit or another robot's: an
 /// InputError, or with drop_unreachable left out and listed in result->dropped. Joints outside
@@ -177,6 +202,7 @@ std::vector<CalibrationSample> reachable_rows(const RobotParams<double>& nominal
     }
   }
   warn_of_units(reachable, *poses, result);
+  warn_of_copies(data, result);
   if (!outside.empty()) {
     result->warnings.push_back(
         std::to_string(outside.size()) +
@@ -1026,6 +1052,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     ParameterEstimate& p = result.parameters[static_cast<std::size_t>(k)];
     const std::size_t uk = static_cast<std::size_t>(k);
     p.name = parameter_name(parameter_id(k, n));
+    p.kind = parameter_id(k, n).kind;
     p.nominal = id.nominal_values()[uk];
     p.half_width = id.half_widths()[uk];
     p.free = is_free[uk];

@@ -26,19 +26,29 @@ struct CalibrationTable {
   ConfigurationErrors nominal_calibration_errors, identified_calibration_errors;
   ConfigurationErrors nominal_validation_errors, identified_validation_errors;
   bool has_validation = false;
+  /// What makes the validation doubtful, in words: configurations whose nominal FK fails, a
+  /// nominal error far beyond the calibration set's (another robot's or another unit's data).
+  std::vector<std::string> warnings;
 };
 
-/// Evaluates both models on both sets (`validation` may be empty).
+/// Evaluates both models on both sets (`validation` may be empty), and warns of a validation set
+/// unlike the calibration set: the nominal model's mean e_p on it beyond 5 times that on the
+/// calibration set (both sets come from one workspace, where the nominal model's errors are
+/// alike), or configurations whose FK fails.
 CalibrationTable calibration_table(const CalibrationResult& result,
                                    const std::vector<CalibrationSample>& calibration,
                                    const std::vector<CalibrationSample>& validation,
                                    const SolverOptions& fk = SolverOptions());
 
+/// Every warning of a calibration: the result's, then the table's.
+std::vector<std::string> calibration_warnings(const CalibrationResult& result,
+                                              const CalibrationTable& table);
+
 /// Table 3 as text (um and mrad), one line per model and set.
 std::string calibration_table_text(const CalibrationTable& table);
 
 /// The whole report as text: Table 3, stages, free parameters (value, nominal, std), parameters at
-/// a bound, gauge directions, residual variance.
+/// a bound, gauge directions, residual variance, the result's and the table's warnings.
 std::string calibration_report_text(const CalibrationResult& result, const CalibrationTable& table);
 
 /// The per-configuration residuals of the identified model on the calibration set, as CSV:

@@ -151,6 +151,7 @@ struct StageReport {
 
 struct ParameterEstimate {
   std::string name;  ///< "l[1]", "camera_x" ...
+  ParameterKind kind = ParameterKind::kLength;
   double nominal = 0;
   double value = 0;    ///< identified, in the final gauge
   double std_dev = 0;  ///< 0 when not free or gauge reference; NaN when not identifiable or failed
