@@ -55,7 +55,10 @@ struct SolverOptions {
   int max_rod_steps = 512;
   /// Newton iterations per solve (each sub-solve of a continuation has its own budget).
   int max_iterations = 20;
-  /// Convergence: max-norm of the scaled residual (lengths / L, forces / (EI / L^2)).
+  /// Convergence: max-norm of the scaled residual (lengths / L, forces / (EI / L^2)). A run of
+  /// chord steps also stops when the next one is predicted to leave an error on the outputs
+  /// below 1 % of position_accuracy and angle_accuracy (that step is taken, its residual not
+  /// evaluated): SolverSummary::final_residual_norm can then be above the tolerance.
   double tolerance = 1e-12;
   /// Step halvings of the backtracking line search.
   int max_line_search = 12;

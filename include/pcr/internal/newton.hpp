@@ -83,9 +83,10 @@ struct NewtonResult {
 /// z (say, at the previous solution of a control loop) to try as the chord matrix of the first
 /// step when z is near the solution; on exit, the factorisation of the last Jacobian evaluated.
 ///
-/// Problem: size(), and evaluate(z, r, J*) filling the residual and, when J is not null, its
-/// Jacobian; it returns a by-product kept with the accepted point (the shooting problem's largest
-/// bending strain).
+/// Problem: size(); evaluate(z, r, J*) filling the residual and, when J is not null, its
+/// Jacobian, and returning a by-product kept with the accepted point (the shooting problem's
+/// largest bending strain); output_change_within(dz, share), whether a step dz moves the solved
+/// outputs by at most that share of their accuracy targets.
 template <class Problem>
 NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const SolverOptions& options,
                           SolverSummary& summary, ChordMatrix* carried = nullptr) {
@@ -95,6 +96,8 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
   constexpr double kChordContraction = 0.1;
   // A residual and a Newton step this small (scaled: 3e-11 m on a 30 mm rod) are rounding noise.
   constexpr double kRoundingFloor = 1e-9;
+  // Newton's error on the outputs is left at most this share of their accuracy targets.
+  constexpr double kNegligibleShare = 1e-2;
   NewtonResult result;
   ShootingVector r, r_trial, z_trial, step, r_corrected, z_corrected;
   JacobianMatrix J, J_trial;
@@ -188,10 +191,15 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
         result.final_norm = norm;
         result.max_strain = strain;
         // The stopping rule of simplified Newton (Hairer and Wanner, Solving ODEs II, IV.8):
-        // chord steps contract at a steady rate, so when the next one is due to bring the
-        // residual below the tolerance it is taken without evaluating the residual after it.
-        if (norm > options.tolerance && contraction * norm <= options.tolerance) {
-          z -= lu.solve(r);
+        // chord steps contract at a steady rate, so the next one is taken without evaluating
+        // the residual after it when it is due to bring the residual below the tolerance, or
+        // when the error it leaves on the outputs, about the contraction times its own size,
+        // is a negligible share of the accuracy targets.
+        if (norm <= options.tolerance) continue;
+        step = -lu.solve(r);
+        if (contraction * norm <= options.tolerance ||
+            problem.output_change_within(contraction * step, kNegligibleShare)) {
+          z += step;
           ++summary.iterations;
           result.final_norm = contraction * norm;  // predicted
           result.status = SolveStatus::kConverged;

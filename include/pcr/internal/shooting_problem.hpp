@@ -48,6 +48,15 @@ class ShootingProblem {
     }
   }
 
+  /// Whether a step dz of the unknowns moves the solved outputs by at most `share` of the
+  /// accuracy targets (SolverOptions::position_accuracy, angle_accuracy).
+  bool output_change_within(const ShootingVector& dz, double share) const {
+    double position, angle;
+    output_change(dz, position, angle);
+    return position <= share * options_.position_accuracy &&
+           angle <= share * options_.angle_accuracy;
+  }
+
   /// The step count for a solution whose estimated error at the current count is `ratio` times
   /// its target: the smallest on the ladder that meets the target (error ~ N^-4), but a lower
   /// count only when it meets half the target, so that a sequence does not flip between two.
