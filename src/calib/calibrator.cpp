@@ -364,7 +364,9 @@ class Identification {
     }
   }
 
-  StageReport run_stage(const CalibrationStage& stage, int rescale = 0) {
+  /// Fits the stage's free parameters; `last`: the final stage (the tighter function tolerance);
+  /// `rescale`: how many times the stage has been solved again for a smaller Huber scale.
+  StageReport run_stage(const CalibrationStage& stage, bool last = true, int rescale = 0) {
     StageReport report;
     report.name = stage.name;
     const std::vector<int> free = free_indices(stage);
@@ -389,7 +391,8 @@ class Identification {
     solver.linear_solver_type = ceres::DENSE_QR;
     solver.max_num_iterations = options_.max_iterations;
     solver.num_threads = 1;
-    solver.function_tolerance = options_.function_tolerance;
+    solver.function_tolerance =
+        last ? options_.function_tolerance : options_.intermediate_function_tolerance;
     solver.gradient_tolerance = 1e-12;
     // Off: Ceres compares the step with |x|, which E (~7e10 Pa) dominates, so any step would
     // look negligible. The function and gradient tolerances (whitened residuals) decide.
@@ -488,7 +491,7 @@ class Identification {
     if (rescale < 8 && used > 0) {
       update_loss_scale();
       if (loss_scale_ < 0.5 * used) {
-        const StageReport again = run_stage(stage, rescale + 1);
+        const StageReport again = run_stage(stage, last, rescale + 1);
         report.final_cost = again.final_cost;
         report.termination = again.termination;
         report.usable = again.usable;
@@ -1039,7 +1042,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     id.set_values(registered);
   }
   for (std::size_t s = 0; s < options.stages.size(); ++s) {
-    result.stages.push_back(id.run_stage(options.stages[s]));
+    result.stages.push_back(id.run_stage(options.stages[s], s + 1 == options.stages.size()));
     if (s == 0 && first_is_extrinsics) result.extrinsics_only = id.robot();
   }
 

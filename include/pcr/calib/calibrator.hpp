@@ -107,6 +107,9 @@ struct CalibrationOptions {
   /// A stage stops when an iteration lowers the cost by less than this fraction. The whitened
   /// cost is ~ m / 2 at the noise floor, so 1e-6 is a decrease far below one noise unit.
   double function_tolerance = 1e-6;
+  /// The same for the stages before the last: they only bring the values into the last stage's
+  /// basin, which refits every parameter they fit.
+  double intermediate_function_tolerance = 1e-2;
   bool compute_covariance = true;
   /// Huber loss on each configuration's whitened residual norm beyond this many declared noise
   /// units (residual_scale): a row that far off pulls like one at the scale, not with its whole
