@@ -24,6 +24,29 @@ namespace pcr::internal {
 /// Reciprocal condition number below which a solved start counts as a bifurcation point.
 inline constexpr double kBifurcationRcond = 1e-13;
 
+/// A rod whose bending turns it by less than this along its length (rad) counts as straight.
+inline constexpr double kStraightTurn = 1e-6;
+
+/// Whether z has four or more straight rods. A straight rod carries an axial force, which does no
+/// work on an inextensible rod: with four or more, the platform's three balance equations leave
+/// n - 3 combinations of their axial forces (a self-stress) undetermined, so the Jacobian is
+/// singular there, and the branches of rods bowed to either side meet (a 5-limb robot with one
+/// limb longer: four rods stay straight at home and the fifth bows). Bending along a rod is
+/// m(s) = m0 - n_perp s, n_perp the force across its tangent at the proximal clamp.
+inline bool self_stressed(const ShootingProblem& problem, const ShootingVector& z) {
+  const ShootingPoint<double> p = problem.unpack(z);
+  int straight = 0;
+  for (int i = 0; i < problem.robot().num_limbs; ++i) {
+    const LimbParams<double>& limb = problem.robot().limb(i);
+    const Wrench<double>& w = p.wrenches[i];
+    const double across = -w.nx * std::sin(limb.alpha) + w.ny * std::cos(limb.alpha);
+    const double turn = (std::abs(w.m) + 0.5 * std::abs(across) * limb.length) * limb.length /
+                        limb.bending_stiffness();
+    straight += turn < kStraightTurn ? 1 : 0;
+  }
+  return straight >= 4;
+}
+
 /// At the last solved point z of a path that stalled at a nearly singular Jacobian, whether the
 /// path meets a bifurcation there rather than a fold. At a fold the path turns back: the input
 /// direction pushes the residual along J's left null vector w (w . dr/du du != 0), so no solution
@@ -34,6 +57,7 @@ inline constexpr double kBifurcationRcond = 1e-13;
 /// direction (the smallest singular value well below the next).
 inline bool stalled_at_bifurcation(const ShootingProblem& problem, const ShootingVector& z,
                                    const ShootingVector& du, SolverSummary& summary) {
+  if (self_stressed(problem, z)) return true;
   ShootingVector r;
   JacobianMatrix J;
   problem.evaluate(z, r, &J);
@@ -84,7 +108,7 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   // (t, rcond) at the last two solved points of the path.
   problem.set_input(u0);
   double rc_last = jacobian_rcond(problem, z0, summary), rc_prev = rc_last;
-  if (rc_last <= kBifurcationRcond) {
+  if (rc_last <= kBifurcationRcond || self_stressed(problem, z0)) {
     // A solution with a singular Jacobian that Newton could not leave: the straight rods of a
     // robot with n >= 4 limbs (a self-stress), where the branches of bowed rods meet.
     z = z0;
