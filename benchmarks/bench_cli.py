@@ -87,7 +87,7 @@ def main():
         libraries = str(len(ldd.splitlines()))
 
     print(f"joint path: {args.rows} rows, {STEP_M * 1e6:g} um apart (default robot)")
-    print(f"pcr fk start-up, one row (mean of 50):    : {startup_ms:.2f} ms, "
+    print(f"pcr fk start-up, one row (mean of 50):     {startup_ms:.2f} ms, "
           f"{libraries} shared libraries (ldd)")
     print(f"pcr fk, whole run / rows:                  {cli_us:.2f} us/row")
     print(f"library warm FK (ForwardSequence):         {sequence_us:.2f} us/row")

@@ -115,6 +115,7 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
   ChordMatrix lu;
   bool jacobian_at_z = true;  // J is the Jacobian at z (else: at an earlier iterate, chord)
   bool factorised = false;    // lu holds the factorisation of the newest Jacobian
+  bool step_ready = false;    // step is the chord step from z with lu
   if (try_chord) {
     if (norm <= kWarmNorm || norm <= options.tolerance) {
       lu = *carried;
@@ -176,7 +177,10 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
     ++summary.iterations;
     if (!jacobian_at_z) {
       // Chord step: accepted only if it contracts as a Newton step near the solution would.
-      step = -lu.solve(r);  // a carried factorisation: a bad one fails the contraction test
+      // A carried factorisation: a bad one fails the contraction test. The stopping rule below
+      // may have computed this step already.
+      if (!step_ready) step = -lu.solve(r);
+      step_ready = false;
       z_trial = z + step;
       const double strain = problem.evaluate(z_trial, r_trial, nullptr);
       ++summary.residual_evaluations;
@@ -197,6 +201,7 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
         // is a negligible share of the accuracy targets.
         if (norm <= options.tolerance) continue;
         step = -lu.solve(r);
+        step_ready = true;
         if (contraction * norm <= options.tolerance ||
             problem.output_change_within(contraction * step, kNegligibleShare)) {
           z += step;
