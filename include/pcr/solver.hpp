@@ -57,7 +57,7 @@ struct SolverOptions {
   int max_iterations = 20;
   /// Convergence: max-norm of the scaled residual (lengths / L, forces / (EI / L^2)). A run of
   /// chord steps also stops when the next one is predicted to leave an error on the outputs
-  /// below 1 % of position_accuracy and angle_accuracy (that step is taken, its residual not
+  /// below 10 % of position_accuracy and angle_accuracy (that step is taken, its residual not
   /// evaluated): SolverSummary::final_residual_norm can then be above the tolerance.
   double tolerance = 1e-12;
   /// Step halvings of the backtracking line search.
