@@ -304,6 +304,28 @@ TEST(Kinematics, PreStressedRedundantRobotsFindTheirBowedHome) {
   }
 }
 
+// Limb 0 of the pre-stressed 4-limb robot pushed 0.1 mm in: the branch followed from the bowed
+// home folds back near 80 um (its Jacobian's smallest singular value falls to 2e-9 of the largest,
+// with the push along it). The continuation stalls there in ever shorter steps too short to show
+// rcond's trend; the stall is still a singularity (no solution ahead on this branch), not a
+// budget that ran out.
+TEST(Kinematics, PreStressedRobotPushedIntoAFoldSaysSingular) {
+  RobotParams<double> robot = testing::regular_robot(4);
+  robot.limb(1).length += 80e-6;
+  robot.limb(1).alpha += 3e-3;
+  const ForwardSolution home = home_solution(robot);
+  ASSERT_TRUE(home.summary.converged());
+  const ForwardSolution pushed = forward_kinematics(robot, joints({1e-4, 0.0, 0.0, 0.0}), home);
+  EXPECT_EQ(pushed.summary.status, SolveStatus::kSingular);
+  EXPECT_GT(pushed.summary.path_fraction, 0.5);
+  EXPECT_LT(pushed.summary.path_fraction, 1.0);
+  EXPECT_NEAR(pushed.q(0), 1e-4 * pushed.summary.path_fraction, 1e-12);
+  // Short of the fold the branch is there: solved warm from home.
+  const ForwardSolution before = forward_kinematics(
+      robot, joints({0.9e-4 * pushed.summary.path_fraction, 0.0, 0.0, 0.0}), home);
+  EXPECT_TRUE(before.summary.converged()) << to_string(before.summary.status);
+}
+
 TEST(Kinematics, SequenceSolveRetriesAFailedWarmStartCold) {
   const RobotParams<double> robot = femto_3pf();
   const JointVector q = joints({0.003, -0.002, 0.001});

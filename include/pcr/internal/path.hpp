@@ -24,6 +24,12 @@ namespace pcr::internal {
 /// Reciprocal condition number below which a solved start counts as a bifurcation point.
 inline constexpr double kBifurcationRcond = 1e-13;
 
+/// Reciprocal condition number of the last solved point at or below which a stalled path counts
+/// as stopped at a singularity even when rcond's trend did not show it coming (its last steps too
+/// short to extrapolate). Over 1357 FK solutions within 1 % strain of 30 robots drawn inside the
+/// paper's intervals (n = 2 to 6) the median is 1e-3 and 1 % lie below 1.6e-7.
+inline constexpr double kStallSingularRcond = 1e-7;
+
 /// A rod whose bending turns it by less than this along its length (rad) counts as straight.
 inline constexpr double kStraightTurn = 1e-6;
 
@@ -126,12 +132,16 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
     return stalled_at_bifurcation(problem, z_last, u1 - u0, summary) ? SolveStatus::kBifurcation
                                                                      : SolveStatus::kSingular;
   };
+  // The status of a stalled path: `otherwise` unless it stalled at a singularity.
+  const auto stall_status = [&](SolveStatus otherwise) {
+    return singular_ahead() || rc_last <= kStallSingularRcond ? singular_status() : otherwise;
+  };
   while (t < 1.0) {
     if (summary.continuation_steps >= options.max_continuation_steps) {
       z = z_last;  // the last solved point of the path
       problem.set_input(u0 + t * (u1 - u0));
       summary.path_fraction = t;
-      return singular_ahead() ? singular_status() : SolveStatus::kMaxIterations;
+      return stall_status(SolveStatus::kMaxIterations);
     }
     ++summary.continuation_steps;
     const double t_next = std::min(1.0, t + dt);
@@ -162,8 +172,7 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
       problem.set_input(u0 + t * (u1 - u0));
       summary.path_fraction = t;
       summary.final_residual_norm = sub.final_norm;
-      return singular_ahead() || sub.status == SolveStatus::kSingular ? singular_status()
-                                                                      : sub.status;
+      return sub.status == SolveStatus::kSingular ? singular_status() : stall_status(sub.status);
     }
   }
   return SolveStatus::kConverged;
