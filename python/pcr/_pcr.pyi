@@ -112,6 +112,7 @@ class SolverOptions:
     max_rod_steps: int
     max_iterations: int
     tolerance: float
+    chord_output_share: float
     max_line_search: int
     continuation: bool
     max_continuation_steps: int

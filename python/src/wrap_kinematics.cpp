@@ -236,6 +236,9 @@ void wrap_kinematics(py::module_& m) {
                      "Newton iterations per solve")
       .def_readwrite("tolerance", &SolverOptions::tolerance,
                      "max-norm of the scaled residual (lengths / l, forces / (EI / l^2))")
+      .def_readwrite("chord_output_share", &SolverOptions::chord_output_share,
+                     "share of the accuracy targets a chord run may leave on the outputs; 0 "
+                     "runs every solve to the tolerance")
       .def_readwrite("max_line_search", &SolverOptions::max_line_search)
       .def_readwrite("continuation", &SolverOptions::continuation)
       .def_readwrite("max_continuation_steps", &SolverOptions::max_continuation_steps)

@@ -96,9 +96,6 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
   constexpr double kChordContraction = 0.1;
   // A residual and a Newton step this small (scaled: 3e-11 m on a 30 mm rod) are rounding noise.
   constexpr double kRoundingFloor = 1e-9;
-  // Newton's error on the outputs is left at most this share of their accuracy targets: with the
-  // discretisation's 0.25 nm, 0.025 nm, 2.5 % of the 1 nm promise.
-  constexpr double kNegligibleShare = 0.1;
   NewtonResult result;
   ShootingVector r, r_trial, z_trial, step, r_corrected, z_corrected;
   JacobianMatrix J, J_trial;
@@ -198,7 +195,7 @@ NewtonResult newton_solve(const Problem& problem, ShootingVector& z, const Solve
         step = -lu.solve(r);
         step_ready = true;
         if (contraction * norm <= options.tolerance ||
-            problem.output_change_within(contraction * step, kNegligibleShare)) {
+            problem.output_change_within(contraction * step, options.chord_output_share)) {
           z += step;
           ++summary.iterations;
           result.final_norm = contraction * norm;  // predicted
