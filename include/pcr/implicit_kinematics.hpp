@@ -33,7 +33,7 @@ struct LinearisedForward {
     z = problem.pack(point);
     ShootingVector r;
     JacobianMatrix J;
-    problem.evaluate(z, r, &J);
+    problem.evaluate(z, r, &J, tips);
     lu.compute(J);
     ok = lu.rcond() > 1e-14;
   }
@@ -42,6 +42,7 @@ struct LinearisedForward {
   ShootingPoint<double> point;
   ShootingVector z;
   Eigen::PartialPivLU<JacobianMatrix> lu;
+  RodTip<double> tips[kMaxLimbs];  ///< the rods' tips at z*, with their sensitivities
   bool ok = false;
 };
 

@@ -6,6 +6,7 @@
 // rod length L, forces by F = EI / L^2 (mean EI), moments by F L.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <type_traits>
@@ -183,11 +184,13 @@ void input_partials(const RobotParams<T>& robot, const ShootingPoint<T>& point,
 /// Evaluates the scaled residual (3n + 3) at a point. With `partials`, also fills
 /// d residual / d (wrenches, pose, q) in scaled units: columns [3i, 3i+3) rod i's wrench,
 /// [3n, 3n+3) the pose (x, y, theta), [3n+3, 4n+3) the joints. Returns the largest bending strain
-/// |m| d / (2 EI) over the rods' RK4 nodes.
+/// |m| d / (2 EI) over the rods' RK4 nodes. With `tips` (n entries), also the rods' tips (with
+/// their sensitivities when `partials` is requested).
 template <class T>
 T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
                     const PlatformLoad<T>& load, const ShootingScale& scale, int rod_steps,
-                    ResidualVector<T>& residual, ShootingMatrix* partials = nullptr) {
+                    ResidualVector<T>& residual, ShootingMatrix* partials = nullptr,
+                    RodTip<T>* tips_out = nullptr) {
   const int n = robot.num_limbs;
   // Rod tips (and sensitivities with partials). In double the rods are integrated together, one
   // per SIMD lane: each is a serial chain of dependent multiplies, side by side they share the
@@ -236,6 +239,7 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
     }
   }
   const T strain = shooting_residual_from_tips(robot, point, load, scale, tips, residual);
+  if (tips_out) std::copy(tips, tips + n, tips_out);
   if (!partials) return strain;
   partials->setZero(3 * n + 3, 4 * n + 3);
   const double c = std::cos(scalar_value(point.pose.theta));

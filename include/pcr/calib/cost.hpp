@@ -17,11 +17,13 @@
 // Two exact implementations of that derivative:
 // - DerivativeMode::kImplicit (default), PoseMeasurementCost: assembled per limb. Rod i's residual
 //   rows depend only on limb i's ten parameters, and of those the rod integration itself only on
-//   (alpha_i, EI_i, l_i): one RK4 pass in Jet<double, 3> per rod gives them; A, gamma, E, d, B,
-//   beta enter by hand-written chain rules. The pose rows of (dr/dz)^-1 come from one transposed
-//   solve with the LU of the already evaluated Jacobian, and the extrinsics (which enter only
-//   the final measurement transform) through a Jet<double, 9>. About 10x cheaper than the
-//   auto-diff pass below, which pushes all 36 lanes through every RK4 step of every rod.
+//   (alpha_i, EI_i, l_i): the rod's symmetries give them from the tip's sensitivities to its
+//   wrench, which the Jacobian dr/dz already integrated (limb_residual_partials); A, gamma, E, d,
+//   B, beta enter by hand-written chain rules. The pose rows of (dr/dz)^-1 come from one
+//   transposed solve with the LU of that Jacobian, and the extrinsics (which enter only the final
+//   measurement transform) through a Jet<double, 9>. No RK4 pass beyond the Jacobian's: far
+//   cheaper than the auto-diff pass below, which pushes all 36 lanes through every RK4 step of
+//   every rod.
 // - DerivativeMode::kAutoDiff: one Newton step in Jet (forward_pose_implicit) through the whole
 //   residual: AutoDiffCostFunction<3, 36> for n = 3, DynamicAutoDiffCostFunction with
 //   Jet<double, 16> chunks otherwise. Kept as the independent cross-check of the assembly.
@@ -74,23 +76,29 @@ namespace internal {
 /// Scaled partial derivatives of limb i's shooting residual rows with respect to its ten flat
 /// parameters (E, d, l, A_x, A_y, alpha, B_x, B_y, beta, gamma), at a fixed point (wrench, pose):
 /// rows 0..2 = closure rows 3i..3i+2, row 3 = limb i's term of the moment balance (row 3n + 2).
-/// The force balance rows do not depend on the parameters.
+/// The force balance rows do not depend on the parameters. `tip`: the rod's tip at that point
+/// with its sensitivities to (n_x, n_y, m(0)).
+///
+/// The rod's own parameters (start angle, EI, l) need no integration: three symmetries of the
+/// planar rod, which RK4 at a fixed step count keeps exactly, turn them into the sensitivities:
+///   turning the start angle and the force by delta turns the rod about its start by delta;
+///   (EI, n, m) -> c (EI, n, m) leaves the shape and scales m;
+///   l -> c l with (n, m) -> (c^2 n, c m) scales the shape about its start by c and m by 1/c.
 inline void limb_residual_partials(const LimbParams<double>& limb, double q,
-                                   const Wrench<double>& w, const Pose2<double>& pose,
-                                   const ShootingScale& scale, int rod_steps,
+                                   const Wrench<double>& w, const RodTip<double>& tip,
+                                   const Pose2<double>& pose, const ShootingScale& scale,
                                    Eigen::Matrix<double, 4, kLimbParameters>& out) {
-  using J3 = ceres::Jet<double, 3>;  // lanes: start angle alpha, EI, length
   const double ca = std::cos(limb.alpha + limb.gamma), sa = std::sin(limb.alpha + limb.gamma);
   const double ei = limb.bending_stiffness();
-  const RodState<J3> start{J3(limb.A.x() + q * ca),
-                           J3(limb.A.y() + q * sa),
-                           J3(limb.alpha, 0),
-                           J3(w.nx),
-                           J3(w.ny),
-                           J3(w.m)};
-  const RodState<J3> tip = integrate_rod(start, J3(ei, 1), J3(limb.length, 2), rod_steps);
-  // d (x, y, theta, m)(l) / d (alpha as start angle, EI, l).
-  const J3* tips[4] = {&tip.x, &tip.y, &tip.theta, &tip.m};
+  const double dx = tip.state.x - (limb.A.x() + q * ca), dy = tip.state.y - (limb.A.y() + q * sa);
+  const Eigen::Matrix<double, 4, 3>& S = tip.sensitivity;  // d (x, y, theta, m)(l) / d (n, m(0))
+  const Eigen::Vector4d d_start_angle =
+      Eigen::Vector4d(-dy, dx, 1.0, 0.0) + S * Eigen::Vector3d(w.ny, -w.nx, 0.0);
+  const Eigen::Vector4d d_ei =
+      (Eigen::Vector4d(0.0, 0.0, 0.0, tip.state.m) - S * Eigen::Vector3d(w.nx, w.ny, w.m)) / ei;
+  const Eigen::Vector4d d_length = (Eigen::Vector4d(dx, dy, 0.0, -tip.state.m) +
+                                    S * Eigen::Vector3d(2.0 * w.nx, 2.0 * w.ny, w.m)) /
+                                   limb.length;
   Eigen::Matrix<double, 4, kLimbParameters> d = Eigen::Matrix<double, 4, kLimbParameters>::Zero();
   const int kE = static_cast<int>(ParameterKind::kYoungModulus);
   const int kD = static_cast<int>(ParameterKind::kDiameter);
@@ -100,13 +108,10 @@ inline void limb_residual_partials(const LimbParams<double>& limb, double q,
   const int kBx = static_cast<int>(ParameterKind::kBx), kBy = static_cast<int>(ParameterKind::kBy);
   const int kBeta = static_cast<int>(ParameterKind::kBeta);
   const int kGamma = static_cast<int>(ParameterKind::kGamma);
-  for (int r = 0; r < 4; ++r) {
-    const ceres::Jet<double, 3>& t = *tips[r];
-    d(r, kE) = t.v[1] * ei / limb.young_modulus;  // EI = E pi d^4 / 64
-    d(r, kD) = t.v[1] * 4.0 * ei / limb.diameter;
-    d(r, kL) = t.v[2];
-    d(r, kAlpha) = t.v[0];
-  }
+  d.col(kE) = d_ei * ei / limb.young_modulus;  // EI = E pi d^4 / 64
+  d.col(kD) = d_ei * 4.0 * ei / limb.diameter;
+  d.col(kL) = d_length;
+  d.col(kAlpha) = d_start_angle;
   // The start point A + q (cos, sin)(alpha + gamma) shifts the whole rod.
   d(0, kAx) = 1.0;
   d(1, kAy) = 1.0;
@@ -165,7 +170,7 @@ inline bool platform_pose_jacobian(const RobotParams<double>& robot,
   Eigen::Matrix<double, 4, kLimbParameters> dr;
   for (int i = 0; i < n; ++i) {
     internal::limb_residual_partials(robot.limb(i), solution.q(i), solution.wrenches[i],
-                                     solution.pose, scale, problem.rod_steps(), dr);
+                                     linear.tips[i], solution.pose, scale, dr);
     const int rows[4] = {3 * i, 3 * i + 1, 3 * i + 2, 3 * n + 2};
     for (int k = 0; k < 3; ++k) {
       for (int j = 0; j < kLimbParameters; ++j) {

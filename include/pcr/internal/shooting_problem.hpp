@@ -131,13 +131,15 @@ class ShootingProblem {
     return p;
   }
 
-  /// Residual and, on request, the Jacobian w.r.t. the scaled unknowns. Returns max strain.
-  double evaluate(const ShootingVector& z, ShootingVector& r, JacobianMatrix* jacobian) const {
+  /// Residual and, on request, the Jacobian w.r.t. the scaled unknowns and the rods' tips (see
+  /// shooting_residual). Returns max strain.
+  double evaluate(const ShootingVector& z, ShootingVector& r, JacobianMatrix* jacobian,
+                  RodTip<double>* tips = nullptr) const {
     const ShootingPoint<double> p = unpack(z);
 
     ResidualVector<double> res;
-    const double strain =
-        shooting_residual(robot_, p, load_, scale_, steps_, res, jacobian ? &partials_ : nullptr);
+    const double strain = shooting_residual(robot_, p, load_, scale_, steps_, res,
+                                            jacobian ? &partials_ : nullptr, tips);
     r = res;
     if (offset_.size() == r.size()) r -= offset_;
     if (jacobian) {
