@@ -400,6 +400,18 @@ class Identification {
     solver.logging_type = ceres::SILENT;
     ProgressCallback callback(stage.name, to_m2, options_.progress);
     if (options_.progress) solver.callbacks.push_back(&callback);
+    // Ceres projects the unconstrained step onto the box: once a step has put a free parameter
+    // on its bound, the following ones keep a fraction of the decrease their model predicts and
+    // crawl. The solve stops there instead, and the parameter is held at the bound (below).
+    std::vector<bool> is_free;
+    BoundCallback stop_at_bound([&] {
+      for (int k : free) {
+        if (is_free[static_cast<std::size_t>(k)] && at_bound(k)) return true;
+      }
+      return false;
+    });
+    solver.callbacks.push_back(&stop_at_bound);
+    solver.update_state_every_iteration = true;  // the callback reads values_
     ceres::Solver::Summary summary;
     const auto start = std::chrono::steady_clock::now();
     for (FkCache& c : caches_) c.evaluations = c.warm_start_failures = c.newton_iterations = 0;
@@ -424,7 +436,7 @@ class Identification {
       if (round == 0) update_loss_scale();
       ceres::Problem problem;
       add_residuals(problem);
-      std::vector<bool> is_free = stage_free;
+      is_free = stage_free;
       problem.SetManifold(values_.data(), make_manifold(is_free, subspace));
       if (!subspace && options_.gauge_prior_weight > 0) {
         // Weak pull towards the nominal values, in half-width units: it only matters along the
@@ -448,24 +460,20 @@ class Identification {
       if (round == 0) report.initial_cost = summary.initial_cost * to_m2;
       report.iterations += static_cast<int>(summary.iterations.size()) - 1;
       add_counters(summary, &report);
-      // Ceres projects the unconstrained step onto the box, which stalls once a parameter sits on
-      // a bound the step pushes against. Active set: hold the parameters at a bound, solve again,
-      // briefly (the next round frees them again, from a recentred start).
-      int held = count_ - static_cast<int>(free.size());
-      ceres::Solver::Options held_solver = solver;
-      held_solver.max_num_iterations = std::max(1, options_.max_iterations / 5);
-      for (int pass = 0; pass < 3; ++pass) {
-        bool changed = false;
-        for (int k : free) {
-          if (is_free[static_cast<std::size_t>(k)] && at_bound(k)) {
-            is_free[static_cast<std::size_t>(k)] = false;
-            ++held;
-            changed = true;
-          }
+      // Active set: hold the free parameters at a bound the cost pushes against, release the
+      // held ones it pulls back inside, solve again; until neither changes.
+      constexpr int kMaxPasses = 12;
+      for (int pass = 0;
+           pass < kMaxPasses &&
+           update_active_set(free, at_bound, summary.termination_type == ceres::USER_SUCCESS,
+                             &is_free);
+           ++pass) {
+        if (std::none_of(free.begin(), free.end(),
+                         [&](int k) { return is_free[static_cast<std::size_t>(k)]; })) {
+          break;
         }
-        if (!changed || held >= count_) break;
         problem.SetManifold(values_.data(), make_manifold(is_free, subspace));
-        ceres::Solve(held_solver, &problem, &summary);
+        ceres::Solve(solver, &problem, &summary);
         report.iterations += static_cast<int>(summary.iterations.size()) - 1;
         add_counters(summary, &report);
       }
@@ -675,6 +683,59 @@ class Identification {
   double last_bounds_scale() const { return last_bounds_scale_; }
 
  private:
+  /// Ends a solve (successfully: the values are the last accepted step's) when `stop` says so
+  /// after an accepted step.
+  class BoundCallback : public ceres::IterationCallback {
+   public:
+    explicit BoundCallback(std::function<bool()> stop) : stop_(std::move(stop)) {}
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+      return s.iteration > 0 && s.step_is_successful && stop_()
+                 ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
+                 : ceres::SOLVER_CONTINUE;
+    }
+
+   private:
+    std::function<bool()> stop_;
+  };
+
+  /// One update of the active set of the bounds. After a solve stopped by a step onto a bound,
+  /// the free parameters at a bound are held. After a solve that ran its course, the sign of the
+  /// cost's gradient at a bound (its Lagrange multiplier's) decides: a parameter of `free` the
+  /// cost pushes against its bound is held, one it pulls back inside is free. Returns whether
+  /// any changed.
+  template <class AtBound>
+  bool update_active_set(const std::vector<int>& free, const AtBound& at_bound,
+                         bool stopped_at_bound, std::vector<bool>* is_free) {
+    if (stopped_at_bound) {
+      bool changed = false;
+      for (int k : free) {
+        if ((*is_free)[static_cast<std::size_t>(k)] && at_bound(k)) {
+          (*is_free)[static_cast<std::size_t>(k)] = false;
+          changed = true;
+        }
+      }
+      return changed;
+    }
+    ceres::Problem problem;
+    add_residuals(problem);
+    double c = 0;
+    std::vector<double> gradient;
+    if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), &c, nullptr, &gradient, nullptr)) {
+      return false;
+    }
+    bool changed = false;
+    for (int k : free) {
+      const std::size_t uk = static_cast<std::size_t>(k);
+      if (!at_bound(k)) continue;
+      const bool pulled_inside = gradient[uk] * (values_[uk] - nominal_values_[uk]) > 0;
+      if ((*is_free)[uk] != pulled_inside) {
+        (*is_free)[uk] = pulled_inside;
+        changed = true;
+      }
+    }
+    return changed;
+  }
+
   class ProgressCallback : public ceres::IterationCallback {
    public:
     ProgressCallback(std::string stage, double to_m2,
