@@ -398,6 +398,10 @@ class Identification {
     // look negligible. The function and gradient tolerances (whitened residuals) decide.
     solver.parameter_tolerance = 0.0;
     solver.logging_type = ceres::SILENT;
+    // With bounds, Ceres runs an Armijo line search on every step; cubic interpolation (its
+    // default) asks for the gradient at each trial point, a whole Jacobian evaluation of the
+    // rows. Quadratic interpolation needs the trial costs only.
+    solver.line_search_interpolation_type = ceres::QUADRATIC;
     ProgressCallback callback(stage.name, to_m2, options_.progress);
     if (options_.progress) solver.callbacks.push_back(&callback);
     // Ceres projects the unconstrained step onto the box: once a step has put a free parameter
