@@ -112,7 +112,8 @@ TEST(CostFunctor, ExactDerivativesMatchCentralDifferences) {
 }
 
 // The per-limb analytic assembly (the default) against the auto-diff pass through the whole
-// residual: two independent implementations of the same implicit-function derivative.
+// residual: two independent implementations of the same implicit-function derivative; with the
+// constant platform load as three more parameters, also its columns.
 TEST(CostFunctor, AnalyticJacobianMatchesAutoDiff) {
   const RobotDescription nominal = default_robot();
   const RobotParams<double>& base = nominal.params;
@@ -123,51 +124,77 @@ TEST(CostFunctor, AnalyticJacobianMatchesAutoDiff) {
   const JointVector configurations[] = {(JointVector(3) << 0.004, -0.003, 0.002).finished(),
                                         (JointVector(3) << -0.009, 0.008, 0.001).finished(),
                                         (JointVector(3) << 0.0, 0.0, 0.0).finished()};
-  for (const JointVector& q : configurations) {
-    std::vector<double> p = flat(base);
-    for (int k = 0; k < count; ++k) {
-      const std::size_t uk = static_cast<std::size_t>(k);
-      // E has no half-width: move it too, so its column is checked away from the nominal.
-      p[uk] += u(rng) * (h[uk] > 0 ? h[uk] : 0.02 * std::abs(p[uk]));
-    }
-    const Pose2<double> measured{2e-4, -1e-4, 0.02};
-    FkCache cache_a, cache_b;
-    std::unique_ptr<ceres::CostFunction> analytic(PoseMeasurementError::Create(
-        base, q, measured, kDefaultOrientationWeight, kDefaultResidualScale, &cache_a,
-        SolverOptions(), DerivativeMode::kImplicit));
-    std::unique_ptr<ceres::CostFunction> autodiff(PoseMeasurementError::Create(
-        base, q, measured, kDefaultOrientationWeight, kDefaultResidualScale, &cache_b,
-        SolverOptions(), DerivativeMode::kAutoDiff));
-    std::vector<double> ja(static_cast<std::size_t>(3 * count)), jb(ja.size());
-    double ra[3], rb[3];
-    const double* params[] = {p.data()};
-    double* jac_a[] = {ja.data()};
-    double* jac_b[] = {jb.data()};
-    ASSERT_TRUE(analytic->Evaluate(params, ra, jac_a));
-    ASSERT_TRUE(autodiff->Evaluate(params, rb, jac_b));
-    for (int i = 0; i < 3; ++i) {
-      EXPECT_NEAR(ra[i], rb[i], 1e-9 * std::max(1.0, std::abs(rb[i])));
-      // Relative to the row's largest entry times a parameter scale (half-width, or |value|).
-      double row_scale = 0;
-      std::vector<double> scale(static_cast<std::size_t>(count));
+  // A load of the size the calibration should absorb (2 mN, 0.05 mN m), and its scales.
+  const double load[kLoadParameters] = {2e-3, -1e-3, 5e-5};
+  const double load_scale[kLoadParameters] = {2e-3, 2e-3, 6e-5};
+  for (const bool identify_load : {false, true}) {
+    const int size = count + (identify_load ? kLoadParameters : 0);
+    for (const JointVector& q : configurations) {
+      std::vector<double> p = flat(base);
+      for (int k = 0; k < count; ++k) {
+        const std::size_t uk = static_cast<std::size_t>(k);
+        // E has no half-width: move it too, so its column is checked away from the nominal.
+        p[uk] += u(rng) * (h[uk] > 0 ? h[uk] : 0.02 * std::abs(p[uk]));
+      }
+      std::vector<double> scale(static_cast<std::size_t>(size));
       for (int k = 0; k < count; ++k) {
         const std::size_t uk = static_cast<std::size_t>(k);
         scale[uk] = h[uk] > 0 ? h[uk] : std::abs(p[uk]);
-        row_scale =
-            std::max(row_scale, std::abs(jb[static_cast<std::size_t>(i * count + k)]) * scale[uk]);
       }
-      ASSERT_GT(row_scale, 0);
-      for (int k = 0; k < count; ++k) {
-        const std::size_t e = static_cast<std::size_t>(i * count + k);
-        EXPECT_NEAR(ja[e] * scale[static_cast<std::size_t>(k)],
-                    jb[e] * scale[static_cast<std::size_t>(k)], 1e-8 * row_scale)
-            << parameter_name(parameter_id(k, 3)) << " residual " << i;
+      for (int j = 0; j < size - count; ++j) {
+        p.push_back(load[j]);
+        scale[static_cast<std::size_t>(count + j)] = load_scale[j];
       }
+      const Pose2<double> measured{2e-4, -1e-4, 0.02};
+      FkCache cache_a, cache_b;
+      std::unique_ptr<ceres::CostFunction> analytic(PoseMeasurementError::Create(
+          base, q, measured, kDefaultOrientationWeight, kDefaultResidualScale, &cache_a,
+          SolverOptions(), DerivativeMode::kImplicit, identify_load));
+      std::unique_ptr<ceres::CostFunction> autodiff(PoseMeasurementError::Create(
+          base, q, measured, kDefaultOrientationWeight, kDefaultResidualScale, &cache_b,
+          SolverOptions(), DerivativeMode::kAutoDiff, identify_load));
+      ASSERT_EQ(analytic->parameter_block_sizes()[0], size);
+      std::vector<double> ja(static_cast<std::size_t>(3 * size)), jb(ja.size());
+      double ra[3], rb[3];
+      const double* params[] = {p.data()};
+      double* jac_a[] = {ja.data()};
+      double* jac_b[] = {jb.data()};
+      ASSERT_TRUE(analytic->Evaluate(params, ra, jac_a));
+      ASSERT_TRUE(autodiff->Evaluate(params, rb, jac_b));
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(ra[i], rb[i], 1e-9 * std::max(1.0, std::abs(rb[i])));
+        // Relative to the row's largest entry times a parameter scale (half-width, or |value|).
+        double row_scale = 0;
+        for (int k = 0; k < size; ++k) {
+          row_scale = std::max(row_scale, std::abs(jb[static_cast<std::size_t>(i * size + k)]) *
+                                              scale[static_cast<std::size_t>(k)]);
+        }
+        ASSERT_GT(row_scale, 0);
+        for (int k = 0; k < size; ++k) {
+          const std::size_t e = static_cast<std::size_t>(i * size + k);
+          EXPECT_NEAR(ja[e] * scale[static_cast<std::size_t>(k)],
+                      jb[e] * scale[static_cast<std::size_t>(k)], 1e-8 * row_scale)
+              << (k < count ? parameter_name(parameter_id(k, 3))
+                            : "load " + std::to_string(k - count))
+              << " residual " << i;
+        }
+      }
+      if (identify_load) {
+        // Not all zero: the load's scale moves the measurement by more than 0.1 noise units.
+        double moved = 0;
+        for (int i = 0; i < 3; ++i) {
+          for (int j = 0; j < kLoadParameters; ++j) {
+            moved = std::max(moved, std::abs(ja[static_cast<std::size_t>(i * size + count + j)]) *
+                                        load_scale[j]);
+          }
+        }
+        EXPECT_GT(moved, 0.1);
+      }
+      // Without a Jacobian: the same residuals.
+      double rc[3];
+      ASSERT_TRUE(analytic->Evaluate(params, rc, nullptr));
+      for (int i = 0; i < 3; ++i) EXPECT_NEAR(rc[i], rb[i], 1e-9 * std::max(1.0, std::abs(rb[i])));
     }
-    // Without a Jacobian: the same residuals.
-    double rc[3];
-    ASSERT_TRUE(analytic->Evaluate(params, rc, nullptr));
-    for (int i = 0; i < 3; ++i) EXPECT_NEAR(rc[i], rb[i], 1e-9 * std::max(1.0, std::abs(rb[i])));
   }
 }
 

@@ -56,13 +56,17 @@ enum class DerivativeMode {
   kAutoDiff,        ///< implicit function theorem, one Jet through the whole residual (exact)
 };
 
+/// The constant platform load (f_x, f_y, m_z; N, N, N m, in W, the moment about the platform
+/// origin) as identified parameters: appended to the flat parameters in the cost's block.
+inline constexpr int kLoadParameters = 3;
+
 /// Warm-start cache of one configuration: the last converged double FK solution.
 struct FkCache {
   ForwardSolution solution;
   bool valid = false;
   /// The flat parameters `solution` was solved at: Ceres evaluates the Jacobian at the point whose
   /// residual it has just evaluated, and that solve is then reused as is.
-  std::array<double, kMaxParameters> parameters{};
+  std::array<double, kMaxParameters + kLoadParameters> parameters{};
   int failures = 0;  ///< evaluations where FK did not converge
   // Profiling counters (written by every evaluation).
   int evaluations = 0;           ///< double FK solves requested (residual or Jacobian)
@@ -143,11 +147,13 @@ inline void limb_residual_partials(const LimbParams<double>& limb, double q,
 /// d ^W T_P / d (flat parameters), physical units (m or rad per parameter unit), at the
 /// converged double solution `solution` of `robot`, by the implicit function theorem assembled
 /// per limb (see the header comment). `jacobian` is 3 x num_parameters, row-major; the extrinsic
-/// columns are zero. Returns false when the solution did not converge or is singular.
+/// columns are zero. With `load_jacobian`, also d ^W T_P / d (f_x, f_y, m_z) of the constant
+/// platform load, 3 x 3 row-major. Returns false when the solution did not converge or is
+/// singular.
 inline bool platform_pose_jacobian(const RobotParams<double>& robot,
                                    const PlatformLoad<double>& load,
                                    const ForwardSolution& solution, const SolverOptions& options,
-                                   double* jacobian) {
+                                   double* jacobian, double* load_jacobian = nullptr) {
   const internal::LinearisedForward linear(robot, load, solution, options);
   if (!linear.ok) return false;
   const int n = robot.num_limbs;
@@ -166,6 +172,14 @@ inline bool platform_pose_jacobian(const RobotParams<double>& robot,
   const double unscale[3] = {scale.length, scale.length, 1.0};  // z_pose = (x / L, y / L, theta)
   for (int k = 0; k < count; ++k) {
     for (int row = 0; row < 3; ++row) jacobian[row * count + k] = 0.0;
+  }
+  if (load_jacobian) {
+    // The load enters the equilibrium rows only: d r_3n+j / d load_j = -1 / (F, F, F L).
+    const double per_load[3] = {1.0 / scale.force, 1.0 / scale.force, 1.0 / scale.moment()};
+    for (int k = 0; k < 3; ++k) {
+      for (int j = 0; j < 3; ++j)
+        load_jacobian[k * 3 + j] = y(3 * n + j, k) * per_load[j] * unscale[k];
+    }
   }
   Eigen::Matrix<double, 4, kLimbParameters> dr;
   for (int i = 0; i < n; ++i) {
@@ -186,24 +200,32 @@ inline bool platform_pose_jacobian(const RobotParams<double>& robot,
 class PoseMeasurementError {
  public:
   /// `base` supplies what the flat vector does not hold (limb count, strokes). `cache` must
-  /// outlive the functor; it is written by every evaluation (single-threaded Ceres).
+  /// outlive the functor; it is written by every evaluation (single-threaded Ceres). With
+  /// `identify_load`, the parameter block holds num_parameters(n) + kLoadParameters values: the
+  /// flat parameters, then the constant platform load FK is solved under.
   PoseMeasurementError(const RobotParams<double>& base, const JointVector& q,
                        const Pose2<double>& measured, double orientation_weight,
                        double residual_scale, FkCache* cache,
-                       const SolverOptions& options = SolverOptions())
+                       const SolverOptions& options = SolverOptions(), bool identify_load = false)
       : base_(base),
         q_(q),
         measured_(measured),
         weight_(orientation_weight),
         inverse_scale_(1.0 / residual_scale),
         cache_(cache),
-        options_(options) {}
+        options_(options),
+        identify_load_(identify_load) {}
+
+  /// Values in the parameter block.
+  int block_size() const {
+    return num_parameters(base_.num_limbs) + (identify_load_ ? kLoadParameters : 0);
+  }
 
   template <class T>
   bool operator()(const T* const params, T* residuals) const {
-    const int count = num_parameters(base_.num_limbs);
-    double values[kMaxParameters];
-    for (int k = 0; k < count; ++k) values[k] = scalar_value(params[k]);
+    const int size = block_size();
+    double values[kMaxParameters + kLoadParameters];
+    for (int k = 0; k < size; ++k) values[k] = scalar_value(params[k]);
     const RobotParams<double> robot = with_parameters(base_, values);
     const ForwardSolution* solution = solve(robot, values);
     if (solution == nullptr) return false;
@@ -215,8 +237,8 @@ class PoseMeasurementError {
       robot_t = robot;
     } else {
       robot_t = with_parameters(base_.template cast<T>(), params);
-      if (!forward_pose_implicit(robot_t, PlatformLoad<T>(), robot, PlatformLoad<double>(),
-                                 *solution, options_, &platform)) {
+      if (!forward_pose_implicit(robot_t, load_of(params), robot, load_of(values), *solution,
+                                 options_, &platform)) {
         return false;
       }
     }
@@ -228,6 +250,7 @@ class PoseMeasurementError {
   /// row-major) by the per-limb assembly (platform_pose_jacobian) chained through the extrinsics.
   bool evaluate(const double* params, double* residuals, double* jacobian) const {
     const int count = num_parameters(base_.num_limbs);
+    const int size = block_size();
     const RobotParams<double> robot = with_parameters(base_, params);
     const ForwardSolution* solution = solve(robot, params);
     if (solution == nullptr) return false;
@@ -236,8 +259,9 @@ class PoseMeasurementError {
       return true;
     }
     ++cache_->jacobian_evaluations;
-    double dpose[3 * kMaxParameters];
-    if (!platform_pose_jacobian(robot, PlatformLoad<double>(), *solution, options_, dpose)) {
+    double dpose[3 * kMaxParameters], dpose_load[3 * kLoadParameters];
+    if (!platform_pose_jacobian(robot, load_of(params), *solution, options_, dpose,
+                                identify_load_ ? dpose_load : nullptr)) {
       return false;
     }
     // The measurement transform, differentiated w.r.t. (platform pose, camera, pattern).
@@ -253,12 +277,16 @@ class PoseMeasurementError {
     const int extrinsic_column = kLimbParameters * base_.num_limbs;
     for (int r = 0; r < 3; ++r) {
       residuals[r] = res[r].a;
-      double* row = jacobian + r * count;
+      double* row = jacobian + r * size;
       for (int k = 0; k < count; ++k) {
         row[k] = res[r].v[0] * dpose[k] + res[r].v[1] * dpose[count + k] +
                  res[r].v[2] * dpose[2 * count + k];
       }
       for (int e = 0; e < kExtrinsicParameters; ++e) row[extrinsic_column + e] += res[r].v[3 + e];
+      for (int j = 0; j < size - count; ++j) {
+        row[count + j] = res[r].v[0] * dpose_load[j] + res[r].v[1] * dpose_load[3 + j] +
+                         res[r].v[2] * dpose_load[6 + j];
+      }
     }
     return true;
   }
@@ -269,15 +297,24 @@ class PoseMeasurementError {
     return (*this)(params[0], residuals);
   }
 
-  /// A cost function with one parameter block of num_parameters(base.num_limbs) values and three
-  /// residuals. The caller owns the result (or hands it to a ceres::Problem).
+  /// A cost function with one parameter block of block_size() values and three residuals. The
+  /// caller owns the result (or hands it to a ceres::Problem).
   static ceres::CostFunction* Create(const RobotParams<double>& base, const JointVector& q,
                                      const Pose2<double>& measured, double orientation_weight,
                                      double residual_scale, FkCache* cache,
                                      const SolverOptions& options = SolverOptions(),
-                                     DerivativeMode mode = DerivativeMode::kImplicit);
+                                     DerivativeMode mode = DerivativeMode::kImplicit,
+                                     bool identify_load = false);
 
  private:
+  /// The load FK is solved under: the block's last values, or none.
+  template <class T>
+  PlatformLoad<T> load_of(const T* params) const {
+    if (!identify_load_) return PlatformLoad<T>();
+    const int count = num_parameters(base_.num_limbs);
+    return PlatformLoad<T>{Vector2<T>(params[count], params[count + 1]), params[count + 2]};
+  }
+
   template <class T>
   void residual(const Pose2<T>& predicted, T* residuals) const {
     residuals[0] = T(weight_ * inverse_scale_) * wrap_angle(predicted.theta - T(measured_.theta));
@@ -287,13 +324,14 @@ class PoseMeasurementError {
 
   /// Converged double FK at `robot`: warm start from the cache, then a cold start from home.
   const ForwardSolution* solve(const RobotParams<double>& robot, const double* params) const {
-    const int count = num_parameters(base_.num_limbs);
+    const int count = block_size();
     if (cache_->valid && std::equal(params, params + count, cache_->parameters.begin())) {
       return &cache_->solution;
     }
     ++cache_->evaluations;
+    const PlatformLoad<double> load = load_of(params);
     if (cache_->valid) {
-      ForwardSolution s = forward_kinematics(robot, q_, cache_->solution, options_);
+      ForwardSolution s = forward_kinematics(robot, q_, cache_->solution, options_, load);
       cache_->newton_iterations += s.summary.iterations;
       if (s.summary.converged()) {
         cache_->solution = s;
@@ -302,7 +340,7 @@ class PoseMeasurementError {
       }
       ++cache_->warm_start_failures;
     }
-    ForwardSolution s = forward_kinematics(robot, q_, options_);
+    ForwardSolution s = forward_kinematics(robot, q_, options_, load);
     cache_->newton_iterations += s.summary.iterations;
     if (!s.summary.converged()) {
       ++cache_->failures;
@@ -321,15 +359,16 @@ class PoseMeasurementError {
   double inverse_scale_;
   FkCache* cache_;
   SolverOptions options_;
+  bool identify_load_;
 };
 
 /// The analytic cost function of DerivativeMode::kImplicit (any limb count): one parameter block
 /// of num_parameters(n) values, three residuals. Takes ownership of the functor.
 class PoseMeasurementCost final : public ceres::CostFunction {
  public:
-  explicit PoseMeasurementCost(PoseMeasurementError* functor, int num_limbs) : functor_(functor) {
+  explicit PoseMeasurementCost(PoseMeasurementError* functor) : functor_(functor) {
     set_num_residuals(3);
-    mutable_parameter_block_sizes()->push_back(num_parameters(num_limbs));
+    mutable_parameter_block_sizes()->push_back(functor->block_size());
   }
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
@@ -343,12 +382,12 @@ class PoseMeasurementCost final : public ceres::CostFunction {
 inline ceres::CostFunction* PoseMeasurementError::Create(
     const RobotParams<double>& base, const JointVector& q, const Pose2<double>& measured,
     double orientation_weight, double residual_scale, FkCache* cache, const SolverOptions& options,
-    DerivativeMode mode) {
+    DerivativeMode mode, bool identify_load) {
   auto* functor = new PoseMeasurementError(base, q, measured, orientation_weight, residual_scale,
-                                           cache, options);
-  const int count = num_parameters(base.num_limbs);
+                                           cache, options, identify_load);
+  const int count = functor->block_size();
   constexpr int kThreeLimbs = kLimbParameters * 3 + kExtrinsicParameters;
-  if (mode == DerivativeMode::kImplicit) return new PoseMeasurementCost(functor, base.num_limbs);
+  if (mode == DerivativeMode::kImplicit) return new PoseMeasurementCost(functor);
   if (mode == DerivativeMode::kAutoDiff) {
     if (count == kThreeLimbs) {
       return new ceres::AutoDiffCostFunction<PoseMeasurementError, 3, kThreeLimbs>(functor);
