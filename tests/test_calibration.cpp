@@ -239,6 +239,78 @@ TEST(Gauge, FixKeepsEveryPrediction) {
   }
 }
 
+// Under a constant platform load the gauge generators carry the load along: the measurement
+// Jacobian (load columns included) annihilates each of them. A distal translation moves the
+// platform origin, and the moment about it gains the force's arm, which turns with the platform
+// angle theta of each configuration; the generators take it at theta = 0, and with theta's arm
+// they are exact too.
+TEST(Gauge, GeneratorsOfTheLoadedRobotChangeNoPrediction) {
+  const Scenario s = make_scenario(6, 0, 3);
+  const RobotParams<double>& robot = s.truth.params;
+  const int count = num_parameters(robot.num_limbs);
+  const PlatformLoad<double> load{Vector2<double>(2e-3, -1e-3), 5e-5};
+  const double fx = load.force.x(), fy = load.force.y();
+  std::vector<double> p = flat(robot);
+  p.insert(p.end(), {fx, fy, load.moment});
+  const std::vector<GaugeGenerator> generators = gauge_generators(robot, load);
+  ASSERT_EQ(generators.size(), 7u);
+  const std::size_t moment = p.size() - 1;
+  EXPECT_EQ(generators[3].direction[moment], fy);  // e_x x f at theta = 0
+  EXPECT_EQ(generators[4].direction[moment], -fx);
+  for (const CalibrationSample& sample : s.calibration) {
+    FkCache cache;
+    std::unique_ptr<ceres::CostFunction> cost(PoseMeasurementError::Create(
+        robot, sample.q, sample.measured, kDefaultOrientationWeight, kDefaultResidualScale, &cache,
+        SolverOptions(), DerivativeMode::kImplicit, /*identify_load=*/true));
+    std::vector<double> jac(static_cast<std::size_t>(3 * (count + kLoadParameters)));
+    double residuals[3];
+    const double* params[] = {p.data()};
+    double* jacobians[] = {jac.data()};
+    ASSERT_TRUE(cost->Evaluate(params, residuals, jacobians));
+    const double theta = forward_kinematics(robot, sample.q, SolverOptions(), load).pose.theta;
+    for (std::size_t j = 0; j < generators.size(); ++j) {
+      std::vector<double> g = generators[j].direction;
+      ASSERT_EQ(g.size(), p.size());
+      // (R(theta) e) x f for the translations e_x, e_y of the distal clamps.
+      if (j == 3) g[moment] = std::cos(theta) * fy - std::sin(theta) * fx;
+      if (j == 4) g[moment] = -std::sin(theta) * fy - std::cos(theta) * fx;
+      for (int row = 0; row < 3; ++row) {
+        double change = 0, scale = 0;
+        for (std::size_t k = 0; k < g.size(); ++k) {
+          const double term = jac[static_cast<std::size_t>(row) * g.size() + k] * g[k];
+          change += term;
+          scale += std::abs(term);
+        }
+        EXPECT_LE(std::abs(change), 1e-6 * scale)
+            << generators[j].name << ", row " << row << ", theta " << theta;
+      }
+    }
+  }
+}
+
+// The finite motion: moving the world (G), turning the platform frame about its origin (H) and
+// scaling the stiffness, with the load moved along, changes no prediction of the loaded robot.
+TEST(Gauge, LoadMovesAlongAFiniteMotion) {
+  const Scenario s = make_scenario(6, 0, 3);
+  const RobotParams<double>& robot = s.truth.params;
+  const PlatformLoad<double> load{Vector2<double>(2e-3, -1e-3), 5e-5};
+  const Pose2<double> G{3e-4, -2e-4, 0.02}, H{0.0, 0.0, -0.01};
+  const double stiffness_scale = 1.01;
+  const RobotParams<double> moved = move_along_gauge(robot, G, H, stiffness_scale);
+  const PlatformLoad<double> moved_load = move_load_along_gauge(load, G, H, stiffness_scale);
+  EXPECT_NEAR(moved_load.force.norm(), std::pow(stiffness_scale, 4) * load.force.norm(), 1e-15);
+  for (const CalibrationSample& sample : s.calibration) {
+    const ForwardSolution a = forward_kinematics(robot, sample.q, SolverOptions(), load);
+    const ForwardSolution b = forward_kinematics(moved, sample.q, SolverOptions(), moved_load);
+    ASSERT_TRUE(a.summary.converged() && b.summary.converged());
+    const Pose2<double> ma = robot.extrinsics.measurement_from_platform(a.pose);
+    const Pose2<double> mb = moved.extrinsics.measurement_from_platform(b.pose);
+    EXPECT_NEAR(ma.x, mb.x, 1e-12);
+    EXPECT_NEAR(ma.y, mb.y, 1e-12);
+    EXPECT_NEAR(ma.theta, mb.theta, 1e-10);
+  }
+}
+
 TEST(Calibrator, RejectsBadInput) {
   RobotDescription nominal = default_robot();
   std::vector<CalibrationSample> data = {{JointVector::Zero(2), Pose2<double>{}}};

@@ -980,6 +980,33 @@ RobotParams<double> move_along_gauge(const RobotParams<double>& params, const Po
   return out;
 }
 
+PlatformLoad<double> move_load_along_gauge(const PlatformLoad<double>& load, const Pose2<double>& G,
+                                           const Pose2<double>& H, double stiffness_scale) {
+  const double stiffness = std::pow(stiffness_scale, 4);  // EI ~ d^4
+  PlatformLoad<double> out;
+  out.force = stiffness * G.rotate(load.force);
+  // The new platform origin lies at H^-1(0) in the old platform frame: the moment about it
+  // loses that arm's cross product with the force (platform angle taken as 0).
+  const Vector2<double> arm = H.inverse().translation();
+  out.moment = stiffness * (load.moment - (arm.x() * load.force.y() - arm.y() * load.force.x()));
+  return out;
+}
+
+std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot,
+                                             const PlatformLoad<double>& load) {
+  std::vector<GaugeGenerator> out = gauge_generators(robot);
+  const double fx = load.force.x(), fy = load.force.y(), m = load.moment;
+  // d load / d coefficient of each generator, in gauge_generators' order (see
+  // move_load_along_gauge): proximal x, y, rotation; distal x, y, rotation; stiffness.
+  const double components[7][kLoadParameters] = {
+      {0, 0, 0},   {0, 0, 0}, {-fy, fx, 0},           {0, 0, fy},
+      {0, 0, -fx}, {0, 0, 0}, {4 * fx, 4 * fy, 4 * m}};
+  for (std::size_t j = 0; j < out.size(); ++j) {
+    out[j].direction.insert(out[j].direction.end(), components[j], components[j] + kLoadParameters);
+  }
+  return out;
+}
+
 RobotParams<double> fix_gauge(const RobotParams<double>& params,
                               const RobotParams<double>& reference, bool proximal_translation,
                               bool proximal_rotation, bool distal_translation, bool distal_rotation,

@@ -270,6 +270,22 @@ std::vector<double> parameter_half_widths(const RobotUncertainty& uncertainty, i
 RobotParams<double> move_along_gauge(const RobotParams<double>& params, const Pose2<double>& G,
                                      const Pose2<double>& H, double stiffness_scale);
 
+/// The constant platform load (pcr/calib/cost.hpp, kLoadParameters) that keeps the predictions
+/// of move_along_gauge(params, G, H, stiffness_scale) under `load`: the force turns with G (the
+/// world moves), force and moment scale with the bending stiffness (stiffness_scale^4), and the
+/// moment, taken about the platform origin that H moves, gains the force's arm. That arm turns
+/// with each configuration's platform angle; it is taken at theta = 0. So with a force on the
+/// platform a distal translation is no longer a gauge (the spread of the platform angles over the
+/// data sees it, weakly), and the predictions are kept exactly only when H does not translate.
+PlatformLoad<double> move_load_along_gauge(const PlatformLoad<double>& load, const Pose2<double>& G,
+                                           const Pose2<double>& H, double stiffness_scale);
+
+/// The seven generators at `robot` under a constant platform load, with the load's components
+/// (move_load_along_gauge to first order, the distal translations' at platform angle 0) after
+/// the flat ones: directions of num_parameters(n) + kLoadParameters values.
+std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot,
+                                             const PlatformLoad<double>& load);
+
 /// Moves `params` along the gauge orbit so that limb 0's clamps (A_0, alpha_0 when
 /// `proximal` = 0b111 bits x/y/rotation present, B_0, beta_0 for `distal`) and d_0 (`stiffness`)
 /// take `reference`'s values; predictions (with no load) are unchanged.
