@@ -63,7 +63,8 @@ TEST_P(CalibrationSweep, ReachesTheNoiseFloor) {
 }
 
 INSTANTIATE_TEST_SUITE_P(TruthsInsideTheIntervals, CalibrationSweep,
-                         ::testing::Values(SweepCase{0.9, 1}, SweepCase{0.9, 2}, SweepCase{0.0, 1}),
+                         ::testing::Values(SweepCase{0.9, 1}, SweepCase{0.9, 2}, SweepCase{0.9, 3},
+                                           SweepCase{0.0, 1}, SweepCase{0.0, 2}, SweepCase{0.0, 3}),
                          [](const ::testing::TestParamInfo<SweepCase>& info) {
                            return std::string(info.param.truth_at_fraction > 0 ? "corners"
                                                                                : "uniform") +
