@@ -363,7 +363,7 @@ class PoseMeasurementError {
 };
 
 /// The analytic cost function of DerivativeMode::kImplicit (any limb count): one parameter block
-/// of num_parameters(n) values, three residuals. Takes ownership of the functor.
+/// of the functor's block_size() values, three residuals. Takes ownership of the functor.
 class PoseMeasurementCost final : public ceres::CostFunction {
  public:
   explicit PoseMeasurementCost(PoseMeasurementError* functor) : functor_(functor) {
