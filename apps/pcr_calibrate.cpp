@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
       residuals_path;
   double weight = pcr::kDefaultOrientationWeight;
   double robust_scale = pcr::CalibrationOptions().robust_scale;
-  bool quiet = false, drop_unreachable = false, strict = false;
+  bool quiet = false, drop_unreachable = false, strict = false, identify_load = false;
   app.add_option("--robot", robot_path, "nominal pcr-robot description (with uncertainty)")
       ->required();
   app.add_option("--data", data_path, "calibration dataset CSV (q1..qn,x,y,theta)")->required();
@@ -65,6 +65,10 @@ int main(int argc, char** argv) {
                "leave out (and list) the rows without an FK solution on the nominal geometry "
                "instead of refusing the dataset");
   app.add_flag("--strict", strict, "exit 3 when the report has a warning");
+  app.add_flag("--identify-load", identify_load,
+               "identify a constant platform load (f_x, f_y, m_z: air-bearing drag, a cable) with "
+               "the last stage; the report gives it, and pcr fk --force --moment predicts under "
+               "it");
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -86,6 +90,7 @@ int main(int argc, char** argv) {
 
     pcr::CalibrationOptions options;
     if (!stages_path.empty()) options.stages = pcr::load_calibration_stages(stages_path);
+    if (identify_load) options.stages.back().free.push_back("load");
     options.orientation_weight = weight;
     options.drop_unreachable = drop_unreachable;
     options.robust_scale = robust_scale;

@@ -131,6 +131,68 @@ TEST_F(PcrCalibrate, IdentifiedFileReproducesTheTruthsMeasurements) {
   }
 }
 
+// A constant load on the platform (1.8 mN, 10 uN m): with --identify-load the report gives it,
+// within 4 of its standard deviations of the truth's (no gauge moves it here: neither the clamps
+// nor the diameters are free), and FK under it reproduces the truth's noise-free measurements.
+TEST_F(PcrCalibrate, IdentifyLoadReportsThePlatformLoad) {
+  VirtualRobotOptions vo;
+  vo.seed = 5;
+  vo.effects.external_load = true;
+  vo.effects.load = PlatformLoad<double>{Vector2<double>(1.5e-3, -1e-3), 1e-5};
+  VirtualRobot robot(nominal_, vo);
+  SamplingOptions so;
+  so.count = 40;
+  so.seed = 6;
+  const std::vector<JointVector> q = poisson_disc_sample(nominal_.params, so).configurations;
+  ASSERT_EQ(q.size(), 40u);
+  Dataset calibration;
+  std::vector<Pose2<double>> exact;
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    const VirtualMeasurement m = robot.measure(q[j]);
+    ASSERT_TRUE(m.ok);
+    if (j < 30) calibration.add(q[j], m.measured);
+    if (j >= 30) exact.push_back(m.exact);
+  }
+  write_dataset(calibration, path("loaded.csv"));
+  std::ofstream(path("stages.json")) << R"([{"name": "extrinsics", "free": ["extrinsics"]},
+             {"name": "lengths", "free": ["l", "camera", "pattern"]}])";
+  const std::string command = kTool + " --robot " + path("nominal.json") + " --data " +
+                              path("loaded.csv") + " --stages " + path("stages.json") +
+                              " --identify-load --output " + path("identified.json") +
+                              " --quiet > " + path("out.txt") + " 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << slurp(path("out.txt"));
+  const std::string out = slurp(path("out.txt"));
+  PlatformLoad<double> load;
+  const std::size_t at = out.find("f = (");
+  ASSERT_NE(at, std::string::npos) << out;
+  ASSERT_EQ(std::sscanf(out.c_str() + at, "f = (%lf, %lf) N, m = %lf N m", &load.force.x(),
+                        &load.force.y(), &load.moment),
+            3)
+      << out;
+  const auto std_of = [&](const std::string& name) {
+    const std::size_t line = out.find("  " + name + " ");
+    const std::size_t std_at = out.find("std ", line);
+    return line == std::string::npos || std_at == std::string::npos
+               ? std::numeric_limits<double>::quiet_NaN()
+               : std::atof(out.c_str() + std_at + 4);
+  };
+  const PlatformLoad<double>& truth = robot.load();
+  EXPECT_NEAR(load.force.x(), truth.force.x(), 4 * std_of("load_f_x")) << out;
+  EXPECT_NEAR(load.force.y(), truth.force.y(), 4 * std_of("load_f_y")) << out;
+  EXPECT_NEAR(load.moment, truth.moment, 4 * std_of("load_m_z")) << out;
+
+  const RobotDescription identified = load_robot(path("identified.json"));
+  double mean = 0;
+  for (std::size_t j = 0; j < exact.size(); ++j) {
+    const ForwardSolution s =
+        forward_kinematics(identified.params, q[30 + j], SolverOptions(), load);
+    ASSERT_TRUE(s.summary.converged());
+    const Pose2<double> p = identified.params.extrinsics.measurement_from_platform(s.pose);
+    mean += std::hypot(p.x - exact[j].x, p.y - exact[j].y) / static_cast<double>(exact.size());
+  }
+  EXPECT_LT(mean, 0.05e-6);
+}
+
 /// Mean position error (m) of a robot file's predictions against the truth's noise-free
 /// measurements of the validation set.
 double validation_mean(const RobotDescription& robot, const std::vector<JointVector>& q,

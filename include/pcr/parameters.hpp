@@ -1,6 +1,8 @@
 #pragma once
 // A flat view of a robot description's parameters, for sensitivity analysis and calibration:
-// per limb (E, d, l, A_x, A_y, alpha, B_x, B_y, beta, gamma), then the six extrinsics.
+// per limb (E, d, l, A_x, A_y, alpha, B_x, B_y, beta, gamma), then the six extrinsics. The
+// calibration may append the constant platform load (pcr/calib/cost.hpp): flat indices past
+// num_parameters(n), which parameter_id names but which no RobotParams holds.
 
 #include <string>
 
@@ -25,6 +27,9 @@ enum class ParameterKind {
   kPatternX,
   kPatternY,
   kPatternTheta,  // extrinsics
+  kLoadForceX,
+  kLoadForceY,
+  kLoadMoment,  // the calibration's optional platform load: not in RobotParams
 };
 
 inline constexpr int kLimbParameters = 10;
@@ -40,7 +45,8 @@ struct ParameterId {
   int limb;  ///< -1 for the extrinsics
 };
 
-/// The parameter at flat index `index` of a robot with `num_limbs` limbs.
+/// The parameter at flat index `index` of a robot with `num_limbs` limbs (the three after the
+/// extrinsics: the load kinds).
 inline ParameterId parameter_id(int index, int num_limbs) {
   if (index < kLimbParameters * num_limbs) {
     return ParameterId{static_cast<ParameterKind>(index % kLimbParameters),
@@ -73,7 +79,10 @@ inline const char* parameter_kind_name(ParameterKind kind) {
                                        "camera_theta",
                                        "pattern_x",
                                        "pattern_y",
-                                       "pattern_theta"};
+                                       "pattern_theta",
+                                       "load_f_x",
+                                       "load_f_y",
+                                       "load_m_z"};
   return kNames[static_cast<int>(kind)];
 }
 
@@ -84,7 +93,7 @@ inline std::string parameter_name(const ParameterId& id) {
   return name;
 }
 
-/// Reference to a parameter inside a description (SI units, radians).
+/// Reference to a parameter inside a description (SI units, radians); not for the load kinds.
 template <class T>
 T& parameter_ref(RobotParams<T>& robot, const ParameterId& id) {
   if (id.limb >= 0) {

@@ -188,6 +188,7 @@ py::dict report_dict(const CalibrationResult& r) {
     d["name"] = g.name;
     d["combination"] = g.combination;
     d["relative_gain"] = g.relative_gain;
+    d["free"] = g.free;
     d["present"] = g.present;
     gauge.append(d);
   }
@@ -195,6 +196,8 @@ py::dict report_dict(const CalibrationResult& r) {
   d["stages"] = stages;
   d["parameters"] = parameters;
   d["gauge"] = gauge;
+  d["load"] = py::make_tuple(r.load.force.x(), r.load.force.y(), r.load.moment);
+  d["load_identified"] = r.load_identified;
   d["free_count"] = r.free_count;
   d["jacobian_rank"] = r.jacobian_rank;
   d["singular_values"] = r.singular_values;
@@ -566,19 +569,23 @@ void wrap_calibration(py::module_& m) {
 
   m.def(
       "pose_errors",
-      [](const RobotDescription& robot, const InputMatrix& q, const InputMatrix& measured) {
+      [](const RobotDescription& robot, const InputMatrix& q, const InputMatrix& measured,
+         const py::object& force, double moment) {
         const std::vector<CalibrationSample> data = samples(q, measured, robot.params.num_limbs);
+        const PlatformLoad<double> load = make_load(force, moment);
         PoseErrorStats stats;
         {
           py::gil_scoped_release release;
-          stats = pose_errors(robot.params, data);
+          stats = pose_errors(robot.params, data, SolverOptions(), load);
         }
         return stats_dict(stats);
       },
-      py::arg("robot"), py::arg("q"), py::arg("measured"),
-      "The paper's Table 3 statistics of `robot` on (q (N, n) m, measured ^Se T_M (N, 3)): "
-      "dict of max_p, mean_p, min_p (m, Eq. 8), max_theta, mean_theta, min_theta (rad, Eq. 9), "
-      "count, failed.");
+      py::arg("robot"), py::arg("q"), py::arg("measured"), py::kw_only(),
+      py::arg("force") = no_force(), py::arg("moment") = 0.0,
+      "The paper's Table 3 statistics of `robot` on (q (N, n) m, measured ^Se T_M (N, 3)), FK "
+      "under the platform load (force fx, fy in N, moment in N m; e.g. calibrate's report "
+      "\"load\"): dict of max_p, mean_p, min_p (m, Eq. 8), max_theta, mean_theta, min_theta "
+      "(rad, Eq. 9), count, failed.");
 
   m.def(
       "calibrate",

@@ -29,6 +29,11 @@ DisplayUnit display_unit(ParameterKind kind) {
     case ParameterKind::kCameraTheta:
     case ParameterKind::kPatternTheta:
       return {1e3, "mrad"};
+    case ParameterKind::kLoadForceX:
+    case ParameterKind::kLoadForceY:
+      return {1e6, "uN"};
+    case ParameterKind::kLoadMoment:
+      return {1e6, "uNm"};
     default:
       return {1e6, "um"};
   }
@@ -74,21 +79,24 @@ CalibrationTable calibration_table(const CalibrationResult& result,
                                    const std::vector<CalibrationSample>& validation,
                                    const SolverOptions& fk) {
   CalibrationTable table;
-  const auto evaluate = [&](const RobotParams<double>& model,
+  // The identified model predicts under the identified platform load (zero unless identified);
+  // the nominal model carries none.
+  const auto evaluate = [&](const RobotParams<double>& model, const PlatformLoad<double>& load,
                             const std::vector<CalibrationSample>& data, ConfigurationErrors& errors,
                             PoseErrorStats& stats) {
-    errors = configuration_errors(model, data, fk);
+    errors = configuration_errors(model, data, fk, load);
     stats = error_statistics(errors);
   };
-  evaluate(result.extrinsics_only, calibration, table.nominal_calibration_errors,
+  const PlatformLoad<double> none;
+  evaluate(result.extrinsics_only, none, calibration, table.nominal_calibration_errors,
            table.nominal_calibration);
-  evaluate(result.identified, calibration, table.identified_calibration_errors,
+  evaluate(result.identified, result.load, calibration, table.identified_calibration_errors,
            table.identified_calibration);
   table.has_validation = !validation.empty();
   if (table.has_validation) {
-    evaluate(result.extrinsics_only, validation, table.nominal_validation_errors,
+    evaluate(result.extrinsics_only, none, validation, table.nominal_validation_errors,
              table.nominal_validation);
-    evaluate(result.identified, validation, table.identified_validation_errors,
+    evaluate(result.identified, result.load, validation, table.identified_validation_errors,
              table.identified_validation);
     const double calibration_mean = table.nominal_calibration.mean_p;
     const double validation_mean = table.nominal_validation.mean_p;
@@ -175,11 +183,25 @@ std::string calibration_report_text(const CalibrationResult& result,
       char buf[64];
       std::snprintf(buf, sizeof buf, "present, |J g| / (s_max |g|) = %.2e", g.relative_gain);
       out << buf << "\n";
+    } else if (g.free) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf,
+                    "not a gauge under the platform load, |J g| / (s_max |g|) = %.2e",
+                    g.relative_gain);
+      out << buf << "\n";
     } else {
       out << "not free\n";
     }
   }
   out << "residual variance (whitened): " << result.residual_variance << "\n";
+  if (result.load_identified) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "platform load (identified; in W, about the platform origin): f = (%.4g, %.4g) "
+                  "N, m = %.4g N m\n",
+                  result.load.force.x(), result.load.force.y(), result.load.moment);
+    out << buf;
+  }
   if (!result.dropped.empty()) {
     out << "\nrows left out (no FK solution on the nominal geometry):\n";
     for (const std::string& row : result.dropped) out << "  " << row << "\n";
@@ -254,6 +276,7 @@ std::string calibration_report_json(const CalibrationResult& result,
   for (const GaugeDirection& g : result.gauge) {
     gauge.push_back({{"name", g.name},
                      {"combination", g.combination},
+                     {"free", g.free},
                      {"present", g.present},
                      {"relative_gain", g.relative_gain}});
   }
@@ -264,8 +287,14 @@ std::string calibration_report_json(const CalibrationResult& result,
       {"parameters_at_bound", at_bound},
       {"gauge_directions", gauge},
       {"gauge_fix",
-       "limb 0 defines the frames: A_0, alpha_0, B_0, beta_0 and d_0 keep their nominal values; "
-       "std are relative to them"},
+       "limb 0 defines the frames: of A_0, alpha_0, B_0, beta_0 and d_0, those whose gauge "
+       "direction is present keep their nominal values (gauge_reference); std are relative to "
+       "them"},
+      {"platform_load",
+       {{"identified", result.load_identified},
+        {"f_x_N", result.load.force.x()},
+        {"f_y_N", result.load.force.y()},
+        {"m_z_Nm", result.load.moment}}},
       {"jacobian_rank", result.jacobian_rank},
       {"free_parameters", result.free_count},
       {"residual_variance", result.residual_variance},

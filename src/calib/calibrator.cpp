@@ -9,6 +9,7 @@
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -22,6 +23,74 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+/// gauge_generators' order.
+enum GaugeIndex {
+  kProximalX,
+  kProximalY,
+  kProximalRotation,
+  kDistalX,
+  kDistalY,
+  kDistalRotation,
+  kStiffness,
+};
+
+/// The scale of the load parameters (their "half-widths"; they carry no bound): for each
+/// component, the load that moves the nominal platform (in Eq. 6's metric, root mean square over
+/// the rows) as far as a clamp's position tolerance (the mean half-width of A and B) does, so that
+/// its columns weigh like the geometry's. The platform is stiff (inextensible rods, and at home
+/// nearly rigid): a millinewton moves it by about 0.1 um on the paper's robot, where EI / L^2 is a
+/// millinewton. Where no row solves: the load that bends a rod by the tolerance.
+std::array<double, kLoadParameters> load_scales(const RobotParams<double>& robot,
+                                                const std::vector<double>& half_widths,
+                                                const std::vector<CalibrationSample>& rows,
+                                                const CalibrationOptions& options) {
+  double tolerance = 0;
+  int terms = 0;
+  for (std::size_t k = 0; k < half_widths.size(); ++k) {
+    const ParameterKind kind = parameter_id(static_cast<int>(k), robot.num_limbs).kind;
+    const bool position = kind == ParameterKind::kAx || kind == ParameterKind::kAy ||
+                          kind == ParameterKind::kBx || kind == ParameterKind::kBy;
+    if (position && half_widths[k] > 0) {
+      tolerance += half_widths[k];
+      ++terms;
+    }
+  }
+  const ShootingScale scale = shooting_scale(robot);
+  tolerance = terms > 0 ? tolerance / terms : 1e-3 * scale.length;
+  const double bend = tolerance / scale.length;
+  std::array<double, kLoadParameters> out = {bend * scale.force, bend * scale.force,
+                                             bend * scale.moment()};
+  double square[kLoadParameters] = {0, 0, 0};
+  int solved = 0;
+  ForwardSequence sequence(robot, options.fk);
+  for (const CalibrationSample& row : rows) {
+    const ForwardSolution& solution = sequence.solve(row.q);
+    double dpose[3 * kMaxParameters], dload[3 * kLoadParameters];
+    if (!solution.summary.converged() ||
+        !platform_pose_jacobian(robot, PlatformLoad<double>(), solution, options.fk, dpose,
+                                dload)) {
+      continue;
+    }
+    for (int j = 0; j < kLoadParameters; ++j) {  // per N or N m
+      const double w = options.orientation_weight * dload[6 + j];
+      square[j] += dload[j] * dload[j] + dload[3 + j] * dload[3 + j] + w * w;
+    }
+    ++solved;
+  }
+  for (int j = 0; j < kLoadParameters && solved > 0; ++j) {
+    const double moved = std::sqrt(square[j] / solved);
+    if (moved > 0 && std::isfinite(moved)) out[static_cast<std::size_t>(j)] = tolerance / moved;
+  }
+  return out;
+}
+
+bool frees_load(const std::vector<CalibrationStage>& stages) {
+  for (const CalibrationStage& stage : stages) {
+    if (std::find(stage.free.begin(), stage.free.end(), "load") != stage.free.end()) return true;
+  }
+  return false;
+}
+
 /// Flat indices of a parameter kind name ("A" covers A_x and A_y, "camera" three values...).
 std::vector<int> indices_of_kind(const std::string& kind, int n) {
   std::vector<ParameterKind> limb_kinds;
@@ -29,6 +98,10 @@ std::vector<int> indices_of_kind(const std::string& kind, int n) {
   const int extrinsics = kLimbParameters * n;
   if (kind == "all") {
     for (int k = 0; k < num_parameters(n); ++k) out.push_back(k);
+    return out;
+  }
+  if (kind == "load") {  // after the flat parameters, in the cost's block
+    for (int k = 0; k < kLoadParameters; ++k) out.push_back(num_parameters(n) + k);
     return out;
   }
   if (kind == "camera" || kind == "extrinsics") {
@@ -71,7 +144,7 @@ std::vector<int> indices_of_kind(const std::string& kind, int n) {
 bool known_kind(const std::string& kind) {
   static const char* const kKinds[] = {"E",      "d",       "l",          "A",   "A_x",  "A_y",
                                        "alpha",  "B",       "B_x",        "B_y", "beta", "gamma",
-                                       "camera", "pattern", "extrinsics", "all"};
+                                       "camera", "pattern", "extrinsics", "all", "load"};
   for (const char* k : kKinds) {
     if (kind == k) return true;
   }
@@ -258,6 +331,17 @@ Extrinsics<double> registered_extrinsics(const std::vector<Pose2<double>>& platf
   return out;
 }
 
+/// u.x generators[x] + u.y generators[y].
+std::vector<double> along(const std::vector<GaugeGenerator>& generators, int x, int y,
+                          const Vector2<double>& u) {
+  std::vector<double> out(generators[static_cast<std::size_t>(x)].direction.size());
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    out[k] = u.x() * generators[static_cast<std::size_t>(x)].direction[k] +
+             u.y() * generators[static_cast<std::size_t>(y)].direction[k];
+  }
+  return out;
+}
+
 /// Generators whose every moved parameter is in `is_free` (and that move at least one).
 std::vector<bool> present_generators(const std::vector<GaugeGenerator>& generators,
                                      const std::vector<bool>& is_free) {
@@ -320,24 +404,72 @@ class Identification {
         options_(options),
         n_(nominal.params.num_limbs),
         count_(num_parameters(n_)),
-        values_(static_cast<std::size_t>(count_)),
-        nominal_values_(static_cast<std::size_t>(count_)),
+        identify_load_(frees_load(options.stages)),
+        block_(count_ + (identify_load_ ? kLoadParameters : 0)),
+        values_(static_cast<std::size_t>(block_)),
+        nominal_values_(static_cast<std::size_t>(block_), 0.0),
         caches_(data.size()) {
     half_widths_ = parameter_half_widths(*nominal.uncertainty, n_);
-    get_parameters(nominal_, nominal_values_.data());
+    if (identify_load_) {
+      const auto scales = load_scales(nominal_, half_widths_, data_, options);
+      half_widths_.insert(half_widths_.end(), scales.begin(), scales.end());
+    }
+    get_parameters(nominal_, nominal_values_.data());  // the nominal load is zero
     values_ = nominal_values_;
   }
 
+  /// The flat parameters.
   int count() const { return count_; }
-  /// The geometry is bounded (Eq. 7); the extrinsics are not: they start from the registration
-  /// of the data (registered_extrinsics), whatever the guess, and the report says when they end
-  /// outside the declared interval.
-  bool bounded(int k) const { return parameter_id(k, n_).limb >= 0; }
+  /// The values Ceres sees: the flat parameters, then the load when a stage frees it.
+  int block() const { return block_; }
+  bool identifies_load() const { return identify_load_; }
+  /// The geometry is bounded (Eq. 7); the extrinsics and the load are not: the extrinsics start
+  /// from the registration of the data (registered_extrinsics), whatever the guess, and the
+  /// report says when they end outside the declared interval.
+  bool bounded(int k) const { return k < count_ && parameter_id(k, n_).limb >= 0; }
   const std::vector<double>& values() const { return values_; }
   void set_values(const std::vector<double>& v) { values_ = v; }
   const std::vector<double>& half_widths() const { return half_widths_; }
   const std::vector<double>& nominal_values() const { return nominal_values_; }
   RobotParams<double> robot() const { return with_parameters(nominal_, values_.data()); }
+  void set_robot(const RobotParams<double>& robot) { get_parameters(robot, values_.data()); }
+  PlatformLoad<double> load() const {
+    if (!identify_load_) return PlatformLoad<double>();
+    const double* l = values_.data() + count_;
+    return PlatformLoad<double>{Vector2<double>(l[0], l[1]), l[2]};
+  }
+  /// Moves the values along the gauge orbit, the load with them (move_load_along_gauge).
+  void move(const GaugeMotion& m) {
+    const PlatformLoad<double> moved = move_load_along_gauge(load(), m.G, m.H, m.stiffness_scale);
+    set_robot(move_along_gauge(robot(), m.G, m.H, m.stiffness_scale));
+    if (identify_load_) {
+      values_[static_cast<std::size_t>(count_)] = moved.force.x();
+      values_[static_cast<std::size_t>(count_) + 1] = moved.force.y();
+      values_[static_cast<std::size_t>(count_) + 2] = moved.moment;
+    }
+  }
+  /// Whether `is_free` (over the block) frees a load parameter.
+  bool load_free(const std::vector<bool>& is_free) const {
+    for (int k = count_; k < block_; ++k) {
+      if (is_free[static_cast<std::size_t>(k)]) return true;
+    }
+    return false;
+  }
+
+  /// The gauge generators at the current values, over the block (with the load's components when
+  /// it is identified).
+  std::vector<GaugeGenerator> generators() const {
+    return identify_load_ ? gauge_generators(robot(), load()) : gauge_generators(robot());
+  }
+  /// Which of `generators` are gauges of a problem whose free parameters are `is_free`: every
+  /// parameter they move is free, and, with the load free, not a distal translation (under a
+  /// force it changes the predictions, by the arm that turns with the platform).
+  std::vector<bool> gauges(const std::vector<GaugeGenerator>& generators,
+                           const std::vector<bool>& is_free) const {
+    std::vector<bool> present = present_generators(generators, is_free);
+    if (load_free(is_free)) present[kDistalX] = present[kDistalY] = false;
+    return present;
+  }
 
   /// Free flat indices of a stage: its kinds, restricted to nonzero half-widths.
   std::vector<int> free_indices(const CalibrationStage& stage) const {
@@ -356,11 +488,11 @@ class Identification {
     ceres::LossFunction* loss =
         robust && loss_scale_ > 0 ? new ceres::HuberLoss(loss_scale_) : nullptr;
     for (std::size_t j = 0; j < data_.size(); ++j) {
-      problem.AddResidualBlock(
-          PoseMeasurementError::Create(nominal_, data_[j].q, data_[j].measured,
-                                       options_.orientation_weight, options_.residual_scale,
-                                       &caches_[j], options_.fk, options_.derivatives),
-          loss, values_.data());
+      problem.AddResidualBlock(PoseMeasurementError::Create(
+                                   nominal_, data_[j].q, data_[j].measured,
+                                   options_.orientation_weight, options_.residual_scale,
+                                   &caches_[j], options_.fk, options_.derivatives, identify_load_),
+                               loss, values_.data());
     }
   }
 
@@ -378,7 +510,7 @@ class Identification {
       report.usable = true;
       return report;
     }
-    std::vector<bool> stage_free(static_cast<std::size_t>(count_), false);
+    std::vector<bool> stage_free(static_cast<std::size_t>(block_), false);
     for (int k : free) stage_free[static_cast<std::size_t>(k)] = true;
     const bool subspace = options_.stage_gauge == StageGauge::kSubspace;
     const auto at_bound = [&](int k) {
@@ -446,11 +578,11 @@ class Identification {
         // Weak pull towards the nominal values, in half-width units: it only matters along the
         // gauge directions (where the data says nothing), which it fixes to the representative
         // closest to the nominal, away from the bounds.
-        Eigen::MatrixXd a = Eigen::MatrixXd::Zero(count_, count_);
+        Eigen::MatrixXd a = Eigen::MatrixXd::Zero(block_, block_);
         for (int k : free) {
           a(k, k) = options_.gauge_prior_weight / half_widths_[static_cast<std::size_t>(k)];
         }
-        const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(nominal_values_.data(), count_);
+        const Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(nominal_values_.data(), block_);
         problem.AddResidualBlock(new ceres::NormalPrior(a, b), nullptr, values_.data());
       }
       for (int k : free) {
@@ -539,8 +671,8 @@ class Identification {
   /// keeps its start's gauge component, so a start near a bound would pin it there; a truth
   /// inside the box has a representative inside it, and this start reaches it.
   void recentre_in_gauge(const std::vector<bool>& is_free, double bounds_scale) {
-    const std::vector<GaugeGenerator> generators = gauge_generators(robot());
-    const std::vector<bool> present = present_generators(generators, is_free);
+    const std::vector<GaugeGenerator> generators = this->generators();
+    const std::vector<bool> present = gauges(generators, is_free);
     std::vector<int> rows, cols;
     for (int k = 0; k < count_; ++k) {
       if (is_free[static_cast<std::size_t>(k)] && bounded(k)) rows.push_back(k);
@@ -587,24 +719,25 @@ class Identification {
     for (Eigen::Index j = 0; j < c; ++j) {
       coefficient[cols[static_cast<std::size_t>(j)]] = g(j);
     }
-    const RobotParams<double> moved = move_along_gauge(
-        robot(), Pose2<double>{coefficient[0], coefficient[1], coefficient[2]},
-        Pose2<double>{coefficient[3], coefficient[4], coefficient[5]}, 1.0 + coefficient[6]);
-    get_parameters(moved, values_.data());
+    move(GaugeMotion{
+        Pose2<double>{coefficient[kProximalX], coefficient[kProximalY],
+                      coefficient[kProximalRotation]},
+        Pose2<double>{coefficient[kDistalX], coefficient[kDistalY], coefficient[kDistalRotation]},
+        1.0 + coefficient[kStiffness]});
   }
 
   /// The stage's manifold: the free parameters in half-width units, minus (with `remove_gauge`)
   /// the gauge directions whose parameters are all free, taken at the current values.
   ceres::Manifold* make_manifold(const std::vector<bool>& is_free, bool remove_gauge) const {
     std::vector<int> free;
-    for (int k = 0; k < count_; ++k) {
+    for (int k = 0; k < block_; ++k) {
       if (is_free[static_cast<std::size_t>(k)]) free.push_back(k);
     }
     const Eigen::Index f = static_cast<Eigen::Index>(free.size());
     Eigen::MatrixXd g(f, 0);
     if (remove_gauge) {
-      const std::vector<GaugeGenerator> generators = gauge_generators(robot());
-      const std::vector<bool> present = present_generators(generators, is_free);
+      const std::vector<GaugeGenerator> generators = this->generators();
+      const std::vector<bool> present = gauges(generators, is_free);
       for (std::size_t j = 0; j < generators.size(); ++j) {
         if (!present[j]) continue;
         g.conservativeResize(f, g.cols() + 1);
@@ -618,8 +751,8 @@ class Identification {
     Eigen::MatrixXd q = Eigen::MatrixXd::Identity(f, f);
     if (g.cols() > 0) q = Eigen::HouseholderQR<Eigen::MatrixXd>(g).householderQ();
     const Eigen::Index t = f - g.cols();
-    SubspaceManifold::RowMajor basis = SubspaceManifold::RowMajor::Zero(count_, t);
-    SubspaceManifold::RowMajor inverse = SubspaceManifold::RowMajor::Zero(t, count_);
+    SubspaceManifold::RowMajor basis = SubspaceManifold::RowMajor::Zero(block_, t);
+    SubspaceManifold::RowMajor inverse = SubspaceManifold::RowMajor::Zero(t, block_);
     for (Eigen::Index c = 0; c < f; ++c) {
       const int k = free[static_cast<std::size_t>(c)];
       const double h = half_widths_[static_cast<std::size_t>(k)];
@@ -627,6 +760,46 @@ class Identification {
       inverse.col(k) = q.block(c, g.cols(), 1, t).transpose() / h;
     }
     return new SubspaceManifold(std::move(basis), std::move(inverse));
+  }
+
+  /// Refits the last stage's free parameters with `held` constant: after a gauge fix that changes
+  /// the predictions slightly (a distal translation under a load). Holding the gauge references
+  /// leaves a full-rank problem, a few iterations from the fixed values. No bounds: the box is
+  /// the stages' gauge's, the fixed gauge may put values outside it.
+  void refit_holding(const std::vector<int>& held) {
+    std::vector<bool> is_free(static_cast<std::size_t>(block_), false);
+    for (int k : last_free_) is_free[static_cast<std::size_t>(k)] = true;
+    for (int k : held) is_free[static_cast<std::size_t>(k)] = false;
+    ceres::Problem problem;
+    add_residuals(problem);
+    problem.SetManifold(values_.data(), make_manifold(is_free, false));
+    ceres::Solver::Options solver;
+    solver.linear_solver_type = ceres::DENSE_QR;
+    solver.max_num_iterations = options_.max_iterations;
+    solver.num_threads = 1;
+    solver.function_tolerance = options_.function_tolerance;
+    solver.gradient_tolerance = 1e-12;
+    solver.parameter_tolerance = 0.0;  // see run_stage
+    solver.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver, &problem, &summary);
+  }
+
+  /// |J g| / (s_max |g|) of the scaled Jacobian on `free` at the current values: ~0 for a
+  /// direction the data do not see (NaN when the model cannot be evaluated).
+  double relative_gain(const std::vector<double>& direction, const std::vector<int>& free) {
+    Eigen::MatrixXd J;
+    Eigen::VectorXd r;
+    if (!jacobian(&J, &r) || !J.allFinite()) return kNaN;
+    Eigen::MatrixXd Js(J.rows(), static_cast<Eigen::Index>(free.size()));
+    Eigen::VectorXd scaled(static_cast<Eigen::Index>(free.size()));
+    for (std::size_t c = 0; c < free.size(); ++c) {
+      const std::size_t k = static_cast<std::size_t>(free[c]);
+      Js.col(static_cast<Eigen::Index>(c)) = J.col(free[c]) * half_widths_[k];
+      scaled(static_cast<Eigen::Index>(c)) = direction[k] / half_widths_[k];
+    }
+    const double smax = Eigen::JacobiSVD<Eigen::MatrixXd>(Js).singularValues()(0);
+    return (Js * scaled).norm() / (smax * scaled.norm());
   }
 
   /// Ceres cost (whitened) at the current values.
@@ -764,6 +937,8 @@ class Identification {
   const CalibrationOptions& options_;
   int n_;
   int count_;
+  bool identify_load_;
+  int block_;
   std::vector<double> values_;
   std::vector<double> nominal_values_;
   std::vector<double> half_widths_;
@@ -1007,33 +1182,64 @@ std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot,
   return out;
 }
 
-RobotParams<double> fix_gauge(const RobotParams<double>& params,
-                              const RobotParams<double>& reference, bool proximal_translation,
-                              bool proximal_rotation, bool distal_translation, bool distal_rotation,
-                              bool stiffness) {
-  // The motion that maps limb 0's estimated clamp frame onto its reference one.
+GaugeMotion gauge_fix_motion(const RobotParams<double>& params,
+                             const RobotParams<double>& reference, bool proximal_translation,
+                             bool proximal_rotation, bool distal_translation, bool distal_rotation,
+                             bool stiffness) {
+  // The motion that maps limb 0's estimated clamp frame onto its reference one; a rotation alone
+  // turns about the origin.
   const auto onto_reference = [](bool translation, bool rotation, const Vector2<double>& estimated,
                                  double estimated_angle, const Vector2<double>& wanted,
                                  double wanted_angle) {
-    if (!translation) return Pose2<double>{0, 0, 0};
     const double rot = rotation ? wanted_angle - estimated_angle : 0.0;
+    if (!translation) return Pose2<double>{0, 0, rot};
     const Vector2<double> t = wanted - Pose2<double>{0, 0, rot}.rotate(estimated);
     return Pose2<double>{t.x(), t.y(), rot};
   };
   const LimbParams<double>& limb = params.limb(0);
   const LimbParams<double>& ref = reference.limb(0);
-  const Pose2<double> G =
-      onto_reference(proximal_translation, proximal_rotation, limb.A, limb.alpha, ref.A, ref.alpha);
-  const Pose2<double> H =
-      onto_reference(distal_translation, distal_rotation, limb.B, limb.beta, ref.B, ref.beta);
-  return move_along_gauge(params, G, H, stiffness ? ref.diameter / limb.diameter : 1.0);
+  return GaugeMotion{
+      onto_reference(proximal_translation, proximal_rotation, limb.A, limb.alpha, ref.A, ref.alpha),
+      onto_reference(distal_translation, distal_rotation, limb.B, limb.beta, ref.B, ref.beta),
+      stiffness ? ref.diameter / limb.diameter : 1.0};
+}
+
+GaugeMotion gauge_fix_motion(const RobotParams<double>& params, const PlatformLoad<double>& load,
+                             const RobotParams<double>& reference, bool held[2]) {
+  const Vector2<double>& B = params.limb(0).B;
+  const Vector2<double>& wanted = reference.limb(0).B;
+  const double force = load.force.norm();
+  if (!(force > 0)) {
+    held[0] = held[1] = true;
+    return GaugeMotion{Pose2<double>{0, 0, 0},
+                       Pose2<double>{wanted.x() - B.x(), wanted.y() - B.y(), 0}, 1.0};
+  }
+  // The platform origin moves by -t: its moment arm about the old origin, t x f at angle 0, is
+  // compensated by move_load_along_gauge; what is left, (R(theta) - I) t x f, is second order in
+  // theta when t is perpendicular to f.
+  const Vector2<double> u(-load.force.y() / force, load.force.x() / force);
+  const int c = std::abs(u.x()) >= std::abs(u.y()) ? 0 : 1;
+  held[c] = true;
+  held[1 - c] = false;
+  const Vector2<double> t = (wanted[c] - B[c]) / u[c] * u;
+  return GaugeMotion{Pose2<double>{0, 0, 0}, Pose2<double>{t.x(), t.y(), 0}, 1.0};
+}
+
+RobotParams<double> fix_gauge(const RobotParams<double>& params,
+                              const RobotParams<double>& reference, bool proximal_translation,
+                              bool proximal_rotation, bool distal_translation, bool distal_rotation,
+                              bool stiffness) {
+  const GaugeMotion m = gauge_fix_motion(params, reference, proximal_translation, proximal_rotation,
+                                         distal_translation, distal_rotation, stiffness);
+  return move_along_gauge(params, m.G, m.H, m.stiffness_scale);
 }
 
 ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
                                          const std::vector<CalibrationSample>& data,
-                                         const SolverOptions& fk) {
+                                         const SolverOptions& fk,
+                                         const PlatformLoad<double>& load) {
   ConfigurationErrors errors;
-  ForwardSequence sequence(robot, fk);
+  ForwardSequence sequence(robot, fk, load);
   for (const CalibrationSample& sample : data) {
     const ForwardSolution& s = sequence.solve(sample.q);
     if (!s.summary.converged()) {
@@ -1049,8 +1255,9 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
 }
 
 PoseErrorStats pose_errors(const RobotParams<double>& robot,
-                           const std::vector<CalibrationSample>& data, const SolverOptions& fk) {
-  return error_statistics(configuration_errors(robot, data, fk));
+                           const std::vector<CalibrationSample>& data, const SolverOptions& fk,
+                           const PlatformLoad<double>& load) {
+  return error_statistics(configuration_errors(robot, data, fk, load));
 }
 
 PoseErrorStats error_statistics(const ConfigurationErrors& errors) {
@@ -1116,17 +1323,16 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   {
     RobotParams<double> start = nominal.params;
     start.extrinsics = registered_extrinsics(nominal_poses, rows, nominal.params.extrinsics);
-    std::vector<double> v(static_cast<std::size_t>(id.count()));
-    get_parameters(start, v.data());
-    id.set_values(v);
+    id.set_robot(start);
   }
   const std::vector<double> registered = id.values();
   const int count = id.count();
+  const int block = id.block();
 
   // Table 3's "nominal model": the nominal robot with the extrinsics alone identified.
   bool first_is_extrinsics = true;
   for (int k : id.free_indices(options.stages.front())) {
-    first_is_extrinsics = first_is_extrinsics && parameter_id(k, n).limb < 0;
+    first_is_extrinsics = first_is_extrinsics && k < count && parameter_id(k, n).limb < 0;
   }
   if (!first_is_extrinsics) {
     id.run_stage(CalibrationStage{"extrinsics (nominal model)", {"extrinsics"}, 1.0});
@@ -1140,10 +1346,10 @@ CalibrationResult calibrate(const RobotDescription& nominal,
 
   // Parameters at a bound (before the gauge fix, in the last stage's box).
   const std::vector<int>& free = id.last_free();
-  std::vector<bool> is_free(static_cast<std::size_t>(count), false);
+  std::vector<bool> is_free(static_cast<std::size_t>(block), false);
   for (int k : free) is_free[static_cast<std::size_t>(k)] = true;
-  result.parameters.resize(static_cast<std::size_t>(count));
-  for (int k = 0; k < count; ++k) {
+  result.parameters.resize(static_cast<std::size_t>(block));
+  for (int k = 0; k < block; ++k) {
     ParameterEstimate& p = result.parameters[static_cast<std::size_t>(k)];
     const std::size_t uk = static_cast<std::size_t>(k);
     p.name = parameter_name(parameter_id(k, n));
@@ -1158,40 +1364,49 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   }
 
   // Gauge: which generators only move free parameters.
-  const std::vector<GaugeGenerator> generators = gauge_generators(id.robot());
-  std::vector<bool> present(generators.size(), false);
-  for (std::size_t g = 0; g < generators.size(); ++g) {
-    bool ok = true, any = false;
-    for (int k = 0; k < count; ++k) {
-      if (generators[g].direction[static_cast<std::size_t>(k)] != 0.0) {
-        ok = ok && is_free[static_cast<std::size_t>(k)];
-        any = true;
-      }
-    }
-    present[g] = ok && any;
-  }
+  std::vector<bool> present = id.gauges(id.generators(), is_free);
   const auto flat = [n](ParameterKind kind, int limb) {
     return parameter_index(ParameterId{kind, limb}, n);
   };
-  const bool prox_t = present[0] && present[1];
-  const bool prox_r = prox_t && present[2];
-  const bool dist_t = present[3] && present[4];
-  const bool dist_r = dist_t && present[5];
-  const bool stiff = present[6];
+  const bool prox_t = present[kProximalX] && present[kProximalY];
+  const bool prox_r = prox_t && present[kProximalRotation];
+  const bool dist_t = present[kDistalX] && present[kDistalY];
+  const bool dist_r = present[kDistalRotation];
+  const bool stiff = present[kStiffness];
+  result.load_identified = id.load_free(is_free);
+  const std::vector<bool> movable = present_generators(id.generators(), is_free);
+  bool held_distal[2] = {dist_t, dist_t};  // B_0's x and y
   if (options.fix_gauge) {
-    const RobotParams<double> fixed =
-        fix_gauge(id.robot(), nominal.params, prox_t, prox_r, dist_t, dist_r, stiff);
-    std::vector<double> v(static_cast<std::size_t>(count));
-    get_parameters(fixed, v.data());
-    id.set_values(v);
+    id.move(gauge_fix_motion(id.robot(), nominal.params, prox_t, prox_r, dist_t, dist_r, stiff));
+    // With the load free, a distal translation is a gauge only perpendicular to the force, and
+    // to second order in the platform angle: the data leave it unidentified, so B_0 fixes it
+    // (one coordinate), and the other free parameters are refitted with the references held.
+    // Along the force it is identified only as far as the data see the force: below the rank
+    // threshold, a gauge too (B_0 held whole).
+    if (result.load_identified && movable[kDistalX] && movable[kDistalY]) {
+      const PlatformLoad<double> load = id.load();
+      const bool force_seen =
+          load.force.norm() > 0 &&
+          id.relative_gain(along(id.generators(), kDistalX, kDistalY, load.force.normalized()),
+                           free) >= kRankThreshold;
+      id.move(gauge_fix_motion(id.robot(), force_seen ? load : PlatformLoad<double>(),
+                               nominal.params, held_distal));
+      present[kDistalX] = held_distal[0];
+      present[kDistalY] = held_distal[1];
+    }
   }
   std::vector<int> held;
   if (prox_t) held.insert(held.end(), {flat(ParameterKind::kAx, 0), flat(ParameterKind::kAy, 0)});
   if (prox_r) held.push_back(flat(ParameterKind::kAlpha, 0));
-  if (dist_t) held.insert(held.end(), {flat(ParameterKind::kBx, 0), flat(ParameterKind::kBy, 0)});
+  if (held_distal[0]) held.push_back(flat(ParameterKind::kBx, 0));
+  if (held_distal[1]) held.push_back(flat(ParameterKind::kBy, 0));
   if (dist_r) held.push_back(flat(ParameterKind::kBeta, 0));
   if (stiff) held.push_back(flat(ParameterKind::kDiameter, 0));
+  if (options.fix_gauge && result.load_identified && (held_distal[0] || held_distal[1])) {
+    id.refit_holding(held);
+  }
   result.identified = id.robot();
+  result.load = id.load();
   result.free_count = static_cast<int>(free.size());
 
   // Rank of the Jacobian (columns scaled by the half-widths) on the free parameters. A model that
@@ -1244,19 +1459,20 @@ CalibrationResult calibrate(const RobotDescription& nominal,
       result.singular_values.push_back(smax > 0 ? sv(k) / smax : 0.0);
       if (smax > 0 && sv(k) > kRankThreshold * smax) ++result.jacobian_rank;
     }
-    const std::vector<GaugeGenerator> final_generators = gauge_generators(id.robot());
+    const std::vector<GaugeGenerator> final_generators = id.generators();
     for (std::size_t g = 0; g < final_generators.size(); ++g) {
       GaugeDirection d;
       d.name = final_generators[g].name;
       d.combination = final_generators[g].combination;
       d.present = present[g];
+      d.free = movable[g];
       Eigen::VectorXd scaled(static_cast<Eigen::Index>(free.size()));
       for (std::size_t c = 0; c < free.size(); ++c) {
         const std::size_t k = static_cast<std::size_t>(free[c]);
         scaled(static_cast<Eigen::Index>(c)) =
             final_generators[g].direction[k] / id.half_widths()[k];
       }
-      d.relative_gain = (d.present && smax > 0 && scaled.norm() > 0)
+      d.relative_gain = (d.free && smax > 0 && scaled.norm() > 0)
                             ? (Js * scaled).norm() / (smax * scaled.norm())
                             : kNaN;
       result.gauge.push_back(d);
@@ -1337,7 +1553,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   } else {
     for (int k : estimated) result.parameters[static_cast<std::size_t>(k)].std_dev = kNaN;
   }
-  for (int k = 0; k < count; ++k) {
+  for (int k = 0; k < block; ++k) {
     result.parameters[static_cast<std::size_t>(k)].value = id.values()[static_cast<std::size_t>(k)];
   }
   add_warnings(id, &result);

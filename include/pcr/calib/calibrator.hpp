@@ -46,6 +46,15 @@
 // - Rows: every configuration is first solved on the nominal geometry. One it cannot reach (a typo,
 //   a wrong unit, another robot's row) is an InputError naming the row, or, with
 //   drop_unreachable, left out and listed; a joint value outside its stroke is a warning.
+// - Platform load: a stage that frees "load" identifies a constant force and moment on the
+//   platform (air-bearing drag, a cable) with the geometry, which would otherwise absorb it (at
+//   200 uN, l_2 ends 24 sigma off with the validation at the floor). Unbounded; its scale is the
+//   load that moves the platform over the rows as far as a clamp tolerance does. It is known
+//   relative to the bending stiffness (the stiffness gauge scales it by the fourth power). Under a
+//   force a distal translation is no longer a gauge (the moment's arm turns with the platform):
+//   the stages keep it; at the end, the translation perpendicular to the force, a gauge to second
+//   order in the platform angle, is held by one coordinate of B_0 (both while the data do not see
+//   the force) and the other free parameters are refitted with the references held.
 
 #include <functional>
 #include <string>
@@ -67,7 +76,8 @@ struct CalibrationSample {
 struct CalibrationStage {
   std::string name;
   /// Kinds: "E", "d", "l", "A", "A_x", "A_y", "alpha", "B", "B_x", "B_y", "beta", "gamma",
-  /// "camera", "pattern", "extrinsics", "all".
+  /// "camera", "pattern", "extrinsics", "all" (the geometry and extrinsics), "load" (the constant
+  /// platform load, kLoadParameters values; not in "all").
   std::vector<std::string> free;
   double bounds_scale = 1.0;
 };
@@ -181,14 +191,24 @@ struct GaugeDirection {
   std::string name;          ///< e.g. "proximal clamps + camera: rotation"
   std::string combination;   ///< the parameters it moves, e.g. "A_x[*] + camera_x"
   double relative_gain = 0;  ///< |J g| / (sigma_max |g|), scaled units: ~0 means a gauge
-  bool present = false;      ///< every parameter it moves is free in the last stage
+  bool free = false;         ///< every parameter it moves is free in the last stage
+  /// Free and a gauge: it changes no prediction (under a free platform load, a distal
+  /// translation is free but changes the predictions where the force is seen), fixed by limb 0.
+  bool present = false;
 };
 
 struct CalibrationResult {
   RobotParams<double> identified;       ///< final parameters (gauge fixed)
   RobotParams<double> extrinsics_only;  ///< nominal robot with identified extrinsics
   std::vector<StageReport> stages;
-  std::vector<ParameterEstimate> parameters;  ///< every flat parameter, in flat order
+  /// Every flat parameter, in flat order, then the load's three (load_f_x, load_f_y in N,
+  /// load_m_z in N m) when a stage frees "load".
+  std::vector<ParameterEstimate> parameters;
+  /// The identified constant platform load (in W, the moment about the platform origin), zero
+  /// unless a stage frees "load". `identified` predicts the measurements under it: Table 3 and
+  /// configuration_errors use it, and `pcr fk` takes it (--force fx,fy --moment mz).
+  PlatformLoad<double> load;
+  bool load_identified = false;
   std::vector<GaugeDirection> gauge;
   int free_count = 0;                   ///< free parameters of the last stage
   int jacobian_rank = 0;                ///< numerical rank of the scaled Jacobian on them
@@ -250,7 +270,8 @@ struct ConfigurationErrors {
 };
 ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
                                          const std::vector<CalibrationSample>& data,
-                                         const SolverOptions& fk = SolverOptions());
+                                         const SolverOptions& fk = SolverOptions(),
+                                         const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Table 3 statistics (max, mean, min) of per-configuration errors; failures are counted apart.
 PoseErrorStats error_statistics(const ConfigurationErrors& errors);
@@ -258,7 +279,8 @@ PoseErrorStats error_statistics(const ConfigurationErrors& errors);
 /// Table 3 statistics of `robot` (with its extrinsics) on `data`.
 PoseErrorStats pose_errors(const RobotParams<double>& robot,
                            const std::vector<CalibrationSample>& data,
-                           const SolverOptions& fk = SolverOptions());
+                           const SolverOptions& fk = SolverOptions(),
+                           const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// The flat half-widths of `uncertainty` for a robot with `num_limbs` limbs.
 std::vector<double> parameter_half_widths(const RobotUncertainty& uncertainty, int num_limbs);
@@ -286,9 +308,32 @@ PlatformLoad<double> move_load_along_gauge(const PlatformLoad<double>& load, con
 std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot,
                                              const PlatformLoad<double>& load);
 
-/// Moves `params` along the gauge orbit so that limb 0's clamps (A_0, alpha_0 when
-/// `proximal` = 0b111 bits x/y/rotation present, B_0, beta_0 for `distal`) and d_0 (`stiffness`)
-/// take `reference`'s values; predictions (with no load) are unchanged.
+/// A motion along the gauge orbit (move_along_gauge's arguments).
+struct GaugeMotion {
+  Pose2<double> G{0, 0, 0};  ///< of the proximal clamps and the camera frame
+  Pose2<double> H{0, 0, 0};  ///< of the distal clamps, about the platform origin
+  double stiffness_scale = 1;
+};
+
+/// The motion that puts limb 0's clamps and d_0 at `reference`'s values: A_0 (with
+/// `proximal_translation`) and alpha_0 (with `proximal_rotation` too), B_0 and beta_0 alike (a
+/// distal rotation alone turns about the platform origin and sets beta_0), d_0 (`stiffness`).
+GaugeMotion gauge_fix_motion(const RobotParams<double>& params,
+                             const RobotParams<double>& reference, bool proximal_translation,
+                             bool proximal_rotation, bool distal_translation, bool distal_rotation,
+                             bool stiffness);
+
+/// The distal translation that fixes the gauge of `params` under a constant platform `load`
+/// (after gauge_fix_motion's rotations). Without a force: B_0 takes `reference`'s value, both
+/// coordinates `held`. With one, a distal translation changes the predictions, by the force's arm
+/// that turns with the platform, to first order in the platform angle unless it is perpendicular
+/// to the force: the motion is along that perpendicular, until the coordinate of B_0 with the
+/// larger share in it takes `reference`'s value (held[0]: x, held[1]: y). Move the load with it
+/// (move_load_along_gauge).
+GaugeMotion gauge_fix_motion(const RobotParams<double>& params, const PlatformLoad<double>& load,
+                             const RobotParams<double>& reference, bool held[2]);
+
+/// move_along_gauge by gauge_fix_motion: predictions (with no load) are unchanged.
 RobotParams<double> fix_gauge(const RobotParams<double>& params,
                               const RobotParams<double>& reference, bool proximal_translation,
                               bool proximal_rotation, bool distal_translation, bool distal_rotation,
