@@ -423,7 +423,6 @@ class Identification {
   int count() const { return count_; }
   /// The values Ceres sees: the flat parameters, then the load when a stage frees it.
   int block() const { return block_; }
-  bool identifies_load() const { return identify_load_; }
   /// The geometry is bounded (Eq. 7); the extrinsics and the load are not: the extrinsics start
   /// from the registration of the data (registered_extrinsics), whatever the guess, and the
   /// report says when they end outside the declared interval.
@@ -499,6 +498,26 @@ class Identification {
     }
   }
 
+  /// Levenberg-Marquardt with dense QR, stopping on `function_tolerance` (relative) or the
+  /// gradient.
+  ceres::Solver::Options solver_options(double function_tolerance) const {
+    ceres::Solver::Options solver;
+    solver.linear_solver_type = ceres::DENSE_QR;
+    solver.max_num_iterations = options_.max_iterations;
+    solver.num_threads = 1;
+    solver.function_tolerance = function_tolerance;
+    solver.gradient_tolerance = 1e-12;
+    // Off: Ceres compares the step with |x|, which E (~7e10 Pa) dominates, so any step would
+    // look negligible. The function and gradient tolerances (whitened residuals) decide.
+    solver.parameter_tolerance = 0.0;
+    solver.logging_type = ceres::SILENT;
+    // With bounds, Ceres runs an Armijo line search on every step; cubic interpolation (its
+    // default) asks for the gradient at each trial point, a whole Jacobian evaluation of the
+    // rows. Quadratic interpolation needs the trial costs only.
+    solver.line_search_interpolation_type = ceres::QUADRATIC;
+    return solver;
+  }
+
   /// Fits the stage's free parameters; `last`: the final stage (the tighter function tolerance);
   /// `rescale`: how many times the stage has been solved again for a smaller Huber scale.
   StageReport run_stage(const CalibrationStage& stage, bool last = true, int rescale = 0) {
@@ -522,21 +541,8 @@ class Identification {
                                stage.bounds_scale * half_widths_[uk] * (1 - 1e-9);
     };
 
-    ceres::Solver::Options solver;
-    solver.linear_solver_type = ceres::DENSE_QR;
-    solver.max_num_iterations = options_.max_iterations;
-    solver.num_threads = 1;
-    solver.function_tolerance =
-        last ? options_.function_tolerance : options_.intermediate_function_tolerance;
-    solver.gradient_tolerance = 1e-12;
-    // Off: Ceres compares the step with |x|, which E (~7e10 Pa) dominates, so any step would
-    // look negligible. The function and gradient tolerances (whitened residuals) decide.
-    solver.parameter_tolerance = 0.0;
-    solver.logging_type = ceres::SILENT;
-    // With bounds, Ceres runs an Armijo line search on every step; cubic interpolation (its
-    // default) asks for the gradient at each trial point, a whole Jacobian evaluation of the
-    // rows. Quadratic interpolation needs the trial costs only.
-    solver.line_search_interpolation_type = ceres::QUADRATIC;
+    ceres::Solver::Options solver = solver_options(last ? options_.function_tolerance
+                                                        : options_.intermediate_function_tolerance);
     ProgressCallback callback(stage.name, to_m2, options_.progress);
     if (options_.progress) solver.callbacks.push_back(&callback);
     // Ceres projects the unconstrained step onto the box: once a step has put a free parameter
@@ -779,14 +785,7 @@ class Identification {
     ceres::Problem problem;
     add_residuals(problem);
     problem.SetManifold(values_.data(), make_manifold(is_free, false));
-    ceres::Solver::Options solver;
-    solver.linear_solver_type = ceres::DENSE_QR;
-    solver.max_num_iterations = options_.max_iterations;
-    solver.num_threads = 1;
-    solver.function_tolerance = options_.function_tolerance;
-    solver.gradient_tolerance = 1e-12;
-    solver.parameter_tolerance = 0.0;  // see run_stage
-    solver.logging_type = ceres::SILENT;
+    const ceres::Solver::Options solver = solver_options(options_.function_tolerance);
     ceres::Solver::Summary summary;
     ceres::Solve(solver, &problem, &summary);
   }
@@ -844,13 +843,13 @@ class Identification {
   /// model has not reached. The median norm of a whitened 3-vector at the noise is 1.538.
   void update_loss_scale() {
     loss_scale_ = options_.robust_scale;
+    row_norms_.clear();
     if (!(loss_scale_ > 0)) return;
     ceres::Problem problem;
     add_residuals(problem, false);
     double c = 0;
     std::vector<double> r;
     if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), &c, &r, nullptr, nullptr)) return;
-    row_norms_.clear();
     for (std::size_t j = 0; 3 * j + 2 < r.size(); ++j)
       row_norms_.push_back(std::sqrt(r[3 * j] * r[3 * j] + r[3 * j + 1] * r[3 * j + 1] +
                                      r[3 * j + 2] * r[3 * j + 2]));
