@@ -178,6 +178,7 @@ py::dict report_dict(const CalibrationResult& r) {
     d["half_width"] = p.half_width;
     d["free"] = p.free;
     d["gauge_reference"] = p.gauge_reference;
+    d["box_deviation"] = p.box_deviation;
     d["at_bound"] = p.at_bound;
     d["identifiable"] = p.identifiable;
     parameters.append(d);

@@ -156,18 +156,24 @@ std::string calibration_report_text(const CalibrationResult& result,
     out << buf;
   }
   out << "\nparameters (value, nominal, deviation from nominal, std; limb-0 gauge; SI, the "
-         "deviation in um, mrad or MPa):\n";
+         "deviation in um, mrad or MPa; box: the deviation in half-widths where the bounds "
+         "apply, the stages' frame before the gauge fix, +-1 at a bound):\n";
   std::vector<std::string> at_bound;
   for (const ParameterEstimate& p : result.parameters) {
     if (p.free) {
       const DisplayUnit unit = display_unit(p.kind);
       char buf[320];
       char std_text[32];
+      char box_text[32] = "";
       std::snprintf(std_text, sizeof std_text, "%.3e", p.std_dev);
-      std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  %+9.3f %-4s  std %s%s%s\n",
+      if (std::isfinite(p.box_deviation)) {
+        std::snprintf(box_text, sizeof box_text, "  box %+.3f", p.box_deviation);
+      }
+      std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  %+9.3f %-4s  std %s%s%s%s\n",
                     p.name.c_str(), p.value, p.nominal, (p.value - p.nominal) * unit.factor,
                     unit.name, p.identifiable ? std_text : "not identifiable",
-                    p.gauge_reference ? "  (gauge reference)" : "", p.at_bound ? "  AT BOUND" : "");
+                    p.gauge_reference ? "  (gauge reference)" : "", box_text,
+                    p.at_bound ? "  AT BOUND" : "");
       out << buf;
     }
     if (p.at_bound) at_bound.push_back(p.name);
@@ -269,6 +275,7 @@ std::string calibration_report_json(const CalibrationResult& result,
                           {"half_width", p.half_width},
                           {"free", p.free},
                           {"gauge_reference", p.gauge_reference},
+                          {"box_deviation", p.box_deviation},
                           {"at_bound", p.at_bound},
                           {"identifiable", p.identifiable}});
   }

@@ -1380,8 +1380,8 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     p.half_width = id.half_widths()[uk];
     p.free = is_free[uk];
     if (p.free && id.bounded(k)) {
-      const double h = id.last_bounds_scale() * p.half_width;
-      p.at_bound = std::abs(std::abs(id.values()[uk] - p.nominal) - h) <= 1e-6 * h;
+      p.box_deviation = (id.values()[uk] - p.nominal) / (id.last_bounds_scale() * p.half_width);
+      p.at_bound = std::abs(std::abs(p.box_deviation) - 1) <= 1e-6;
     }
   }
 

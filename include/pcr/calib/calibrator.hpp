@@ -57,6 +57,7 @@
 //   the force) and the other free parameters are refitted with the references held.
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -181,7 +182,12 @@ struct ParameterEstimate {
   double half_width = 0;
   bool free = false;             ///< free in the last stage
   bool gauge_reference = false;  ///< held by the gauge fix
-  bool at_bound = false;         ///< ended (before the gauge fix) within 1e-6 of its bound range
+  /// Where the bounds apply: (value - nominal) / (bounds_scale half-width) at the end of the
+  /// last stage, before the gauge fix moves the values to the limb-0 frame (a bounded free
+  /// parameter; NaN otherwise). +-1: at a bound. The limb-0 frame is no frame of the box: there a
+  /// clamp may lie up to two half-widths from its nominal position inside a valid fit.
+  double box_deviation = std::numeric_limits<double>::quiet_NaN();
+  bool at_bound = false;  ///< |box_deviation| within 1e-6 of 1
   /// False when it has a share (>= 0.1) in a direction the data cannot identify (see
   /// CalibrationResult::unidentifiable); its std_dev is then NaN.
   bool identifiable = true;
