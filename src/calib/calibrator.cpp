@@ -331,17 +331,6 @@ Extrinsics<double> registered_extrinsics(const std::vector<Pose2<double>>& platf
   return out;
 }
 
-/// u.x generators[x] + u.y generators[y].
-std::vector<double> along(const std::vector<GaugeGenerator>& generators, int x, int y,
-                          const Vector2<double>& u) {
-  std::vector<double> out(generators[static_cast<std::size_t>(x)].direction.size());
-  for (std::size_t k = 0; k < out.size(); ++k) {
-    out[k] = u.x() * generators[static_cast<std::size_t>(x)].direction[k] +
-             u.y() * generators[static_cast<std::size_t>(y)].direction[k];
-  }
-  return out;
-}
-
 /// Generators whose every moved parameter is in `is_free` (and that move at least one).
 std::vector<bool> present_generators(const std::vector<GaugeGenerator>& generators,
                                      const std::vector<bool>& is_free) {
@@ -790,21 +779,21 @@ class Identification {
     ceres::Solve(solver, &problem, &summary);
   }
 
-  /// |J g| / (s_max |g|) of the scaled Jacobian on `free` at the current values: ~0 for a
-  /// direction the data do not see (NaN when the model cannot be evaluated).
-  double relative_gain(const std::vector<double>& direction, const std::vector<int>& free) {
+  /// The smallest singular value of the scaled Jacobian on `columns` at the current values,
+  /// relative to the largest (the rank test of the covariance); NaN when the model cannot be
+  /// evaluated.
+  double smallest_singular_value(const std::vector<int>& columns) {
     Eigen::MatrixXd J;
     Eigen::VectorXd r;
-    if (!jacobian(&J, &r) || !J.allFinite()) return kNaN;
-    Eigen::MatrixXd Js(J.rows(), static_cast<Eigen::Index>(free.size()));
-    Eigen::VectorXd scaled(static_cast<Eigen::Index>(free.size()));
-    for (std::size_t c = 0; c < free.size(); ++c) {
-      const std::size_t k = static_cast<std::size_t>(free[c]);
-      Js.col(static_cast<Eigen::Index>(c)) = J.col(free[c]) * half_widths_[k];
-      scaled(static_cast<Eigen::Index>(c)) = direction[k] / half_widths_[k];
+    if (columns.empty() || !jacobian(&J, &r) || !J.allFinite()) return kNaN;
+    Eigen::MatrixXd Js(J.rows(), static_cast<Eigen::Index>(columns.size()));
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      Js.col(static_cast<Eigen::Index>(c)) =
+          J.col(columns[c]) * half_widths_[static_cast<std::size_t>(columns[c])];
     }
-    const double smax = Eigen::JacobiSVD<Eigen::MatrixXd>(Js).singularValues()(0);
-    return (Js * scaled).norm() / (smax * scaled.norm());
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(Js).singularValues();
+    if (sv.size() < static_cast<Eigen::Index>(columns.size())) return 0.0;  // fewer rows
+    return sv(sv.size() - 1) / sv(0);
   }
 
   /// Ceres cost (whitened) at the current values.
@@ -1398,32 +1387,42 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   result.load_identified = id.load_free(is_free);
   const std::vector<bool> movable = present_generators(id.generators(), is_free);
   bool held_distal[2] = {dist_t, dist_t};  // B_0's x and y
+  const auto references = [&] {            // the parameters the gauge fix holds
+    std::vector<int> held;
+    if (prox_t) held.push_back(flat(ParameterKind::kAx, 0));
+    if (prox_t) held.push_back(flat(ParameterKind::kAy, 0));
+    if (prox_r) held.push_back(flat(ParameterKind::kAlpha, 0));
+    if (held_distal[0]) held.push_back(flat(ParameterKind::kBx, 0));
+    if (held_distal[1]) held.push_back(flat(ParameterKind::kBy, 0));
+    if (dist_r) held.push_back(flat(ParameterKind::kBeta, 0));
+    if (stiff) held.push_back(flat(ParameterKind::kDiameter, 0));
+    return held;
+  };
   if (options.fix_gauge) {
     id.move(gauge_fix_motion(id.robot(), nominal.params, prox_t, prox_r, dist_t, dist_r, stiff));
     // With the load free, a distal translation is a gauge only perpendicular to the force, and
-    // to second order in the platform angle: the data leave it unidentified, so B_0 fixes it
-    // (one coordinate), and the other free parameters are refitted with the references held.
-    // Along the force it is identified only as far as the data see the force: below the rank
-    // threshold, a gauge too (B_0 held whole).
+    // to second order in the platform angle: the data leave it unidentified, so one coordinate
+    // of B_0 holds it. Along the force it is identified as far as the data see the force: where
+    // the free parameters less the references are rank deficient, it is a gauge too (B_0 held
+    // whole). The other free parameters are then refitted with the references held.
     if (result.load_identified && movable[kDistalX] && movable[kDistalY]) {
-      const PlatformLoad<double> load = id.load();
-      const bool force_seen =
-          load.force.norm() > 0 &&
-          id.relative_gain(along(id.generators(), kDistalX, kDistalY, load.force.normalized()),
-                           free) >= kRankThreshold;
-      id.move(gauge_fix_motion(id.robot(), force_seen ? load : PlatformLoad<double>(),
-                               nominal.params, held_distal));
+      id.move(gauge_fix_motion(id.robot(), id.load(), nominal.params, held_distal));
+      if (!(held_distal[0] && held_distal[1])) {
+        const std::vector<int> held = references();
+        std::vector<int> estimated;
+        for (int k : free) {
+          if (std::find(held.begin(), held.end(), k) == held.end()) estimated.push_back(k);
+        }
+        if (!(id.smallest_singular_value(estimated) > kRankThreshold)) {
+          id.move(
+              gauge_fix_motion(id.robot(), PlatformLoad<double>(), nominal.params, held_distal));
+        }
+      }
       present[kDistalX] = held_distal[0];
       present[kDistalY] = held_distal[1];
     }
   }
-  std::vector<int> held;
-  if (prox_t) held.insert(held.end(), {flat(ParameterKind::kAx, 0), flat(ParameterKind::kAy, 0)});
-  if (prox_r) held.push_back(flat(ParameterKind::kAlpha, 0));
-  if (held_distal[0]) held.push_back(flat(ParameterKind::kBx, 0));
-  if (held_distal[1]) held.push_back(flat(ParameterKind::kBy, 0));
-  if (dist_r) held.push_back(flat(ParameterKind::kBeta, 0));
-  if (stiff) held.push_back(flat(ParameterKind::kDiameter, 0));
+  const std::vector<int> held = references();
   if (options.fix_gauge && result.load_identified && (held_distal[0] || held_distal[1])) {
     id.refit_holding(held);
   }
