@@ -321,6 +321,27 @@ TEST_F(PcrCalibrate, UnitSlipsAreNamed) {
   EXPECT_NE(err.find("units.csv:"), std::string::npos) << err;
 }
 
+// A dataset written in an image's left-handed frame (y down): named as mirrored; the clean one is
+// not.
+TEST_F(PcrCalibrate, AMirroredDatasetIsNamed) {
+  Dataset data = read_dataset(path("calibration.csv"));
+  for (Pose2<double>& pose : data.poses) {
+    pose.y = -pose.y;
+    pose.theta = -pose.theta;
+  }
+  write_dataset(data, path("mirrored.csv"));
+  for (const std::string name : {"mirrored.csv", "calibration.csv"}) {
+    const std::string command = kTool + " --robot " + path("nominal.json") + " --data " +
+                                path(name) + " --quiet --output " + path("out.json") +
+                                " > /dev/null 2> " + path("err.txt");
+    EXPECT_EQ(std::system(command.c_str()), 0);
+    const std::string err = slurp(path("err.txt"));
+    EXPECT_EQ(err.find("times better mirrored (y and theta negated)") != std::string::npos,
+              name == "mirrored.csv")
+        << name << ": " << err;
+  }
+}
+
 // Two rows pasted twice and a validation set of another robot (its poses 0.5 mm off): warnings
 // name the copies by line and the validation set by its error, and --strict makes them an exit 3.
 TEST_F(PcrCalibrate, CopiedRowsAndAForeignValidationSetAreNamed) {

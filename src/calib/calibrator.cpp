@@ -331,6 +331,44 @@ Extrinsics<double> registered_extrinsics(const std::vector<Pose2<double>>& platf
   return out;
 }
 
+/// RMS distance (m) between the platform positions the measurements give through `extrinsics`
+/// (Eq. 5) and `platform`.
+double registration_rms(const std::vector<Pose2<double>>& platform,
+                        const std::vector<CalibrationSample>& rows,
+                        const Extrinsics<double>& extrinsics) {
+  double square = 0;
+  for (std::size_t j = 0; j < rows.size(); ++j) {
+    const Pose2<double> p = extrinsics.platform_from_measurement(rows[j].measured);
+    square += (p.translation() - platform[j].translation()).squaredNorm();
+  }
+  return std::sqrt(square / static_cast<double>(rows.size()));
+}
+
+/// A dataset written in a left-handed frame (an image's, y down) is mirrored: no rigid extrinsics
+/// map it onto the model, and the stages end far from the noise, naming the extrinsics. When the
+/// measurements register ten times better onto the nominal model's poses with y and theta
+/// negated, the warning says so.
+void warn_of_mirror(const std::vector<Pose2<double>>& platform,
+                    const std::vector<CalibrationSample>& rows, const Extrinsics<double>& guess,
+                    CalibrationResult* result) {
+  std::vector<CalibrationSample> mirrored = rows;
+  for (CalibrationSample& row : mirrored) {
+    row.measured.y = -row.measured.y;
+    row.measured.theta = -row.measured.theta;
+  }
+  const double as_given =
+      registration_rms(platform, rows, registered_extrinsics(platform, rows, guess));
+  const double as_mirrored =
+      registration_rms(platform, mirrored, registered_extrinsics(platform, mirrored, guess));
+  if (as_mirrored * 10 < as_given) {
+    result->warnings.push_back(
+        "the measured poses register onto the nominal model's " +
+        format_number(as_given / as_mirrored) +
+        " times better mirrored (y and theta negated): written in a left-handed frame, as an "
+        "image's (y down)?");
+  }
+}
+
 /// Generators whose every moved parameter is in `is_free` (and that move at least one).
 std::vector<bool> present_generators(const std::vector<GaugeGenerator>& generators,
                                      const std::vector<bool>& is_free) {
@@ -1335,6 +1373,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     RobotParams<double> start = nominal.params;
     start.extrinsics = registered_extrinsics(nominal_poses, rows, nominal.params.extrinsics);
     id.set_robot(start);
+    warn_of_mirror(nominal_poses, rows, nominal.params.extrinsics, &result);
   }
   const std::vector<double> registered = id.values();
   const int count = id.count();
