@@ -108,15 +108,24 @@ def test_d_optimal_sample(robot):
         pcr.sample_configurations(robot, count=6, design="d_optimal")
 
 
-def test_calibration_recovers_extrinsics(robot):
-    # A nominal whose only uncertain parameters are the extrinsics: the virtual robot's truth then
-    # differs from it by its extrinsics only, and the extrinsics stage alone must explain the data.
+def uncertain_extrinsics_and_lengths(robot, length=0.0):
+    """A copy of robot whose only uncertain parameters are the extrinsics and (length > 0, in m)
+    the rod lengths."""
     nominal = robot.copy()
     u = pcr.Uncertainty()
     u.camera = robot.uncertainty.camera
     u.pattern = robot.uncertainty.pattern
     u.limbs = [pcr.LimbUncertainty() for _ in range(3)]
+    for limb in u.limbs:
+        limb.l = length
     nominal.uncertainty = u
+    return nominal
+
+
+def test_calibration_recovers_extrinsics(robot):
+    # A nominal whose only uncertain parameters are the extrinsics: the virtual robot's truth then
+    # differs from it by its extrinsics only, and the extrinsics stage alone must explain the data.
+    nominal = uncertain_extrinsics_and_lengths(robot)
     v_ext = pcr.VirtualRobot(nominal, seed=7, noise_position=0.0, noise_angle=0.0)
     assert v_ext.truth.limbs[0].l == nominal.limbs[0].l
     assert v_ext.truth.extrinsics.camera.x != 0.0
@@ -169,14 +178,7 @@ def test_calibration_identifies_a_platform_load(robot):
     # "load" in the last stage the report gives the load within 4 of its standard deviations of
     # the truth's (no gauge moves it: neither the clamps nor the diameters are free), and FK under
     # it reproduces the noise-free measurements.
-    nominal = robot.copy()
-    u = pcr.Uncertainty()
-    u.camera = robot.uncertainty.camera
-    u.pattern = robot.uncertainty.pattern
-    u.limbs = [pcr.LimbUncertainty() for _ in range(3)]
-    for limb in u.limbs:
-        limb.l = 126e-6
-    nominal.uncertainty = u
+    nominal = uncertain_extrinsics_and_lengths(robot, 126e-6)
     v = pcr.VirtualRobot(nominal, seed=5, force=(1.5e-3, -1e-3), moment=1e-5)
     sets = pcr.sample_configurations(nominal, count=30, validation_count=10, seed=6)
     q, q_validation = sets["calibration"], sets["validation"]
