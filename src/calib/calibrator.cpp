@@ -347,17 +347,17 @@ double registration_rms(const std::vector<Pose2<double>>& platform,
 /// A dataset written in a left-handed frame (an image's, y down) is mirrored: no rigid extrinsics
 /// map it onto the model, and the stages end far from the noise, naming the extrinsics. When the
 /// measurements register ten times better onto the nominal model's poses with y and theta
-/// negated, the warning says so.
+/// negated, the warning says so. `registered`: registered_extrinsics of the rows as given.
 void warn_of_mirror(const std::vector<Pose2<double>>& platform,
-                    const std::vector<CalibrationSample>& rows, const Extrinsics<double>& guess,
+                    const std::vector<CalibrationSample>& rows,
+                    const Extrinsics<double>& registered, const Extrinsics<double>& guess,
                     CalibrationResult* result) {
   std::vector<CalibrationSample> mirrored = rows;
   for (CalibrationSample& row : mirrored) {
     row.measured.y = -row.measured.y;
     row.measured.theta = -row.measured.theta;
   }
-  const double as_given =
-      registration_rms(platform, rows, registered_extrinsics(platform, rows, guess));
+  const double as_given = registration_rms(platform, rows, registered);
   const double as_mirrored =
       registration_rms(platform, mirrored, registered_extrinsics(platform, mirrored, guess));
   if (as_mirrored * 10 < as_given) {
@@ -1373,7 +1373,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     RobotParams<double> start = nominal.params;
     start.extrinsics = registered_extrinsics(nominal_poses, rows, nominal.params.extrinsics);
     id.set_robot(start);
-    warn_of_mirror(nominal_poses, rows, nominal.params.extrinsics, &result);
+    warn_of_mirror(nominal_poses, rows, start.extrinsics, nominal.params.extrinsics, &result);
   }
   const std::vector<double> registered = id.values();
   const int count = id.count();
