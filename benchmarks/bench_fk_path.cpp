@@ -48,7 +48,7 @@ int main(int argc, char** argv) try {
   csv.columns = {"q1", "q2", "q3"};
   const CsvTable table = read_csv(argv[1], csv);
   std::vector<JointVector> path;
-  for (const std::vector<double>& row : table.rows) {
+  for (const CsvRow row : table.rows) {
     path.emplace_back(JointVector::Map(row.data(), 3));
   }
 

@@ -45,6 +45,16 @@ TEST(CsvIo, ReadsRowsWithoutHeader) {
   EXPECT_EQ(t.line_numbers, (std::vector<int>{1, 3}));
 }
 
+// The first data row is the last line, without its newline: the rows are sized from the text
+// after it, which is empty (the sanitizer build checks that nothing beyond the text is read).
+TEST(CsvIo, ReadsAFirstRowWithoutNewline) {
+  for (const char* text : {"1,2", "a,b\n1,2", "# comment\na,b\r\n1,2"}) {
+    const pcr::CsvTable t = parse(text);
+    ASSERT_EQ(t.rows.size(), 1u) << text;
+    EXPECT_EQ(t.rows[0], (std::vector<double>{1, 2})) << text;
+  }
+}
+
 TEST(CsvIo, HeaderSelectsColumnsByNameAndSkipsCommentColumns) {
   const pcr::CsvTable t =
       parse("# a comment line\r\ntheta,#note,x,y\r\n0.5,hello world,1,2\r\n", {"x", "y", "theta"});

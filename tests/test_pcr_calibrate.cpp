@@ -112,7 +112,7 @@ TEST_F(PcrCalibrate, IdentifiedFileReproducesTheTruthsMeasurements) {
   ASSERT_EQ(predicted.rows.size(), validation_q_.size());
   double nominal_mean = 0, identified_mean = 0;
   for (std::size_t j = 0; j < validation_q_.size(); ++j) {
-    const std::vector<double>& row = predicted.rows[j];
+    const pcr::CsvRow row = predicted.rows[j];
     ASSERT_EQ(row[3], 1.0) << "pcr fk did not converge on row " << j;
     const ForwardSolution b = forward_kinematics(nominal_.params, validation_q_[j]);
     ASSERT_TRUE(b.summary.converged());
@@ -288,7 +288,7 @@ TEST_F(PcrCalibrate, OutliersAreDownWeightedAndNamed) {
   columns.ignore_other_columns = true;
   const CsvTable residuals = read_csv(path("residuals.csv"), columns);
   ASSERT_EQ(residuals.rows.size(), data.size());
-  for (const std::vector<double>& row : residuals.rows) {
+  for (const pcr::CsvRow row : residuals.rows) {
     const bool moved = row[0] == 8 || row[0] == 20;
     EXPECT_EQ(row[1], row[0] + 1);  // the header is line 1
     EXPECT_EQ(row[3], moved ? 1.0 : 0.0) << "row " << row[0] << " norm " << row[2];

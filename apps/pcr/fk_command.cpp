@@ -29,7 +29,7 @@ void run_fk(const FkArguments& args) {
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
   ForwardSequence sequence(robot.params, options, load);
-  const auto solve_row = [&](const std::vector<double>& row, CsvWriter& out) {
+  const auto solve_row = [&](const CsvRow row, CsvWriter& out) {
     JointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
     const ForwardSolution& solution = sequence.solve(q);

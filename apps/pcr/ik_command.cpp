@@ -34,7 +34,7 @@ void run_ik(const IkArguments& args) {
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
   InverseSequence sequence(robot.params, options, load);
-  const auto solve_row = [&](const std::vector<double>& row, CsvWriter& out) {
+  const auto solve_row = [&](const CsvRow row, CsvWriter& out) {
     const Pose2<double> pose{row[0], row[1], row[2]};
     const InverseSolution& solution = sequence.solve(pose);
     const SolverSummary& s = solution.summary;

@@ -9,6 +9,7 @@
 // - every other field must be a finite decimal number; fields are not quoted.
 // Any violation throws InputError naming the source, the line and the column (both 1-based).
 
+#include <algorithm>
 #include <cstddef>
 #include <fstream>
 #include <iosfwd>
@@ -32,12 +33,75 @@ struct CsvReadOptions {
   bool ignore_other_columns{false};
 };
 
+/// One row of a CsvTable: a view of its numeric fields, valid while the table lives.
+class CsvRow {
+ public:
+  CsvRow(const double* values, std::size_t size) : values_(values), size_(size) {}
+  std::size_t size() const { return size_; }
+  const double& operator[](std::size_t column) const { return values_[column]; }
+  const double* data() const { return values_; }
+  const double* begin() const { return values_; }
+  const double* end() const { return values_ + size_; }
+  friend bool operator==(const CsvRow& row, const std::vector<double>& values) {
+    return std::equal(row.begin(), row.end(), values.begin(), values.end());
+  }
+
+ private:
+  const double* values_;
+  std::size_t size_;
+};
+
+/// The rows of a CsvTable, stored one after another in one array, so that reading a row
+/// allocates nothing once the array has grown.
+class CsvRows {
+ public:
+  class Iterator {
+   public:
+    Iterator(const CsvRows& rows, std::size_t index) : rows_(&rows), index_(index) {}
+    CsvRow operator*() const { return (*rows_)[index_]; }
+    Iterator& operator++() {
+      ++index_;
+      return *this;
+    }
+    bool operator!=(const Iterator& other) const { return index_ != other.index_; }
+
+   private:
+    const CsvRows* rows_;
+    std::size_t index_;
+  };
+
+  explicit CsvRows(std::size_t width = 0) : width_(width) {}
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  std::size_t width() const { return width_; }
+  CsvRow operator[](std::size_t row) const { return {values_.data() + row * width_, width_}; }
+  Iterator begin() const { return {*this, 0}; }
+  Iterator end() const { return {*this, size_}; }
+  bool operator==(const CsvRows& other) const {
+    return width_ == other.width_ && size_ == other.size_ && values_ == other.values_;
+  }
+
+  /// Room for `rows` rows in all, so that appending them copies nothing.
+  void reserve(std::size_t rows) { values_.reserve(rows * width_); }
+  /// A new last row of zeros, for the reader to fill.
+  double* append() {
+    values_.resize(values_.size() + width_, 0.0);
+    ++size_;
+    return values_.data() + values_.size() - width_;
+  }
+
+ private:
+  std::size_t width_;
+  std::size_t size_{0};
+  std::vector<double> values_;
+};
+
 struct CsvTable {
   std::string source;  ///< file name, or "<stdin>"
   bool has_header{false};
-  std::vector<std::string> columns;       ///< names of the numeric columns (expected or read)
-  std::vector<std::vector<double>> rows;  ///< numeric columns only, in `columns` order
-  std::vector<int> line_numbers;          ///< 1-based source line of each row
+  std::vector<std::string> columns;  ///< names of the numeric columns (expected or read)
+  CsvRows rows;                      ///< numeric columns only, in `columns` order
+  std::vector<int> line_numbers;     ///< 1-based source line of each row
 };
 
 /// Parses CSV text; `source` names it in error messages.

@@ -67,7 +67,7 @@ std::vector<Pose2<double>> load_path_csv(const std::string& path) {
   if (table.rows.empty()) throw InputError(path + ": the path has no pose (columns x,y,theta)");
   std::vector<Pose2<double>> poses;
   poses.reserve(table.rows.size());
-  for (const std::vector<double>& row : table.rows) poses.push_back({row[0], row[1], row[2]});
+  for (const CsvRow row : table.rows) poses.push_back({row[0], row[1], row[2]});
   return poses;
 }
 
@@ -234,7 +234,7 @@ MeasuredPath load_measured_csv(const std::string& path) {
   std::vector<int> first_line;
   const double tol_length = 1e-12, tol_angle = 1e-12;
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    const std::vector<double>& row = table.rows[r];
+    const CsvRow row = table.rows[r];
     const std::string where = path + ":" + std::to_string(table.line_numbers[r]);
     const double index = row[0];
     if (!(index >= 0) || index != std::floor(index) || index > 1e7) {

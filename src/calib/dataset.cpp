@@ -99,7 +99,7 @@ Dataset parse_dataset(std::istream& in, const std::string& source, int num_joint
   const CsvTable table = read_table(in, source, num_joints, 3, &data.num_joints);
   const int n = data.num_joints;
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    const std::vector<double>& row = table.rows[r];
+    const CsvRow row = table.rows[r];
     JointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
     data.q.push_back(q);
@@ -140,7 +140,7 @@ std::vector<JointVector> parse_configurations(std::istream& in, const std::strin
   int n = 0;
   const CsvTable table = read_table(in, source, num_joints, 0, &n);
   std::vector<JointVector> out;
-  for (const std::vector<double>& row : table.rows) {
+  for (const CsvRow row : table.rows) {
     JointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
     out.push_back(q);

@@ -175,7 +175,17 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
       const std::string name = table.has_header ? " (" + header_names[j] + ")" : "";
       return "column " + std::to_string(j + 1) + name + ": " + what + quoted(fields[j]);
     };
-    std::vector<double> row(table.columns.size(), 0.0);
+    if (table.rows.empty()) {
+      // Sized once from the lines left (an upper bound on the rows): no copy as the rows grow.
+      // `begin` already points past this line, beyond the text when it has no final newline.
+      table.rows = CsvRows(table.columns.size());
+      const std::string_view rest = std::string_view(text).substr(std::min(begin, text.size()));
+      const std::size_t lines_left =
+          1 + static_cast<std::size_t>(std::count(rest.begin(), rest.end(), '\n'));
+      table.rows.reserve(lines_left);
+      table.line_numbers.reserve(lines_left);
+    }
+    double* const row = table.rows.append();
     for (std::size_t j = 0; j < fields.size(); ++j) {
       if (mapping[j] < 0) continue;
       const std::optional<double> value = parse_number(fields[j]);
@@ -188,7 +198,6 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
       }
       row[static_cast<std::size_t>(mapping[j])] = *value;
     }
-    table.rows.push_back(std::move(row));
     table.line_numbers.push_back(line_number);
   }
   return table;
