@@ -125,6 +125,33 @@ TEST(Kinematics, JacobianMatchesCentralDifferences) {
   check_jacobian(inverse, inverse.pack(point));
 }
 
+// The chord matrix's inverse, formed at its first secant correction from the factorisation,
+// against a QR solve of the same systems: random matrices of every size up to the largest shooting
+// problem's, their rows scaled apart so that partial pivoting reorders them.
+TEST(Kinematics, ChordMatrixInverseMatchesAnIndependentSolve) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal;
+  for (int size = 1; size <= kMaxResiduals; ++size) {
+    JacobianMatrix J(size, size);
+    for (int i = 0; i < size; ++i) {
+      for (int j = 0; j < size; ++j) J(i, j) = normal(rng) * std::pow(10.0, (i % 3) - 1);
+    }
+    internal::ChordMatrix chord;
+    chord.compute(J);
+    ShootingVector s(size), b(size);
+    for (int i = 0; i < size; ++i) {
+      s(i) = normal(rng);
+      b(i) = normal(rng);
+    }
+    // A secant the Jacobian already satisfies forms the inverse and leaves it as it is.
+    const ShootingVector y = J * s;
+    chord.secant_update(s, y);
+    const ShootingVector expected = J.colPivHouseholderQr().solve(b);
+    const ShootingVector x = chord.solve(b);
+    EXPECT_LE((x - expected).norm(), 1e-10 * expected.norm()) << "size " << size;
+    EXPECT_LE((J * x - b).norm(), 1e-12 * J.norm() * x.norm()) << "size " << size;
+  }
+}
 // The clamps' reactions balance the external load: sum n_i(0) = f and
 // sum (A_i(q) x n_i(0) + m_i(0)) = p_P x f + m_z about W's origin (the whole robot is in
 // equilibrium).

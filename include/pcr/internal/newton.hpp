@@ -41,7 +41,7 @@ class ChordMatrix {
   /// Skipped when s is not seen through the current matrix (s . solve(y) near zero).
   void secant_update(const ShootingVector& s, const ShootingVector& y) {
     if (!has_inverse_) {
-      inverse_ = lu_.inverse();
+      invert_factorisation();
       has_inverse_ = true;
     }
     const ShootingVector Hy = inverse_ * y;
@@ -51,6 +51,30 @@ class ChordMatrix {
   }
 
  private:
+  /// inverse_ = J^-1 from the factorisation P J = L U, one column per unit vector, by forward
+  /// and back substitution along the columns of L and U. Eigen's lu_.inverse() goes through its
+  /// blocked triangular solves (packing, a matrix kernel), which at 12 x 12 cost more than the
+  /// arithmetic: it was about a tenth of a warm IK solve.
+  void invert_factorisation() {
+    const int n = lu_.rows();
+    const JacobianMatrix& LU = lu_.matrixLU();
+    // Row operations on all the columns at once: each row update is a vector operation, and the
+    // columns' substitutions are independent, so none waits on the latency of another.
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor,
+                                   kMaxResiduals, kMaxResiduals>;
+    RowMajor X = RowMajor::Zero(n, n);
+    const auto& to_row = lu_.permutationP().indices();  // P e_c = e_{to_row(c)}
+    for (int c = 0; c < n; ++c) X(to_row(c), c) = 1.0;
+    for (int k = 0; k < n - 1; ++k) {  // L, unit lower
+      for (int i = k + 1; i < n; ++i) X.row(i) -= LU(i, k) * X.row(k);
+    }
+    for (int k = n - 1; k >= 0; --k) {  // U
+      X.row(k) /= LU(k, k);
+      for (int i = 0; i < k; ++i) X.row(i) -= LU(i, k) * X.row(k);
+    }
+    inverse_ = X;
+  }
+
   JacobianLU lu_;
   JacobianMatrix inverse_;
   double rcond_ = 0.0;
