@@ -201,16 +201,48 @@ TEST(CsvIo, WriterAllocatesNothingPerRow) {
   } discard;
   std::ostream stream(&discard);
   pcr::CsvWriter out(stream);
+  const auto add_rows = [&out](int rows) {
+    for (int r = 0; r < rows; ++r) {
+      out.add(-1.2345678901234567e-300 * r);
+      out.add(r);
+      out.add("max_iterations");
+      out.end_row();
+    }
+  };
+  add_rows(5000);  // more than a batch: the formatting thread has started (its one allocation)
   g_allocations = 0;
   g_counting = true;
-  for (int r = 0; r < 100000; ++r) {
-    out.add(-1.2345678901234567e-300 * r);
-    out.add(r);
-    out.add("max_iterations");
-    out.end_row();
-  }
+  add_rows(100000);
+  out.flush();
   g_counting = false;
   EXPECT_EQ(g_allocations, 0);
+}
+
+// Rows handed to the formatting thread and rows formatted by flush() on the caller's thread, a
+// flush in the middle of a row, and a stream that is read between flushes: the text is what
+// the rows say, in order.
+TEST(CsvIo, WriterKeepsTheOrderAcrossFlushes) {
+  std::ostringstream text;
+  std::string expected;
+  {
+    pcr::CsvWriter out(text);
+    for (int r = 0; r < 30000; ++r) {
+      out.add(r);
+      out.add(r * 1e-7);
+      expected += std::to_string(r) + "," + pcr::format_double(r * 1e-7);
+      if (r % 7919 == 0) {
+        out.flush();
+        ASSERT_EQ(text.str(), expected) << "row " << r;
+      }
+      out.add(std::string(static_cast<std::size_t>(r % 5), 'x'));
+      out.end_row();
+      expected += "," + std::string(static_cast<std::size_t>(r % 5), 'x') + "\n";
+    }
+    out.flush();
+    EXPECT_EQ(text.str(), expected);
+    out.add("last");
+  }
+  EXPECT_EQ(text.str(), expected + "last");
 }
 
 TEST(CsvIo, OutputFileIsAtomic) {

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <fstream>
 #include <iosfwd>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -123,8 +124,13 @@ char* format_double(double value, char* out);
 /// Joins fields with commas and a trailing newline.
 std::string csv_line(const std::vector<std::string>& fields);
 
-/// Writes CSV rows to a stream through one buffer, handed over in 64 kB chunks, so that writing a
-/// row allocates nothing. Numbers are written as format_double.
+/// Writes CSV rows to a stream; numbers are written as format_double. The fields are recorded as
+/// they are added and formatted later: once a few hundred rows are waiting, a second thread formats
+/// and writes them while the caller computes the next ones (formatting 8 numbers costs about a
+/// fifth of a warm FK solve). Nothing is allocated per row: the rows go through three recycled
+/// batches, the text through one buffer handed to the stream in 64 kB chunks. Only flush() (and the
+/// destructor) guarantees that the rows added so far have reached the stream; until then the
+/// stream belongs to the writer.
 class CsvWriter {
  public:
   explicit CsvWriter(std::ostream& out);
@@ -138,15 +144,14 @@ class CsvWriter {
   void add(std::string_view text);
   /// Ends the row (a newline); the next add starts a new one.
   void end_row();
-  /// Writes the buffered rows to the stream.
+  /// Writes every row added so far to the stream (waiting for the second thread, if any).
   void flush();
 
  private:
-  void separate();
-
-  std::ostream& out_;
-  std::string buffer_;
-  bool row_started_{false};
+  struct Batch;
+  class Formatter;
+  std::unique_ptr<Batch> batch_;  ///< the rows being added
+  std::unique_ptr<Formatter> formatter_;
 };
 
 }  // namespace pcr
