@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
-"""What `pcr fk` costs per row, against the library's solve and a plain RK4 residual.
+"""What `pcr fk` and `pcr ik` cost per row, against the library's solves and a plain RK4 residual.
 
 Writes a smooth joint path for the default robot (a circle in joint space, 10 um from row to row),
-times `pcr fk` on it, start-up, parsing and writing included, then runs bench_fk_path on the same
-file: the library's warm FK along the path (as pcr fk solves its rows) and a plain three-rod
-RK4-64 residual. Prints the per-row costs and two ratios (targets: CLI / library <= 1.3,
-CLI / plain residual <= 0.5), and the start-up of `pcr fk` (mean of 50 runs on a one-row input)
+times `pcr fk` on it, start-up, parsing and writing included; takes the poses it printed as the
+path of `pcr ik` and times that; then runs bench_fk_path on the same files: the library's warm FK
+and IK along the paths (as pcr fk and pcr ik solve their rows) and a plain three-rod RK4-64
+residual. Prints the per-row costs and the ratios (targets: CLI / library <= 1.3 for both,
+pcr fk / plain residual <= 0.5), and the start-up of `pcr fk` (mean of 50 runs on a one-row input)
 with the number of shared libraries it loads. Standard library only; times are the best of
 --repeat runs.
 
@@ -13,6 +14,7 @@ with the number of shared libraries it loads. Standard library only; times are t
 """
 
 import argparse
+import csv
 import math
 import os
 import shutil
@@ -71,7 +73,16 @@ def main():
         output = os.path.join(scratch, "fk.csv")
         cli_us = best_seconds([pcr, "fk", "--input", path, "--output", output],
                               args.repeat) / args.rows * 1e6
-        measured = subprocess.run([library, path, str(args.repeat)], capture_output=True,
+        poses = os.path.join(scratch, "poses.csv")
+        with open(output) as fk, open(poses, "w") as f:
+            rows = csv.DictReader(fk)
+            f.write("x,y,theta\n")
+            for row in rows:
+                f.write(f"{row['x']},{row['y']},{row['theta']}\n")
+        ik_output = os.path.join(scratch, "ik.csv")
+        ik_us = best_seconds([pcr, "ik", "--input", poses, "--output", ik_output],
+                             args.repeat) / args.rows * 1e6
+        measured = subprocess.run([library, path, str(args.repeat), poses], capture_output=True,
                                   text=True, check=True).stdout
         # An empty input is an error (no data rows): start-up is timed on the home row.
         one_row = os.path.join(scratch, "home.csv")
@@ -80,6 +91,7 @@ def main():
         startup_ms = mean_seconds([pcr, "fk", "--input", one_row, "--output", output], 50) * 1e3
     values = dict(line.split() for line in measured.splitlines())
     sequence_us = float(values["fk_sequence_us"])
+    ik_sequence_us = float(values["ik_sequence_us"])
     residual_us = float(values["plain_rk4_64_residual_us"])
     libraries = "?"
     if shutil.which("ldd"):
@@ -93,7 +105,10 @@ def main():
     print(f"library warm FK (ForwardSequence):         {sequence_us:.2f} us/row")
     print(f"library, forward_kinematics_or_cold:       {float(values['fk_or_cold_us']):.2f} us/row")
     print(f"plain three-rod RK4-64 residual (-O2):     {residual_us:.2f} us")
+    print(f"pcr ik, whole run / rows:                  {ik_us:.2f} us/row")
+    print(f"library warm IK (InverseSequence):         {ik_sequence_us:.2f} us/row")
     print(f"CLI / library warm FK:        {cli_us / sequence_us:.2f}  (target <= 1.3)")
+    print(f"CLI / library warm IK:        {ik_us / ik_sequence_us:.2f}  (target <= 1.3)")
     print(f"CLI / plain RK4-64 residual:  {cli_us / residual_us:.2f}  (target <= 0.5)")
 
 

@@ -1,8 +1,9 @@
-// The floor of `pcr fk`, for benchmarks/bench_cli.py: the library's FK of the default robot along
-// the joint path of a CSV file (columns q1,q2,q3), solved as pcr fk solves its rows
-// (ForwardSequence) and by forward_kinematics_or_cold row after row; and, as a yardstick of the
+// The floor of `pcr fk` and `pcr ik`, for benchmarks/bench_cli.py: the library's FK of the default
+// robot along the joint path of a CSV file (columns q1,q2,q3), solved as pcr fk solves its rows
+// (ForwardSequence) and by forward_kinematics_or_cold row after row; its IK along the pose path of
+// another (columns x,y,theta), as pcr ik solves them (InverseSequence); and, as a yardstick of the
 // machine, a plain three-rod RK4 residual of 64 steps (plain_rk4_residual.cpp).
-//   build/benchmarks/bench_fk_path PATH.csv [REPEAT]
+//   build/benchmarks/bench_fk_path PATH.csv [REPEAT [POSES.csv]]
 // Prints one "name microseconds" line per measurement: the best of REPEAT (default 3) runs.
 #include <algorithm>
 #include <chrono>
@@ -72,6 +73,21 @@ int main(int argc, char** argv) try {
     return failures;
   });
 
+  double ik_sequence_us = 0;
+  if (argc > 3) {
+    CsvReadOptions pose_columns;
+    pose_columns.columns = {"x", "y", "theta"};
+    const CsvTable poses_table = read_csv(argv[3], pose_columns);
+    std::vector<Pose2<double>> poses;
+    for (const CsvRow row : poses_table.rows) poses.push_back({row[0], row[1], row[2]});
+    ik_sequence_us = best_us_per_item(repeat, poses.size(), [&] {
+      InverseSequence sequence(robot);
+      int failures = 0;
+      for (const Pose2<double>& pose : poses) failures += !sequence.solve(pose).summary.converged();
+      return failures;
+    });
+  }
+
   // The default robot's rods, near home: the unknowns change a little from call to call.
   bench::PlainRod rods[3];
   for (int i = 0; i < 3; ++i) {
@@ -95,6 +111,7 @@ int main(int argc, char** argv) try {
   std::printf("fk_sequence_us %.4f\n", sequence_us);
   std::printf("fk_or_cold_us %.4f\n", or_cold_us);
   std::printf("plain_rk4_64_residual_us %.4f\n", residual_us);
+  if (argc > 3) std::printf("ik_sequence_us %.4f\n", ik_sequence_us);
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "bench_fk_path: %s\n", e.what());
