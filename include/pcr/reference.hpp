@@ -1,5 +1,6 @@
 #pragma once
-// High-accuracy reference solutions computed with SUNDIALS CVODE (compiled target pcr::reference).
+// Independent references for the tests (compiled target pcr::reference): high-accuracy solutions
+// computed with SUNDIALS CVODE, and the elastic stability of an equilibrium by its energy.
 //
 // The same rod equations as pcr/rod.hpp (Mauze et al. 2021, Eq. 1), with the same sign
 // convention (n(s), m(s) are exerted by the material beyond s on the material before it):
@@ -12,6 +13,8 @@
 // "best available" answer; they allocate and may throw, so they are not for the real-time loop.
 // SUNDIALS headers never appear here.
 
+#include <array>
+#include <limits>
 #include <vector>
 
 #include "pcr/kinematics.hpp"
@@ -79,5 +82,71 @@ ForwardSolution forward_kinematics_reference(
     const RobotParams<double>& robot, const JointVector& q, const ForwardSolution& start,
     const ReferenceOptions& options = ReferenceOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
+
+// ---- Elastic stability by the energy ----------------------------------------------------------
+// An equilibrium is stable when the total potential energy (the rods' bending energy minus the
+// work of the platform load) has a strict local minimum among the configurations that respect the
+// clamps. This reference discretises each rod's tangent angle at the midpoints of N equal
+// segments (the clamps' angles at both ends), finds the discrete equilibrium next to a start by
+// Newton on its first-order conditions, and projects the Hessian of the Lagrangian on the null
+// space of the constraints (each rod's tip at its distal clamp). Its smallest eigenvalue,
+// in a metric that makes it independent of N, is positive for a stable equilibrium. It shares
+// no code with the shooting solver: no rod ODE, no sensitivities. Dense matrices of size
+// n N + 3: for tests.
+
+/// A rod clamped at A (in W) with tangent angle alpha (in W), its tip attached to the platform at
+/// B (in P) with tangent angle beta (in P). Length l (m), EI (N m^2).
+struct EnergyRod {
+  Vector2<double> A;
+  double alpha = 0;
+  Vector2<double> B;
+  double beta = 0;
+  double length = 0;
+  double ei = 0;
+};
+
+struct EnergyProblem {
+  std::vector<EnergyRod> rods;
+  PlatformLoad<double> load;  ///< dead force at the origin of P and moment, in W
+  /// The platform's free components (x, y, theta); a held one keeps its start value. A single
+  /// rod with a held platform is a rod clamped at both ends.
+  std::array<bool, 3> platform_free{true, true, true};
+};
+
+/// A configuration of the discrete model: the platform pose and each rod's N midpoint angles.
+struct EnergyState {
+  Pose2<double> pose;
+  std::vector<std::vector<double>> angles;
+};
+
+struct EnergyOptions {
+  int max_iterations = 30;
+  /// On the first-order conditions: closure / l and gradient / (EI / l) (per unit of each unknown).
+  double tolerance = 1e-11;
+};
+
+struct EnergyStability {
+  bool converged = false;  ///< the discrete equilibrium was found next to the start
+  int iterations = 0;
+  EnergyState state;  ///< the discrete equilibrium (or the last iterate)
+  /// Smallest eigenvalue of the reduced Hessian, energy in units of EI / l (means over the rods),
+  /// per unit of the metric int dtheta^2 ds / l + |dP|^2 / l^2 + dphi^2. Positive: stable.
+  double min_eigenvalue = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// The discrete equilibrium next to `start` and its stability (the angles' count sets N).
+/// Throws std::invalid_argument on a malformed problem.
+EnergyStability energy_stability(const EnergyProblem& problem, const EnergyState& start,
+                                 const EnergyOptions& options = EnergyOptions());
+
+/// The energy problem of a robot at joints q (rod i from limb i, its clamp moved by q_i).
+EnergyProblem energy_problem(const RobotParams<double>& robot, const JointVector& q,
+                             const PlatformLoad<double>& load = PlatformLoad<double>());
+
+/// A start for energy_stability from a shooting solution (pose and proximal wrenches at q): each
+/// rod's angles at the midpoints of `segments` segments.
+EnergyState energy_start(const RobotParams<double>& robot, const JointVector& q,
+                         const Pose2<double>& pose,
+                         const std::array<Wrench<double>, kMaxLimbs>& wrenches, int segments);
 
 }  // namespace pcr
