@@ -1,6 +1,6 @@
 // The energy-based stability reference (pcr::energy_stability) against closed forms: Euler's
-// clamped-clamped column, a cantilever under a dead tip load; and its discrete equilibrium
-// against the shooting solver's on the default robot.
+// clamped-clamped column, a cantilever under a dead tip load; its discrete equilibrium against the
+// shooting solver's on the default robot; and a robot driven past a fold.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -111,6 +111,39 @@ TEST(EnergyStability, DefaultRobotAgreesWithShootingAndIsStable) {
       energy_problem(robot, zero), energy_start(robot, zero, home.pose, home.wrenches, 100));
   ASSERT_TRUE(at_home.converged);
   EXPECT_GT(at_home.min_eigenvalue, 0);
+}
+
+// The default robot with a 60 mm stroke, its platform moved along a line at theta = 0 (75 degrees
+// from the x axis) by warm-started IK: the IK solutions continue smoothly past about 22.8 mm, but
+// there the equilibrium with the joints held loses its stability (a fold of the forward problem):
+// the smallest eigenvalue falls through zero.
+TEST(EnergyStability, PastAFoldTheLongerStrokeRobotIsUnstable) {
+  RobotParams<double> robot = femto_3pf();
+  for (int i = 0; i < 3; ++i) {
+    robot.limb(i).q_min = -0.030;
+    robot.limb(i).q_max = 0.030;
+  }
+  InverseSequence sequence(robot);
+  const double direction = 75 * M_PI / 180;
+  double previous = std::numeric_limits<double>::infinity();
+  for (int k = 0; k <= 250; ++k) {
+    const double t = k * 1e-4;
+    const InverseSolution& ik =
+        sequence.solve({t * std::cos(direction), t * std::sin(direction), 0.0});
+    ASSERT_TRUE(ik.summary.converged()) << t;
+    if (k != 200 && k != 220 && k != 235 && k != 250) continue;
+    const EnergyStability s = energy_stability(
+        energy_problem(robot, ik.q), energy_start(robot, ik.q, ik.pose, ik.wrenches, 100));
+    ASSERT_TRUE(s.converged) << t;
+    EXPECT_LT(std::hypot(s.state.pose.x - ik.pose.x, s.state.pose.y - ik.pose.y), 1e-5) << t;
+    if (t < 0.0225) {
+      EXPECT_GT(s.min_eigenvalue, 0) << t;
+    } else {
+      EXPECT_LT(s.min_eigenvalue, 0) << t;
+    }
+    EXPECT_LT(s.min_eigenvalue, previous) << t;
+    previous = s.min_eigenvalue;
+  }
 }
 
 TEST(EnergyStability, RejectsMalformedProblems) {

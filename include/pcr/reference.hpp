@@ -134,7 +134,9 @@ struct EnergyStability {
   double min_eigenvalue = std::numeric_limits<double>::quiet_NaN();
 };
 
-/// The discrete equilibrium next to `start` and its stability (the angles' count sets N).
+/// The discrete equilibrium next to `start` and its stability (the angles' count sets N). Plain
+/// Newton: next to a fold the discrete model's own fold lies O(1 / N^2) away, and Newton may
+/// fail there, or end on another branch: compare the state's pose with the start's.
 /// Throws std::invalid_argument on a malformed problem.
 EnergyStability energy_stability(const EnergyProblem& problem, const EnergyState& start,
                                  const EnergyOptions& options = EnergyOptions());
