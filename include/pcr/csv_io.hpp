@@ -74,7 +74,6 @@ class CsvRows {
   explicit CsvRows(std::size_t width = 0) : width_(width) {}
   std::size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
-  std::size_t width() const { return width_; }
   CsvRow operator[](std::size_t row) const { return {values_.data() + row * width_, width_}; }
   Iterator begin() const { return {*this, 0}; }
   Iterator end() const { return {*this, size_}; }

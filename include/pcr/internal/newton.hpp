@@ -51,10 +51,10 @@ class ChordMatrix {
   }
 
  private:
-  /// inverse_ = J^-1 from the factorisation P J = L U, one column per unit vector, by forward
-  /// and back substitution along the columns of L and U. Eigen's lu_.inverse() goes through its
-  /// blocked triangular solves (packing, a matrix kernel), which at 12 x 12 cost more than the
-  /// arithmetic: it was about a tenth of a warm IK solve.
+  /// inverse_ = J^-1 = U^-1 L^-1 P from the factorisation P J = L U. Eigen's lu_.inverse() goes
+  /// through its blocked triangular solves (packing, a matrix kernel), which at 12 x 12 cost more
+  /// than the arithmetic: about a tenth of a warm IK solve. Substituting one column at a time was
+  /// slower still (each column a chain of dependent divisions).
   void invert_factorisation() {
     const int n = lu_.rows();
     const JacobianMatrix& LU = lu_.matrixLU();
