@@ -114,9 +114,18 @@ class SolveTimer {
   long iterations_ = 0, evaluations_ = 0, failures_ = 0;
 };
 
+/// The solver's default options, with the stability check (pcr/stability.hpp) on (argument 1) or
+/// off (0): the warm-start benchmarks time both.
+SolverOptions with_stability(const benchmark::State& state) {
+  SolverOptions options;
+  options.check_stability = state.range(0) != 0;
+  return options;
+}
+
 // FK from the solution of joints 10 um away (each joint), as in a control loop.
 void BM_ForwardWarm(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
+  const SolverOptions options = with_stability(state);
   const std::vector<ForwardSolution> solutions = reachable_solutions(64);
   std::size_t k = 0;
   SolveTimer timer;
@@ -124,16 +133,17 @@ void BM_ForwardWarm(benchmark::State& state) {
     const ForwardSolution& warm = solutions[k++ % solutions.size()];
     JointVector q = warm.q;
     q.array() += 10e-6;
-    timer.time([&] { return forward_kinematics(robot, q, warm); });
+    timer.time([&] { return forward_kinematics(robot, q, warm, options); });
   }
   timer.report(state);
 }
-BENCHMARK(BM_ForwardWarm);
+BENCHMARK(BM_ForwardWarm)->Arg(0)->Arg(1);
 
 // IK from the solution of the pose 10 um / 1 mrad away. The warm starts are IK solutions, as in a
 // control loop (each carries its IK Jacobian for the first, chord, step).
 void BM_InverseWarm(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
+  const SolverOptions options = with_stability(state);
   std::vector<InverseSolution> warm;
   for (const ForwardSolution& fk : reachable_solutions(64)) {
     warm.push_back(inverse_kinematics(robot, fk.pose, as_inverse_warm_start(fk)));
@@ -144,11 +154,11 @@ void BM_InverseWarm(benchmark::State& state) {
     const InverseSolution& start = warm[k++ % warm.size()];
     const Pose2<double> target{start.pose.x + 7.07e-6, start.pose.y + 7.07e-6,
                                start.pose.theta + 1e-3};
-    timer.time([&] { return inverse_kinematics(robot, target, start); });
+    timer.time([&] { return inverse_kinematics(robot, target, start, options); });
   }
   timer.report(state);
 }
-BENCHMARK(BM_InverseWarm);
+BENCHMARK(BM_InverseWarm)->Arg(0)->Arg(1);
 
 // The same steps along a path, as a control loop solves them (ForwardSequence, InverseSequence):
 // each solve starts from the previous one with the chord matrix it carries, already corrected by
@@ -159,7 +169,7 @@ BENCHMARK(BM_InverseWarm);
 // to 1 mrad).
 void BM_ForwardSequence(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
-  ForwardSequence sequence(robot);
+  ForwardSequence sequence(robot, with_stability(state));
   SolveTimer timer;
   long k = 0;
   for (auto _ : state) {
@@ -170,11 +180,11 @@ void BM_ForwardSequence(benchmark::State& state) {
   }
   timer.report(state);
 }
-BENCHMARK(BM_ForwardSequence);
+BENCHMARK(BM_ForwardSequence)->Arg(0)->Arg(1);
 
 void BM_InverseSequence(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
-  InverseSequence sequence(robot);
+  InverseSequence sequence(robot, with_stability(state));
   SolveTimer timer;
   long k = 0;
   for (auto _ : state) {
@@ -186,7 +196,7 @@ void BM_InverseSequence(benchmark::State& state) {
   }
   timer.report(state);
 }
-BENCHMARK(BM_InverseSequence);
+BENCHMARK(BM_InverseSequence)->Arg(0)->Arg(1);
 
 void BM_ForwardCold(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();

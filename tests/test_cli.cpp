@@ -255,6 +255,39 @@ TEST_F(Cli, RobotCommandWritesTheCanonicalFile) {
   EXPECT_EQ(slurp(path), slurp(std::string(PCR_SOURCE_DIR) + "/robots/femto-3pf.json"));
 }
 
+// The default robot with a +-40 mm stroke along a line at 75 degrees: past 22.8 mm the branch
+// warm-started IK follows would not hold (rod 0 buckles); pcr ik reports the stable equilibrium
+// at the same pose instead, with the stability columns.
+TEST_F(Cli, IkReportsStableEquilibria) {
+  pcr::RobotDescription robot = pcr::default_robot();
+  for (int i = 0; i < 3; ++i) {
+    robot.params.limb(i).q_min = -0.040;
+    robot.params.limb(i).q_max = 0.040;
+  }
+  const std::string path = (dir_ / "long.json").string();
+  pcr::save_robot(robot, path);
+  std::string poses = "x,y,theta\n";
+  const double direction = 75 * M_PI / 180;
+  for (double t : {0.0, 0.01, 0.02, 0.022, 0.023, 0.024, 0.025}) {
+    poses += pcr::format_double(t * std::cos(direction)) + "," +
+             pcr::format_double(t * std::sin(direction)) + ",0\n";
+  }
+  const Result r = run("ik --robot '" + path + "'", poses);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const pcr::CsvTable t =
+      parse(r.out, {"q1", "converged", "stable", "stability_margin", "singularity"});
+  ASSERT_EQ(t.rows.size(), 7u);
+  for (const auto& row : t.rows) {
+    EXPECT_EQ(row[1], 1.0);
+    EXPECT_EQ(row[2], 1.0);
+    EXPECT_GT(row[3], 0.0);
+    EXPECT_GT(row[4], 0.0);
+  }
+  EXPECT_GT(t.rows[6][0], 0.030);  // rod 0 buckled: its joint ~10 mm past the straight branch's
+  // Without the search (a robot whose stroke ends before the stable solution), the rows past the
+  // fold are unstable, reported, and fail unless --allow-unstable.
+}
+
 TEST_F(Cli, IkRefusesMoreThanThreeLimbs) {
   pcr::RobotDescription robot = pcr::default_robot();
   robot.uncertainty.reset();

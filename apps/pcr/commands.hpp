@@ -23,6 +23,7 @@ void register_sample_command(CLI::App& app);
 void register_sensitivity_command(CLI::App& app);
 void register_accuracy_command(CLI::App& app);
 void register_demo_command(CLI::App& app);
+void register_map_command(CLI::App& app);
 #endif
 #ifdef PCR_HAS_VISION
 void register_measure_command(CLI::App& app);
@@ -61,6 +62,20 @@ inline CLI::Validator within(double lo, double hi, const std::string& unit = "")
 inline CLI::Option* add_robot_option(CLI::App& command, std::string& path) {
   return command.add_option("--robot", path,
                             "pcr-robot JSON description (default: the built-in femto-3pf)");
+}
+
+/// The robot of `--robot PATH` (the default robot when empty) for a command that solves inverse
+/// kinematics (`what`): an InputError when it has more than 3 limbs.
+inline RobotDescription load_robot_for_inverse(const std::string& path, const std::string& what) {
+  RobotDescription robot = load_robot_or_default(path);
+  const int n = robot.params.num_limbs;
+  if (n > 3) {
+    throw InputError((path.empty() ? std::string("<default robot>") : path) + ": robot '" +
+                     robot.name + "' has " + std::to_string(n) + " limbs; " + what +
+                     " solves inverse kinematics, a square problem only for 3 limbs (full pose) "
+                     "and 2 limbs (x, y imposed, theta solved)");
+  }
+  return robot;
 }
 
 /// Reads a CSV table from `path`, or from stdin when it is empty or "-"; a table without rows is
@@ -146,7 +161,8 @@ struct SolveArguments {
 /// exit status is 1 if any failed.
 template <class SolveRow>
 void solve_rows(const char* command, const CsvTable& table, const std::string& output,
-                const std::vector<std::string>& header, SolveRow&& solve_row) {
+                const std::vector<std::string>& header, SolveRow&& solve_row,
+                bool allow_unstable = false) {
   OutputFile file(output);
   CsvWriter out(file.stream());
   for (const std::string& name : header) out.add(name);
@@ -155,7 +171,12 @@ void solve_rows(const char* command, const CsvTable& table, const std::string& o
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
     const SolveStatus status = solve_row(table.rows[r], out);
     out.end_row();
-    if (status != SolveStatus::kConverged) {
+    if (status == SolveStatus::kUnstable && !allow_unstable) {
+      ++failures;
+      std::cerr << command << ": " << table.source << ":" << table.line_numbers[r]
+                << ": unstable: the equilibrium at this pose would not hold, and no stable one "
+                   "was found (--allow-unstable accepts it)\n";
+    } else if (status != SolveStatus::kConverged && status != SolveStatus::kUnstable) {
       ++failures;
       std::cerr << command << ": " << table.source << ":" << table.line_numbers[r]
                 << ": not converged (" << to_string(status) << ")\n";
@@ -172,18 +193,27 @@ void solve_rows(const char* command, const CsvTable& table, const std::string& o
 
 /// The columns after the inputs (and, for IK, the joints) of both commands' output.
 inline const std::vector<std::string>& summary_columns() {
-  static const std::vector<std::string> columns = {"converged", "iterations", "residual", "status",
-                                                   "max_strain"};
+  static const std::vector<std::string> columns = {"converged",        "iterations", "residual",
+                                                   "status",           "max_strain", "stable",
+                                                   "stability_margin", "singularity"};
   return columns;
 }
 
-/// Adds the fields of summary_columns(); max_strain only for a valid equilibrium.
+/// Adds the fields of summary_columns(); max_strain only for a valid equilibrium; stable is 1, 0
+/// or empty when not checked (no valid equilibrium).
 inline void add_summary_fields(const SolverSummary& s, bool valid, CsvWriter& out) {
   out.add(s.converged() ? 1 : 0);
   out.add(s.iterations);
   out.add(s.final_residual_norm);
   out.add(to_string(s.status));
   out.add(valid ? s.max_strain : std::nan(""));
+  if (s.stability == Stability::kUnchecked) {
+    out.add("");
+  } else {
+    out.add(s.stability == Stability::kStable ? 1 : 0);
+  }
+  out.add(s.stability_margin);
+  out.add(s.singularity);
 }
 
 }  // namespace pcr::cli

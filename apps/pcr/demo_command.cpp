@@ -20,6 +20,7 @@
 #include "pcr/calib/sampling.hpp"
 #include "pcr/calib/sensitivity.hpp"
 #include "pcr/calib/virtual_robot.hpp"
+#include "pcr/calib/workspace_map.hpp"
 #ifdef PCR_HAS_VISION
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
@@ -310,6 +311,86 @@ std::string accuracy_section(const pcr::CalibrationResult& calibrated, pcr::Virt
   return md;
 }
 
+/// Step 6: where the identified robot can work at theta = 0: the maps of `pcr map` (CSV) and, with
+/// the vision library, heat maps of the stability margin, the singularity and the strain.
+std::string workspace_section(const pcr::RobotDescription& identified, const fs::path& out,
+                              json& report, const Progress& progress) {
+  pcr::WorkspaceMapOptions options;
+  options.grid = 200;
+  const pcr::WorkspaceMap map = pcr::workspace_map(identified.params, options);
+  const int n = identified.params.num_limbs;
+  {
+    pcr::OutputFile file((out / "map-identified.csv").string());
+    pcr::write_workspace_map_csv(map, n, file.stream());
+    file.commit();
+  }
+  int reachable = 0, unstable = 0;
+  double min_singularity = HUGE_VAL;
+  for (const pcr::WorkspaceMapPoint& p : map.points) {
+    if (!p.reachable) continue;
+    ++reachable;
+    unstable += p.stable ? 0 : 1;
+    min_singularity = std::min(min_singularity, p.singularity);
+  }
+  const pcr::RotationRange rotation = pcr::rotation_range(identified.params, 0.0, 0.0);
+  std::vector<std::string> images;
+#ifdef PCR_HAS_VISION
+  // Over the reachable points; log scales for quantities that span decades.
+  const auto field = [&](const char* name, auto value) {
+    std::vector<double> values(map.points.size(), std::numeric_limits<double>::quiet_NaN());
+    double lo = HUGE_VAL, hi = -HUGE_VAL;
+    for (std::size_t k = 0; k < values.size(); ++k) {
+      if (!map.points[k].reachable) continue;
+      values[k] = value(map.points[k]);
+      if (std::isfinite(values[k])) {
+        lo = std::min(lo, values[k]);
+        hi = std::max(hi, values[k]);
+      }
+    }
+    if (!(hi > lo)) return;
+    const std::string file = std::string("images/map-") + name + ".png";
+    pcr::vision::write_heat_map_png(values, map.nx, map.ny, lo, hi, (out / file).string());
+    images.push_back(file);
+  };
+  field("stability-margin", [](const pcr::WorkspaceMapPoint& p) {
+    return std::copysign(std::log10(1.0 + std::abs(p.stability_margin)), p.stability_margin);
+  });
+  field("singularity", [](const pcr::WorkspaceMapPoint& p) { return std::log10(p.singularity); });
+  field("max-strain", [](const pcr::WorkspaceMapPoint& p) { return p.max_strain; });
+#endif
+  report["workspace"] = {{"theta", map.theta},
+                         {"grid", map.nx},
+                         {"range_m", {map.x_min, map.x_max, map.y_min, map.y_max}},
+                         {"reachable_area_m2", map.reachable_area},
+                         {"stable_area_m2", map.stable_area},
+                         {"reachable_points", reachable},
+                         {"unstable_reachable_points", unstable},
+                         {"min_singularity", reachable ? min_singularity : NAN},
+                         {"rotation_range_at_centre_rad", {rotation.theta_min, rotation.theta_max}},
+                         {"seconds", map.seconds},
+                         {"files", {"map-identified.csv"}},
+                         {"images", images}};
+  char line[160];
+  std::snprintf(line, sizeof line,
+                "      %d x %d map in %.2f s: reachable %.2f mm^2, stable %.2f mm^2", map.nx,
+                map.ny, map.seconds, map.reachable_area * 1e6, map.stable_area * 1e6);
+  progress.say(line);
+  char text[1024];
+  std::snprintf(
+      text, sizeof text,
+      "Identified robot at theta = 0, %d x %d positions over x [%.2f, %.2f] mm, y [%.2f, %.2f] "
+      "mm (map-identified.csv, %.2f s): reachable within the stroke %.2f mm^2, of which stable "
+      "%.2f mm^2 (%d of %d reachable points only by an unstable equilibrium); smallest "
+      "singular value of the scaled FK Jacobian there %.3g. Rotation range at the centre: "
+      "[%.4f, %.4f] rad.\n",
+      map.nx, map.ny, map.x_min * 1e3, map.x_max * 1e3, map.y_min * 1e3, map.y_max * 1e3,
+      map.seconds, map.reachable_area * 1e6, map.stable_area * 1e6, unstable, reachable,
+      min_singularity, rotation.theta_min, rotation.theta_max);
+  std::string md = text;
+  for (const std::string& image : images) md += "\n![" + image + "](" + image + ")\n";
+  return md;
+}
+
 void run_demo(const DemoArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out = prepare_output(args.output);
@@ -443,6 +524,12 @@ void run_demo(const DemoArgs& args) {
         accuracy_section(calibrated, robot, args, out, report, progress);
   progress.end();
 
+  // 6. Workspace maps.
+  progress.begin("workspace maps of the identified robot (reachability, stability, singularity)");
+  md += "\n## 5. Where the identified robot can work\n\n" +
+        workspace_section(identified, out, report, progress);
+  progress.end();
+
   report["files"] = {"report.md",
                      "report.json",
                      "design.json",
@@ -456,6 +543,7 @@ void run_demo(const DemoArgs& args) {
                      "calibration-errors.csv",
                      "accuracy-{square,circle}-{nominal,identified}.csv",
                      "attained-{square,circle}-{nominal,identified}.csv",
+                     "map-identified.csv",
                      "images/"};
   report["time_s"] = Progress::seconds_since(start);
   md += fmt("\nTotal time %.1f s.\n", Progress::seconds_since(start));

@@ -58,9 +58,10 @@ void register_fk_command(CLI::App& app) {
   CLI::App* fk = app.add_subcommand(
       "fk",
       "Forward kinematics: rows q1,...,qn (m) -> q1,...,qn,x,y,theta,converged,"
-      "iterations,residual,status,max_strain. Joints outside q_range give converged=0, status "
-      "out_of_range (the pose of that equilibrium is still given). Exit status 1 if a row did "
-      "not converge.");
+      "iterations,residual,status,max_strain,stable,stability_margin,singularity. Joints "
+      "outside q_range give converged=0, status out_of_range (the pose of that equilibrium is "
+      "still given). stable=0: the equilibrium would not hold. Exit status 1 if a row did not "
+      "converge.");
   pcr::cli::add_robot_option(*fk, args->robot);
   fk->add_option("--input", args->input, "CSV of joint values (default: stdin)");
   fk->add_option("--output", args->output, "output CSV (default: stdout)");

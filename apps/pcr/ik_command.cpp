@@ -9,18 +9,13 @@ namespace {
 struct IkArguments {
   std::string robot, input, output;
   pcr::cli::SolveArguments solve;
+  bool allow_unstable = false;
 };
 
 void run_ik(const IkArguments& args) {
   using namespace pcr;
-  const RobotDescription robot = load_robot_or_default(args.robot);
+  const RobotDescription robot = cli::load_robot_for_inverse(args.robot, "pcr ik");
   const int n = robot.params.num_limbs;
-  if (n > 3) {
-    throw InputError((args.robot.empty() ? std::string("<default robot>") : args.robot) +
-                     ": robot '" + robot.name + "' has " + std::to_string(n) +
-                     " limbs; inverse kinematics is a square problem only for 3 limbs (full "
-                     "pose) and 2 limbs (x, y imposed, theta solved)");
-  }
   const SolverOptions options = args.solve.options();
   const PlatformLoad<double> load = args.solve.load();
   CsvReadOptions csv;
@@ -38,7 +33,8 @@ void run_ik(const IkArguments& args) {
     const Pose2<double> pose{row[0], row[1], row[2]};
     const InverseSolution& solution = sequence.solve(pose);
     const SolverSummary& s = solution.summary;
-    const bool valid = usable_as_warm_start(s);  // a valid equilibrium, maybe out of range
+    // A valid equilibrium, maybe out of range or unstable.
+    const bool valid = is_equilibrium(s);
     const double nan = std::numeric_limits<double>::quiet_NaN();
     // For n = 2 theta is solved for: report the solved value.
     out.add(pose.x);
@@ -48,7 +44,7 @@ void run_ik(const IkArguments& args) {
     cli::add_summary_fields(s, valid, out);
     return s.status;
   };
-  cli::solve_rows("pcr ik", table, args.output, header, solve_row);
+  cli::solve_rows("pcr ik", table, args.output, header, solve_row, args.allow_unstable);
 }
 
 }  // namespace
@@ -58,12 +54,16 @@ void register_ik_command(CLI::App& app) {
   CLI::App* ik = app.add_subcommand(
       "ik",
       "Inverse kinematics: rows x,y,theta (m, m, rad) -> x,y,theta,q1,...,qn,converged,"
-      "iterations,residual,status,max_strain. Joints outside q_range give converged=0, "
-      "status out_of_range. With 2 limbs theta is solved for (the input theta is ignored). "
-      "Exit status 1 if a row did not converge.");
+      "iterations,residual,status,max_strain,stable,stability_margin,singularity. Joints "
+      "outside q_range give converged=0, status out_of_range. An equilibrium that would not "
+      "hold (stable=0) is replaced by a stable one at the same pose when one is found, else "
+      "status unstable. With 2 limbs theta is solved for (the input theta is ignored). Exit "
+      "status 1 if a row did not converge or is unstable (unless --allow-unstable).");
   pcr::cli::add_robot_option(*ik, args->robot);
   ik->add_option("--input", args->input, "CSV of poses (default: stdin)");
   ik->add_option("--output", args->output, "output CSV (default: stdout)");
+  ik->add_flag("--allow-unstable", args->allow_unstable,
+               "accept rows where only an unstable equilibrium was found (exit status 0)");
   args->solve.add_to(*ik);
   ik->callback([args] { run_ik(*args); });
 }

@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
   register_sensitivity_command(app);
   register_accuracy_command(app);
   register_demo_command(app);
+  register_map_command(app);
 #endif
 #ifdef PCR_HAS_VISION
   register_measure_command(app);

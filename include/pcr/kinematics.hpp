@@ -93,6 +93,10 @@ inline InverseSolution as_inverse_warm_start(const ForwardSolution& fk);
 /// whose joints lie outside their stroke.
 inline bool usable_as_warm_start(const SolverSummary& summary);
 
+/// Whether a solution is an equilibrium of the robot: usable as a warm start, or IK's kUnstable
+/// (an equilibrium that would not hold).
+inline bool is_equilibrium(const SolverSummary& summary);
+
 /// One input of a sequence (see SequenceSolver): warm-started from `warm` when there is one (may
 /// be null), retried from home when that fails (the warm start lies on another branch, or too far
 /// along a fold). The summary counts the iterations and residual evaluations of both.
@@ -107,10 +111,36 @@ inline InverseSolution inverse_kinematics_or_cold(
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
 
+/// Does nothing with the points of a traced path.
+struct NoPathVisitor {
+  template <class Solution>
+  void operator()(const Solution&) const {}
+};
+
+/// Forward kinematics from a warm start along the straight joint path to q by pseudo-arclength
+/// continuation: through folds, where the joints' path turns back (the robot snaps through). The
+/// solution at q when the curve of solutions comes back to it (after an even number of folds),
+/// else the last point traced with status kSingular. summary.folds_passed and first_fold say
+/// where it turned. visit(point) sees every point of the curve (path_fraction: where its input
+/// lies on the path; its stability checked as SolverOptions::check_stability says).
+template <class Visitor = NoPathVisitor>
+ForwardSolution forward_kinematics_through_folds(
+    const RobotParams<double>& robot, const JointVector& q, const ForwardSolution& warm_start,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>(), Visitor&& visit = Visitor());
+
+/// As forward_kinematics_through_folds, for IK along a straight pose path.
+template <class Visitor = NoPathVisitor>
+InverseSolution inverse_kinematics_through_folds(
+    const RobotParams<double>& robot, const Pose2<double>& pose, const InverseSolution& warm_start,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>(), Visitor&& visit = Visitor());
+
 /// Solves a sequence of FK (ForwardSequence) or IK (InverseSequence) inputs: the rows of a file,
 /// a batch, a trajectory, a measurement campaign. One policy, everywhere in pcr: each input is
 /// warm-started from the last usable solution of the sequence (usable_as_warm_start), and a warm
-/// solve that fails is retried cold, from home. A failed input leaves the warm start as it was, so
+/// solve that fails is retried cold, from home (one that stops at a fold is first followed through
+/// it, with SolverOptions::through_folds). A failed input leaves the warm start as it was, so
 /// the input after it starts from the last usable solution again. No heap: the solutions live in
 /// the solver, which keeps the last usable one and the latest one.
 template <class Solution>

@@ -29,6 +29,9 @@ struct LimbParams {
   double q_max{0};           ///< actuator stroke, upper end (m)
 
   T bending_stiffness() const { return pcr::bending_stiffness(young_modulus, diameter); }
+  /// EA of the circular section (N): the kinematics takes the rods as inextensible, the stability
+  /// check (pcr/stability.hpp) needs their axial compliance.
+  T axial_stiffness() const { return young_modulus * T(M_PI / 4.0) * diameter * diameter; }
 
   /// Unit vector of the actuator's translation, in W.
   Vector2<T> actuator_direction() const {

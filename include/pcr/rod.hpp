@@ -283,28 +283,39 @@ RodStepper<double, Sens> get_lane(const RodBundle<N, Sens>& bundle, int lane) {
   return rod;
 }
 
+struct NoStepVisitor {
+  template <class Bundle>
+  void operator()(int, const Bundle&) const {}
+};
+
 /// Integrates n <= N initialised rods over `steps` steps in one bundle of N lanes, and writes
 /// their final states back (bit for bit what one at a time gives, see RodStepper). Lanes beyond n
-/// carry a copy of rod 0.
-template <int N, bool Sens>
-void integrate_rods_bundled(RodStepper<double, Sens>* rods, int n, int steps) {
+/// carry a copy of rod 0. after_step(k, bundle) sees the bundle at node k = 1 ... steps.
+template <int N, bool Sens, class AfterStep = NoStepVisitor>
+void integrate_rods_bundled(RodStepper<double, Sens>* rods, int n, int steps,
+                            AfterStep&& after_step = AfterStep()) {
   RodBundle<N, Sens> bundle;
   for (int r = 0; r < N; ++r) set_lane(bundle, r, rods[r < n ? r : 0]);
-  for (int i = 0; i < steps; ++i) bundle.step();
+  for (int i = 0; i < steps; ++i) {
+    bundle.step();
+    after_step(i + 1, bundle);
+  }
   for (int r = 0; r < n; ++r) rods[r] = get_lane(bundle, r);
 }
 
 /// Integrates n initialised rods (n <= 8) over `steps` steps in SIMD lanes: in a bundle of 2, 4 or
-/// 8 lanes, the smallest that holds them.
-template <bool Sens>
-void integrate_rods_in_lanes(RodStepper<double, Sens>* rods, int n, int steps) {
+/// 8 lanes, the smallest that holds them. after_step(k, bundle) as in integrate_rods_bundled (rod
+/// r in lane r).
+template <bool Sens, class AfterStep = NoStepVisitor>
+void integrate_rods_in_lanes(RodStepper<double, Sens>* rods, int n, int steps,
+                             AfterStep&& after_step = AfterStep()) {
   if (n <= 0) return;
   if (n <= 2) {
-    integrate_rods_bundled<2>(rods, n, steps);
+    integrate_rods_bundled<2>(rods, n, steps, after_step);
   } else if (n <= 4) {
-    integrate_rods_bundled<4>(rods, n, steps);
+    integrate_rods_bundled<4>(rods, n, steps, after_step);
   } else {
-    integrate_rods_bundled<8>(rods, n, steps);
+    integrate_rods_bundled<8>(rods, n, steps, after_step);
   }
 }
 
@@ -319,6 +330,23 @@ RodStepper<T, Sens> integrate_rod_pass(const RodState<T>& start, const T& ei, co
     visit(T(i + 1) * rod.h, rod.state());
   }
   return rod;
+}
+
+/// A one-rod stepper's state as a RodTip: its sensitivities with Sens, else left unset.
+template <class T, bool Sens>
+RodTip<T> tip_of(const RodStepper<T, Sens>& rod) {
+  RodTip<T> tip;
+  tip.state = rod.state();
+  tip.max_abs_moment = rod.max_abs_moment;
+  if constexpr (Sens) {
+    for (int j = 0; j < 3; ++j) {
+      tip.sensitivity(0, j) = rod.tx[j];
+      tip.sensitivity(1, j) = rod.ty[j];
+      tip.sensitivity(2, j) = rod.tth[j];
+      tip.sensitivity(3, j) = rod.tm[j];
+    }
+  }
+  return tip;
 }
 
 }  // namespace internal
@@ -337,18 +365,8 @@ RodState<T> integrate_rod(const RodState<T>& start, const T& ei, const T& length
 template <class T>
 RodTip<T> integrate_rod_with_sensitivity(const RodState<T>& start, const T& ei, const T& length,
                                          int steps) {
-  RodTip<T> tip;
-  const auto pass =
-      internal::integrate_rod_pass<T, true>(start, ei, length, steps, internal::NoVisitor{});
-  tip.state = pass.state();
-  tip.max_abs_moment = pass.max_abs_moment;
-  for (int j = 0; j < 3; ++j) {
-    tip.sensitivity(0, j) = pass.tx[j];
-    tip.sensitivity(1, j) = pass.ty[j];
-    tip.sensitivity(2, j) = pass.tth[j];
-    tip.sensitivity(3, j) = pass.tm[j];
-  }
-  return tip;
+  return internal::tip_of(
+      internal::integrate_rod_pass<T, true>(start, ei, length, steps, internal::NoVisitor{}));
 }
 
 /// Integrates the rod and calls visit(s, RodState) at each of the steps + 1 nodes (the shape).

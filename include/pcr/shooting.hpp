@@ -181,6 +181,40 @@ void input_partials(const RobotParams<T>& robot, const ShootingPoint<T>& point,
   }
 }
 
+/// The scaled partials of the residual (see shooting_residual) from the rods' tips with their
+/// sensitivities.
+template <class T>
+void shooting_partials_from_tips(const RobotParams<T>& robot, const ShootingPoint<T>& point,
+                                 const ShootingScale& scale, const RodTip<T>* tips,
+                                 ShootingMatrix& partials) {
+  const int n = robot.num_limbs;
+  partials.setZero(3 * n + 3, 4 * n + 3);
+  const double c = std::cos(scalar_value(point.pose.theta));
+  const double s = std::sin(scalar_value(point.pose.theta));
+  for (int i = 0; i < n; ++i) {
+    const LimbParams<T>& limb = robot.limb(i);
+    const RodTip<T>& rod = tips[i];
+    const Vector2<T> arm = distal_arm(limb, T(c), T(s));
+    const double arm_x = scalar_value(arm.x()), arm_y = scalar_value(arm.y());
+    // d r / d (scaled wrench): physical derivative times the unknown's scale.
+    const double to_scaled[3] = {scale.force, scale.force, scale.moment()};
+    for (int j = 0; j < 3; ++j) {
+      const int col = 3 * i + j;
+      partials(3 * i + 0, col) = scalar_value(rod.sensitivity(0, j)) * to_scaled[j] / scale.length;
+      partials(3 * i + 1, col) = scalar_value(rod.sensitivity(1, j)) * to_scaled[j] / scale.length;
+      partials(3 * i + 2, col) = scalar_value(rod.sensitivity(2, j)) * to_scaled[j];
+      // Moment balance: arm x n + m(l).
+      double dmoment = scalar_value(rod.sensitivity(3, j));
+      if (j == 0) dmoment += -arm_y;
+      if (j == 1) dmoment += arm_x;
+      partials(3 * n + 2, col) = dmoment * to_scaled[j] / scale.moment();
+    }
+    partials(3 * n + 0, 3 * i + 0) = 1.0;
+    partials(3 * n + 1, 3 * i + 1) = 1.0;
+  }
+  input_partials(robot, point, scale, partials);
+}
+
 /// Evaluates the scaled residual (3n + 3) at a point. With `partials`, also fills
 /// d residual / d (wrenches, pose, q) in scaled units: columns [3i, 3i+3) rod i's wrench,
 /// [3n, 3n+3) the pose (x, y, theta), [3n+3, 4n+3) the joints. Returns the largest bending strain
@@ -207,18 +241,7 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
                    rod_steps);
     }
     internal::integrate_rods_in_lanes(rods, n, rod_steps);
-    for (int i = 0; i < n; ++i) {
-      tips[i].state = rods[i].state();
-      tips[i].max_abs_moment = rods[i].max_abs_moment;
-      if constexpr (kSens) {
-        for (int j = 0; j < 3; ++j) {
-          tips[i].sensitivity(0, j) = rods[i].tx[j];
-          tips[i].sensitivity(1, j) = rods[i].ty[j];
-          tips[i].sensitivity(2, j) = rods[i].tth[j];
-          tips[i].sensitivity(3, j) = rods[i].tm[j];
-        }
-      }
-    }
+    for (int i = 0; i < n; ++i) tips[i] = internal::tip_of(rods[i]);
   };
   if constexpr (std::is_same_v<T, double>) {
     if (partials) {
@@ -240,34 +263,7 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
   }
   const T strain = shooting_residual_from_tips(robot, point, load, scale, tips, residual);
   if (tips_out) std::copy(tips, tips + n, tips_out);
-  if (!partials) return strain;
-  partials->setZero(3 * n + 3, 4 * n + 3);
-  const double c = std::cos(scalar_value(point.pose.theta));
-  const double s = std::sin(scalar_value(point.pose.theta));
-  for (int i = 0; i < n; ++i) {
-    const LimbParams<T>& limb = robot.limb(i);
-    const RodTip<T>& rod = tips[i];
-    const Vector2<T> arm = distal_arm(limb, T(c), T(s));
-    const double arm_x = scalar_value(arm.x()), arm_y = scalar_value(arm.y());
-    // d r / d (scaled wrench): physical derivative times the unknown's scale.
-    const double to_scaled[3] = {scale.force, scale.force, scale.moment()};
-    for (int j = 0; j < 3; ++j) {
-      const int col = 3 * i + j;
-      (*partials)(3 * i + 0, col) =
-          scalar_value(rod.sensitivity(0, j)) * to_scaled[j] / scale.length;
-      (*partials)(3 * i + 1, col) =
-          scalar_value(rod.sensitivity(1, j)) * to_scaled[j] / scale.length;
-      (*partials)(3 * i + 2, col) = scalar_value(rod.sensitivity(2, j)) * to_scaled[j];
-      // Moment balance: arm x n + m(l).
-      double dmoment = scalar_value(rod.sensitivity(3, j));
-      if (j == 0) dmoment += -arm_y;
-      if (j == 1) dmoment += arm_x;
-      (*partials)(3 * n + 2, col) = dmoment * to_scaled[j] / scale.moment();
-    }
-    (*partials)(3 * n + 0, 3 * i + 0) = 1.0;
-    (*partials)(3 * n + 1, 3 * i + 1) = 1.0;
-  }
-  input_partials(robot, point, scale, *partials);
+  if (partials) shooting_partials_from_tips(robot, point, scale, tips, *partials);
   return strain;
 }
 

@@ -13,6 +13,8 @@ enum class SolveStatus {
                    ///< branches (kSingular: a fold, no solution ahead on this branch)
   kNonFinite,      ///< the residual became NaN or infinite
   kOutOfRange,     ///< IK converged, but a joint value lies outside its stroke
+  kUnstable,       ///< IK converged on an unstable equilibrium, and found no stable one at the
+                   ///< pose (SolverOptions::stable_inverse)
   kUnsupported,    ///< the request is not a square problem (IK with n > 3 limbs)
   kInvalidInput,   ///< wrong sizes, NaN inputs, or a robot with fewer than 2 / more than kMaxLimbs
                    ///< limbs
@@ -32,6 +34,8 @@ inline const char* to_string(SolveStatus status) {
       return "non_finite";
     case SolveStatus::kOutOfRange:
       return "out_of_range";
+    case SolveStatus::kUnstable:
+      return "unstable";
     case SolveStatus::kUnsupported:
       return "unsupported";
     case SolveStatus::kInvalidInput:
@@ -39,6 +43,13 @@ inline const char* to_string(SolveStatus status) {
   }
   return "unknown";
 }
+
+/// Elastic stability of a solution's equilibrium with its joints held (pcr/stability.hpp).
+enum class Stability {
+  kUnchecked,  ///< not checked: SolverOptions::check_stability off, or no converged solution
+  kStable,
+  kUnstable,
+};
 
 struct SolverOptions {
   /// RK4 steps per rod; 0 chooses them from an estimate of the solution's own discretisation
@@ -76,6 +87,21 @@ struct SolverOptions {
   int max_continuation_iterations = 8;
   /// Smallest continuation increment, as a fraction of the whole path.
   double min_continuation_step = 1.0 / 1024.0;
+  /// Check the elastic stability of every converged solution (pcr/stability.hpp): the cost of one
+  /// more residual-plus-Jacobian evaluation (~1 us for 3 limbs), not counted in
+  /// SolverSummary::residual_evaluations (the solve's own).
+  bool check_stability = true;
+  /// When IK converges on an unstable equilibrium, look for a stable one at the same pose
+  /// (kUnstable when none is found). Needs check_stability.
+  bool stable_inverse = true;
+  /// A sequence (SequenceSolver) whose warm solve stops at a fold (or short of it: kSingular or
+  /// kMaxIterations) follows the curve of solutions
+  /// through it by pseudo-arclength continuation, as the robot snaps through: the input path
+  /// turns back at each fold, and the input is reached after an even number of them (else the
+  /// cold retry from home follows).
+  bool through_folds = false;
+  /// Points a pseudo-arclength trace may solve.
+  int max_arclength_steps = 400;
 };
 
 struct SolverSummary {
@@ -98,6 +124,18 @@ struct SolverSummary {
   /// requested input (1): 1 when converged; on a failure, the last point solved along the way,
   /// which the solution's q and pose describe.
   double path_fraction = 0.0;
+  /// Stability of the returned equilibrium (kUnchecked unless converged, or IK's kOutOfRange or
+  /// kUnstable, and SolverOptions::check_stability).
+  Stability stability = Stability::kUnchecked;
+  /// EquilibriumStability::margin: positive when stable, through zero at a fold (NaN unchecked).
+  double stability_margin = std::numeric_limits<double>::quiet_NaN();
+  /// EquilibriumStability::singularity: reciprocal condition number of the scaled forward
+  /// Jacobian, zero at a fold or a bifurcation (NaN unchecked).
+  double singularity = std::numeric_limits<double>::quiet_NaN();
+  /// Folds a pseudo-arclength trace passed (SolverOptions::through_folds), and the path fraction
+  /// of the first: where the input turned back.
+  int folds_passed = 0;
+  double first_fold = std::numeric_limits<double>::quiet_NaN();
   bool converged() const { return status == SolveStatus::kConverged; }
 };
 

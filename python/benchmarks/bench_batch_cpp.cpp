@@ -23,12 +23,15 @@ int main(int argc, char** argv) {
     }
   }
   std::vector<double> qo(q.size()), pose(static_cast<std::size_t>(rows * 3)),
-      wrenches(static_cast<std::size_t>(rows * n * 3)), residual(rows), strain(rows);
+      wrenches(static_cast<std::size_t>(rows * n * 3)), residual(rows), strain(rows), margin(rows),
+      singularity(rows);
   std::vector<int> status(rows), iterations(rows), steps(rows);
   std::unique_ptr<bool[]> converged(new bool[static_cast<std::size_t>(rows)]);
+  std::unique_ptr<bool[]> stable(new bool[static_cast<std::size_t>(rows)]);
   const pcr::python::BatchBuffers out{qo.data(),       pose.data(),   wrenches.data(),
                                       converged.get(), status.data(), iterations.data(),
-                                      residual.data(), strain.data(), steps.data()};
+                                      residual.data(), strain.data(), steps.data(),
+                                      stable.get(),    margin.data(), singularity.data()};
   const auto start = std::chrono::steady_clock::now();
   pcr::python::forward_batch(robot, q.data(), rows, pcr::SolverOptions(), {}, out);
   const double seconds =

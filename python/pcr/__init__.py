@@ -39,9 +39,11 @@ if has_calibration:
         pose_errors,
         read_configurations,
         read_dataset,
+        rotation_range,
         sample_configurations,
         sensitivity,
         sensitivity_configurations,
+        workspace_map,
         write_configurations,
         write_dataset,
     )
@@ -151,33 +153,22 @@ def pose_errors_per_configuration(robot, q, measured, **solve_args):
 
 
 def workspace(robot, theta=0.0, half_width=None, resolution=41, centre=(0.0, 0.0), **solve_args):
-    """The reachable set at a fixed orientation: IK on a (resolution x resolution) grid of
-    positions around ``centre`` (m), swept row by row in alternating directions so that each
-    IK is warm-started from its neighbour.
+    """The reachable set at a fixed orientation on a (resolution x resolution) grid of positions
+    around ``centre`` (m): ``workspace_map`` over that square.
 
-    half_width (m) defaults to 1.3 times the largest actuator stroke. Returns a dict: ``x``, ``y``
-    (resolution,) grid axes (m), ``reachable`` (resolution, resolution) bool [iy, ix] (IK
-    converged within the strokes), ``q`` (resolution, resolution, n) joints (m, NaN where
-    unreachable), ``max_strain`` and ``theta``.
+    half_width (m) defaults to 1.3 times the largest actuator stroke. Returns workspace_map's
+    dict: ``x``, ``y`` (resolution,) grid axes (m), ``reachable`` (resolution, resolution) bool
+    [iy, ix] (an equilibrium within the strokes), ``stable``, ``q`` (resolution, resolution, n)
+    joints (m, NaN where IK found no equilibrium), ``max_strain``, ``stability_margin``,
+    ``singularity``, ``theta``, the areas.
     """
+    if not has_calibration:
+        raise RuntimeError("pcr.workspace needs pcr's calibration library (workspace_map), which "
+                           "this build of the module lacks")
     if half_width is None:  # the platform can travel a little further than one stroke
         half_width = 1.3 * max(max(abs(l.q_range[0]), abs(l.q_range[1])) for l in robot.limbs)
     if resolution < 2:
         raise ValueError(f"resolution: expected at least 2, got {resolution}")
-    xs = centre[0] + _np.linspace(-half_width, half_width, resolution)
-    ys = centre[1] + _np.linspace(-half_width, half_width, resolution)
-    order = []
-    for iy in range(resolution):
-        row = range(resolution) if iy % 2 == 0 else range(resolution - 1, -1, -1)
-        order.extend((iy, ix) for ix in row)
-    order = _np.array(order)
-    poses = _np.column_stack([xs[order[:, 1]], ys[order[:, 0]], _np.full(len(order), theta)])
-    ik = robot.inverse(poses, **solve_args)
-    n = robot.num_limbs
-    reachable = _np.zeros((resolution, resolution), dtype=bool)
-    q = _np.full((resolution, resolution, n), _np.nan)
-    strain = _np.full((resolution, resolution), _np.nan)
-    reachable[order[:, 0], order[:, 1]] = ik.converged
-    q[order[:, 0], order[:, 1]] = _np.where(ik.converged[:, None], ik.q, _np.nan)
-    strain[order[:, 0], order[:, 1]] = _np.where(ik.converged, ik.max_strain, _np.nan)
-    return {"x": xs, "y": ys, "theta": theta, "reachable": reachable, "q": q, "max_strain": strain}
+    span = (centre[0] - half_width, centre[0] + half_width, centre[1] - half_width,
+            centre[1] + half_width)
+    return workspace_map(robot, theta=theta, grid=resolution, range=span, **solve_args)

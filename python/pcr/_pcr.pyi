@@ -97,6 +97,7 @@ class SolveStatus:
     bifurcation: SolveStatus
     non_finite: SolveStatus
     out_of_range: SolveStatus
+    unstable: SolveStatus
     unsupported: SolveStatus
     invalid_input: SolveStatus
     @property
@@ -118,6 +119,8 @@ class SolverOptions:
     max_continuation_steps: int
     max_continuation_iterations: int
     min_continuation_step: float
+    check_stability: bool
+    stable_inverse: bool
     def __init__(self) -> None: ...
     def replace(self, **changes: Any) -> SolverOptions: ...
 
@@ -149,6 +152,12 @@ class Solution:
     @property
     def continuation_steps(self) -> int: ...
     @property
+    def stable(self) -> Optional[bool]: ...
+    @property
+    def stability_margin(self) -> float: ...
+    @property
+    def singularity(self) -> float: ...
+    @property
     def shapes(self) -> Optional[list[FloatArray]]: ...  # per rod (steps + 1, 4): s, x, y, theta
 
 class BatchResult:
@@ -162,6 +171,9 @@ class BatchResult:
     residual: FloatArray
     max_strain: FloatArray
     rod_steps: npt.NDArray[np.int32]
+    stable: npt.NDArray[np.bool_]
+    stability_margin: FloatArray
+    singularity: FloatArray
     shapes: Optional[list[Optional[list[FloatArray]]]]
     def __len__(self) -> int: ...
 
@@ -270,6 +282,14 @@ def command_path(robot: Robot, path: ArrayLike, *, strain_limit: float = 0.01,
                  force: Vector = (0.0, 0.0), moment: float = 0.0,
                  options: Optional[SolverOptions] = None,
                  cold_start_fallback: bool = True) -> dict[str, Any]: ...  # q, poses, max_strain, iterations
+
+def workspace_map(robot: Robot, *, theta: float = 0.0, grid: int = 200,
+                  range: Optional[tuple[float, float, float, float]] = None,
+                  force: Any = ..., moment: float = 0.0,
+                  options: Optional[SolverOptions] = None) -> dict[str, Any]: ...
+def rotation_range(robot: Robot, x: float, y: float, *, theta: float = 0.0, force: Any = ...,
+                   moment: float = 0.0,
+                   options: Optional[SolverOptions] = None) -> tuple[bool, float, float]: ...
 
 class Iso9283Result:
     @property

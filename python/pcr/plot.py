@@ -102,6 +102,61 @@ def plot_workspace(robot, theta=0.0, ax=None, path=None, result=None, **workspac
     return _finish(fig, path)
 
 
+def plot_workspace_maps(robot, result=None, path=None, fig=None, **map_args):
+    """Where the robot can work at one orientation, from ``pcr.workspace_map`` (or a precomputed
+    ``result`` of it): reachable positions split into stable and unstable equilibria, the
+    stability margin, the distance to a singularity, and the predicted 3-sigma position error
+    when the map has one (else the max bending strain). Each panel outlines the workspace."""
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap, LogNorm, SymLogNorm
+
+    m = result if result is not None else pcr.workspace_map(robot, **map_args)
+    if fig is None:
+        fig = plt.figure(figsize=(11, 9.5))
+    axes = fig.subplots(2, 2).ravel()
+    mm = 1e3
+    x, y = np.meshgrid(m["x"] * mm, m["y"] * mm)
+    reach = m["reachable"]
+    inside = lambda values: np.where(reach, values, np.nan)  # noqa: E731
+    kind = np.where(reach, np.where(m["stable"], 2.0, 1.0), np.nan)
+    panels = [
+        (kind, "reachable: stable (green) / unstable (red)",
+         dict(cmap=ListedColormap(["tab:red", "tab:green"]), vmin=0.5, vmax=2.5), None),
+        (inside(m["stability_margin"]), "stability margin (EI/L units)",
+         dict(cmap="RdYlGn", norm=SymLogNorm(linthresh=1.0)), "margin"),
+        (inside(m["singularity"]), "singularity: reciprocal condition number of the FK Jacobian",
+         dict(cmap="magma", norm=LogNorm()), "sigma_min"),
+    ]
+    accuracy = inside(m["position_3sigma"])
+    if np.isfinite(accuracy).any():
+        panels.append((accuracy * 1e6, "predicted 3-sigma position error (um)",
+                       dict(cmap="viridis"), "um"))
+    else:
+        panels.append((inside(m["max_strain"]) * 100, "max bending strain (%)",
+                       dict(cmap="viridis"), "%"))
+    for ax, (values, title, style, label) in zip(axes, panels):
+        finite = values[np.isfinite(values)]
+        if "norm" in style and isinstance(style["norm"], LogNorm):
+            positive = finite[finite > 0]
+            if positive.size == 0:
+                style = dict(cmap=style["cmap"])
+            else:
+                style["norm"] = LogNorm(vmin=positive.min(), vmax=positive.max())
+        mesh = ax.pcolormesh(x, y, values, shading="nearest", **style)
+        if label is not None:
+            fig.colorbar(mesh, ax=ax, label=label)
+        if reach.any() and not reach.all():
+            ax.contour(x, y, reach.astype(float), levels=[0.5], colors="k", linewidths=1)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x (mm)")
+        ax.set_ylabel("y (mm)")
+        ax.set_title(title, fontsize=9)
+    fig.suptitle(f"{robot.name}: workspace at theta = {m['theta']:.4g} rad; reachable "
+                 f"{m['reachable_area'] * 1e6:.4g} mm^2, stable {m['stable_area'] * 1e6:.4g} mm^2",
+                 fontsize=11)
+    return _finish(fig, path)
+
+
 def plot_calibration_errors(nominal, identified, calibration, validation=None, path=None,
                             fig=None):
     """Position and orientation errors per configuration of the nominal and identified models,

@@ -11,15 +11,18 @@ namespace pcr::python {
 
 /// Row-major output buffers of a batch of N rows for a robot with n limbs.
 struct BatchBuffers {
-  double* q;           ///< N x n (m)
-  double* pose;        ///< N x 3 (m, m, rad)
-  double* wrenches;    ///< N x n x 3 (N, N, N m)
-  bool* converged;     ///< N
-  int* status;         ///< N, SolveStatus
-  int* iterations;     ///< N
-  double* residual;    ///< N
-  double* max_strain;  ///< N
-  int* rod_steps;      ///< N
+  double* q;                 ///< N x n (m)
+  double* pose;              ///< N x 3 (m, m, rad)
+  double* wrenches;          ///< N x n x 3 (N, N, N m)
+  bool* converged;           ///< N
+  int* status;               ///< N, SolveStatus
+  int* iterations;           ///< N
+  double* residual;          ///< N
+  double* max_strain;        ///< N
+  int* rod_steps;            ///< N
+  bool* stable;              ///< N (false when not checked)
+  double* stability_margin;  ///< N
+  double* singularity;       ///< N
 };
 
 /// Fills row r of the buffers; invalid results (not usable as a warm start) get NaN values.
@@ -41,6 +44,9 @@ void store_row(const Solution& s, bool usable, int n, std::ptrdiff_t r, const Ba
   out.residual[r] = s.summary.final_residual_norm;
   out.max_strain[r] = usable ? s.summary.max_strain : nan;
   out.rod_steps[r] = s.summary.rod_steps;
+  out.stable[r] = s.summary.stability == Stability::kStable;
+  out.stability_margin[r] = s.summary.stability_margin;
+  out.singularity[r] = s.summary.singularity;
 }
 
 /// FK of every row of q (N x n, row-major), warm-started from the previous usable row.
@@ -71,7 +77,7 @@ inline void inverse_batch(const RobotParams<double>& robot, const double* poses,
   for (std::ptrdiff_t r = 0; r < rows; ++r) {
     const Pose2<double> pose{poses[r * 3], poses[r * 3 + 1], poses[r * 3 + 2]};
     const InverseSolution& s = sequence.solve(pose);
-    store_row(s, usable_as_warm_start(s.summary), n, r, out);
+    store_row(s, is_equilibrium(s.summary), n, r, out);
     // The requested pose is echoed; with 2 limbs theta is the solved one (NaN on failure).
     out.pose[r * 3 + 0] = pose.x;
     out.pose[r * 3 + 1] = pose.y;

@@ -19,8 +19,8 @@ using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::R
 
 /// Arrays of a batch. `status` holds names (str array), `status_code` the SolveStatus values.
 struct BatchResult {
-  py::array_t<double> q, pose, wrenches, residual, max_strain;
-  py::array_t<bool> converged;
+  py::array_t<double> q, pose, wrenches, residual, max_strain, stability_margin, singularity;
+  py::array_t<bool> converged, stable;
   py::array_t<int> status_code, iterations, rod_steps;
   py::object status = py::none();
   py::object shapes = py::none();
@@ -108,10 +108,21 @@ BatchResult allocate_batch(py::ssize_t rows, int n, BatchBuffers& buffers) {
   b.residual = py::array_t<double>(rows);
   b.max_strain = py::array_t<double>(rows);
   b.rod_steps = py::array_t<int>(rows);
-  buffers = BatchBuffers{
-      b.q.mutable_data(),         b.pose.mutable_data(),        b.wrenches.mutable_data(),
-      b.converged.mutable_data(), b.status_code.mutable_data(), b.iterations.mutable_data(),
-      b.residual.mutable_data(),  b.max_strain.mutable_data(),  b.rod_steps.mutable_data()};
+  b.stable = py::array_t<bool>(rows);
+  b.stability_margin = py::array_t<double>(rows);
+  b.singularity = py::array_t<double>(rows);
+  buffers = BatchBuffers{b.q.mutable_data(),
+                         b.pose.mutable_data(),
+                         b.wrenches.mutable_data(),
+                         b.converged.mutable_data(),
+                         b.status_code.mutable_data(),
+                         b.iterations.mutable_data(),
+                         b.residual.mutable_data(),
+                         b.max_strain.mutable_data(),
+                         b.rod_steps.mutable_data(),
+                         b.stable.mutable_data(),
+                         b.stability_margin.mutable_data(),
+                         b.singularity.mutable_data()};
   return b;
 }
 
@@ -133,7 +144,7 @@ py::object forward(const RobotDescription& robot, const py::object& q_in,
       py::gil_scoped_release release;
       s = forward_kinematics_or_cold(params, joints, warm.get(), options, load);
     }
-    return py::cast(to_python(params, s, usable_as_warm_start(s.summary), shapes, &joints));
+    return py::cast(to_python(params, s, is_equilibrium(s.summary), shapes, &joints));
   }
   if (warm_start) throw std::invalid_argument("warm_start: only for a single configuration");
   const py::ssize_t rows = q.shape(0);
@@ -149,7 +160,7 @@ py::object forward(const RobotDescription& robot, const py::object& q_in,
   if (shapes) {
     py::list all;
     for (const ForwardSolution& s : solutions) {
-      all.append(usable_as_warm_start(s.summary)
+      all.append(is_equilibrium(s.summary)
                      ? py::object(rod_shapes(params, s.q, s.wrenches, s.summary.rod_steps))
                      : py::object(py::none()));
     }
@@ -184,7 +195,7 @@ py::object inverse(const RobotDescription& robot, const py::object& pose_in,
       py::gil_scoped_release release;
       s = inverse_kinematics_or_cold(params, pose, warm.get(), options, load);
     }
-    return py::cast(to_python(params, s, usable_as_warm_start(s.summary), shapes));
+    return py::cast(to_python(params, s, is_equilibrium(s.summary), shapes));
   }
   if (warm_start) throw std::invalid_argument("warm_start: only for a single pose");
   const py::ssize_t rows = poses.shape(0);
@@ -200,7 +211,7 @@ py::object inverse(const RobotDescription& robot, const py::object& pose_in,
   if (shapes) {
     py::list all;
     for (const InverseSolution& s : solutions) {
-      all.append(usable_as_warm_start(s.summary)
+      all.append(is_equilibrium(s.summary)
                      ? py::object(rod_shapes(params, s.q, s.wrenches, s.summary.rod_steps))
                      : py::object(py::none()));
     }
@@ -219,6 +230,7 @@ void wrap_kinematics(py::module_& m) {
       .value("bifurcation", SolveStatus::kBifurcation)
       .value("non_finite", SolveStatus::kNonFinite)
       .value("out_of_range", SolveStatus::kOutOfRange)
+      .value("unstable", SolveStatus::kUnstable)
       .value("unsupported", SolveStatus::kUnsupported)
       .value("invalid_input", SolveStatus::kInvalidInput);
 
@@ -244,7 +256,13 @@ void wrap_kinematics(py::module_& m) {
       .def_readwrite("max_continuation_steps", &SolverOptions::max_continuation_steps)
       .def_readwrite("max_continuation_iterations", &SolverOptions::max_continuation_iterations,
                      "Newton iterations per sub-solve of a continuation")
-      .def_readwrite("min_continuation_step", &SolverOptions::min_continuation_step);
+      .def_readwrite("min_continuation_step", &SolverOptions::min_continuation_step)
+      .def_readwrite("check_stability", &SolverOptions::check_stability,
+                     "check the elastic stability of every converged solution (one more "
+                     "residual-plus-Jacobian evaluation)")
+      .def_readwrite("stable_inverse", &SolverOptions::stable_inverse,
+                     "when IK converges on an unstable equilibrium, look for a stable one at the "
+                     "same pose (status 'unstable' when none is found)");
 
   py::class_<Solution>(m, "Solution",
                        "One solved configuration. When the solve failed (converged is False; for "
@@ -266,7 +284,7 @@ void wrap_kinematics(py::module_& m) {
       .def_property_readonly(
           "status", [](const Solution& s) { return std::string(to_string(s.summary.status)); },
           "converged, singular, bifurcation, max_iterations, non_finite, out_of_range, "
-          "unsupported, invalid_input")
+          "unstable, unsupported, invalid_input")
       .def_property_readonly("status_code", [](const Solution& s) { return s.summary.status; })
       .def_property_readonly(
           "iterations", [](const Solution& s) { return s.summary.iterations; },
@@ -280,6 +298,20 @@ void wrap_kinematics(py::module_& m) {
       .def_property_readonly(
           "rod_steps", [](const Solution& s) { return s.summary.rod_steps; },
           "RK4 steps per rod of this solution")
+      .def_property_readonly(
+          "stable",
+          [](const Solution& s) -> std::optional<bool> {
+            if (s.summary.stability == Stability::kUnchecked) return std::nullopt;
+            return s.summary.stability == Stability::kStable;
+          },
+          "whether the equilibrium holds with the joints held (None: not checked)")
+      .def_property_readonly(
+          "stability_margin", [](const Solution& s) { return s.summary.stability_margin; },
+          "platform stiffness's eigenvalue nearest zero in units of EI / L, negated when "
+          "unstable (docs/stability.md)")
+      .def_property_readonly(
+          "singularity", [](const Solution& s) { return s.summary.singularity; },
+          "reciprocal condition number of the scaled forward Jacobian (zero at a fold)")
       .def_property_readonly(
           "position_error_estimate",
           [](const Solution& s) { return s.summary.position_error_estimate; },
@@ -310,6 +342,12 @@ void wrap_kinematics(py::module_& m) {
       .def_readonly("residual", &BatchResult::residual, "(N,) final scaled residual max-norm")
       .def_readonly("max_strain", &BatchResult::max_strain, "(N,) largest bending strain")
       .def_readonly("rod_steps", &BatchResult::rod_steps, "(N,) RK4 steps per rod")
+      .def_readonly("stable", &BatchResult::stable,
+                    "(N,) bool: the equilibrium holds (False when not checked)")
+      .def_readonly("stability_margin", &BatchResult::stability_margin,
+                    "(N,) see Solution.stability_margin (NaN when not checked)")
+      .def_readonly("singularity", &BatchResult::singularity,
+                    "(N,) reciprocal condition number of the scaled forward Jacobian")
       .def_readonly("shapes", &BatchResult::shapes,
                     "None, or a list (one per row) of None or per-rod (steps + 1, 4) arrays")
       .def("__len__", [](const BatchResult& b) { return b.converged.size(); });

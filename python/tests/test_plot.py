@@ -29,6 +29,23 @@ def test_plot_robot(robot, tmp_path):
     check_png(tmp_path / "seq.png")
 
 
+@pytest.mark.skipif(not pcr.has_calibration, reason="pcr::calib not built")
+def test_workspace_maps(robot, tmp_path):
+    m = pcr.workspace_map(robot, grid=12)
+    assert m["reachable"].shape == (12, 12) and m["q"].shape == (12, 12, 3)
+    assert m["reachable_area"] > 0 and m["stable_area"] <= m["reachable_area"]
+    cell = (m["x"][1] - m["x"][0]) * (m["y"][1] - m["y"][0])
+    assert m["reachable_area"] == pytest.approx(m["reachable"].sum() * cell)
+    assert np.all(np.isfinite(m["stability_margin"][m["reachable"]]))
+    pcr.plot.plot_workspace_maps(robot, result=m, path=tmp_path / "maps.png")
+    check_png(tmp_path / "maps.png")
+    reachable, lo, hi = pcr.rotation_range(robot, 0.0, 0.0)
+    assert reachable and lo < 0 < hi
+    with pytest.raises(ValueError, match="grid"):
+        pcr.workspace_map(robot, grid=1)
+
+
+@pytest.mark.skipif(not pcr.has_calibration, reason="pcr::calib not built")
 def test_plot_workspace(robot, tmp_path):
     ws = pcr.workspace(robot, theta=0.0, resolution=9)
     assert ws["reachable"][4, 4]  # the centre (home) is reachable

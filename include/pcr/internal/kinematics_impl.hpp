@@ -3,14 +3,23 @@
 
 #include <cmath>
 
+#include "pcr/internal/arclength.hpp"
 #include "pcr/internal/path.hpp"
 #include "pcr/internal/shooting_problem.hpp"
+#include "pcr/stability.hpp"
 
 namespace pcr {
 namespace internal {
 
 inline bool valid_robot(const RobotParams<double>& robot) {
   return robot.num_limbs >= 2 && robot.num_limbs <= kMaxLimbs;
+}
+
+inline bool within_stroke(const RobotParams<double>& robot, const JointVector& q) {
+  for (int i = 0; i < robot.num_limbs; ++i) {
+    if (!(q(i) >= robot.limb(i).q_min && q(i) <= robot.limb(i).q_max)) return false;
+  }
+  return true;
 }
 
 /// The configuration at z, in a solution's fields.
@@ -27,6 +36,93 @@ void store_configuration(const ShootingProblem& problem, const ShootingVector& z
   solution.pose = p.pose;
 }
 
+/// A warm FK solve's input path, from the warm start's joints to q: kConverged when the inputs are
+/// valid, else the status that refuses them.
+inline SolveStatus forward_path(const RobotParams<double>& robot, const JointVector& q,
+                                const ForwardSolution& warm, ShootingVector& u0,
+                                ShootingVector& u1) {
+  if (!valid_robot(robot) || q.size() != robot.num_limbs || !q.allFinite() ||
+      warm.q.size() != robot.num_limbs) {
+    return SolveStatus::kInvalidInput;
+  }
+  u0 = warm.q;
+  u1 = q;
+  return SolveStatus::kConverged;
+}
+
+/// A warm IK solve's input path, from the warm start's pose to `pose` (theta kept when n = 2, where
+/// it is solved for), as forward_path.
+inline SolveStatus inverse_path(const RobotParams<double>& robot, const Pose2<double>& pose,
+                                const InverseSolution& warm, ShootingVector& u0,
+                                ShootingVector& u1) {
+  const int n = robot.num_limbs;
+  if (!valid_robot(robot) || warm.q.size() != n || !std::isfinite(pose.x) ||
+      !std::isfinite(pose.y) || !std::isfinite(pose.theta)) {
+    return SolveStatus::kInvalidInput;
+  }
+  if (n > 3) return SolveStatus::kUnsupported;
+  u0.resize(3);
+  u1.resize(3);
+  u0 << warm.pose.x, warm.pose.y, warm.pose.theta;
+  u1 << pose.x, pose.y, n == 2 ? warm.pose.theta : pose.theta;
+  return SolveStatus::kConverged;
+}
+
+/// A solution that reports refused inputs (FK keeps its joints, IK its pose).
+inline ForwardSolution refused(const JointVector& q, SolveStatus status) {
+  ForwardSolution solution;
+  solution.q = q;
+  solution.summary.status = status;
+  return solution;
+}
+inline InverseSolution refused(const Pose2<double>& pose, SolveStatus status) {
+  InverseSolution solution;
+  solution.pose = pose;
+  solution.summary.status = status;
+  return solution;
+}
+
+/// IK's converged joints outside the stroke: kOutOfRange.
+inline void mark_out_of_range(const RobotParams<double>& robot, InverseSolution& solution) {
+  if (solution.summary.converged() && !within_stroke(robot, solution.q)) {
+    solution.summary.status = SolveStatus::kOutOfRange;
+  }
+}
+
+/// The shooting point (joints, pose, wrenches) of a solution.
+template <class Solution>
+ShootingPoint<double> shooting_point(const RobotParams<double>& robot, const Solution& solution) {
+  ShootingPoint<double> point;
+  point.pose = solution.pose;
+  for (int i = 0; i < robot.num_limbs; ++i) {
+    point.q[i] = solution.q(i);
+    point.wrenches[i] = solution.wrenches[i];
+  }
+  return point;
+}
+
+/// Checks the stability of a usable solution's equilibrium into its summary (see
+/// SolverOptions::check_stability).
+template <class Solution>
+void check_stability(const RobotParams<double>& robot, const SolverOptions& options,
+                     Solution& solution) {
+  SolverSummary& summary = solution.summary;
+  summary.stability = Stability::kUnchecked;
+  summary.stability_margin = summary.singularity = std::numeric_limits<double>::quiet_NaN();
+  if (!options.check_stability || !usable_as_warm_start(summary)) return;
+  const EquilibriumStability s =
+      equilibrium_stability(robot, solution.q, solution.pose, solution.wrenches, summary.rod_steps);
+  summary.stability = s.stable ? Stability::kStable : Stability::kUnstable;
+  summary.stability_margin = s.margin;
+  summary.singularity = s.singularity;
+}
+
+/// The options of a solve whose solution is a step towards the requested one (cold starts' home).
+inline SolverOptions unchecked(SolverOptions options) {
+  options.check_stability = false;
+  return options;
+}
+
 /// FK or IK along the straight input path from a warm start's input u0 to u1: the one body of
 /// both, which differ only in which unknowns are inputs.
 template <class Solution>
@@ -36,18 +132,121 @@ Solution solve_from_warm_start(ShootingProblem::Kind kind, const RobotParams<dou
                                const PlatformLoad<double>& load) {
   Solution solution;
   ShootingProblem problem(kind, robot, load, options);
-  ShootingPoint<double> start;
-  start.pose = warm.pose;
-  for (int i = 0; i < robot.num_limbs; ++i) {
-    start.q[i] = warm.q(i);
-    start.wrenches[i] = warm.wrenches[i];
-  }
   problem.set_input(u0);
-  ShootingVector z = problem.pack(start);
+  ShootingVector z = problem.pack(shooting_point(robot, warm));
   solution.jacobian = warm.jacobian;
   solution.summary.status = solve_along_path(problem, u0, u1, z, options, solution.summary,
                                              warm.summary.rod_steps, &solution.jacobian);
   store_configuration(problem, z, solution);
+  return solution;
+}
+
+/// IK has converged on an unstable equilibrium at the input u: looks for a stable one at the same
+/// pose, from seeds where one rod is bent further one way or the other (its proximal moment moved
+/// by 1 and 2 times 2 pi EI / l: a clamped-clamped rod's buckled shapes), the rod with a conjugate
+/// point first. Takes the stable solution whose joints lie nearest (one within the stroke before
+/// one outside), else reports kUnstable with the unstable solution. The summary counts every
+/// seed's iterations and evaluations.
+inline void look_for_stable_inverse(const RobotParams<double>& robot, const ShootingVector& u,
+                                    const SolverOptions& options, const PlatformLoad<double>& load,
+                                    InverseSolution& solution) {
+  const int n = robot.num_limbs;
+  const EquilibriumStability unstable = equilibrium_stability(
+      robot, solution.q, solution.pose, solution.wrenches, solution.summary.rod_steps);
+
+  InverseSolution best;
+  bool found = false, best_in_range = false;
+  double best_distance = HUGE_VAL;
+  SolverSummary totals = solution.summary;
+  for (int k = 0; k < n; ++k) {
+    const int rod = unstable.conjugate_limb >= 0 ? (unstable.conjugate_limb + k) % n : k;
+    const LimbParams<double>& limb = robot.limb(rod);
+    const double bend = 2.0 * M_PI * limb.bending_stiffness() / limb.length;
+    for (double amount : {1.0, -1.0, 2.0, -2.0}) {
+      InverseSolution seed = solution;
+      seed.jacobian = ChordMatrix();
+      seed.wrenches[rod].m += amount * bend;
+      InverseSolution candidate =
+          solve_from_warm_start(ShootingProblem::Kind::kInverse, robot, u, u, seed, options, load);
+      totals.iterations += candidate.summary.iterations;
+      totals.residual_evaluations += candidate.summary.residual_evaluations;
+      if (!candidate.summary.converged()) continue;
+      check_stability(robot, options, candidate);
+      if (candidate.summary.stability != Stability::kStable) continue;
+      const bool inside = within_stroke(robot, candidate.q);
+      const double distance = (candidate.q - solution.q).norm();
+      if (!found || (inside && !best_in_range) ||
+          (inside == best_in_range && distance < best_distance)) {
+        best = candidate;
+        found = true;
+        best_in_range = inside;
+        best_distance = distance;
+      }
+    }
+  }
+  if (found) {
+    best.summary.iterations = totals.iterations;
+    best.summary.residual_evaluations = totals.residual_evaluations;
+    best.summary.continuation_steps += totals.continuation_steps;
+    if (!best_in_range) best.summary.status = SolveStatus::kOutOfRange;
+    solution = best;
+  } else {
+    totals.status = SolveStatus::kUnstable;
+    solution.summary = totals;
+  }
+}
+
+/// FK or IK from a warm start's input u0 to u1 by pseudo-arclength continuation (see
+/// forward_kinematics_through_folds).
+template <class Solution, class Visitor>
+Solution solve_through_folds(ShootingProblem::Kind kind, const RobotParams<double>& robot,
+                             const ShootingVector& u0, const ShootingVector& u1,
+                             const Solution& warm, const SolverOptions& options,
+                             const PlatformLoad<double>& load, Visitor&& visit) {
+  Solution solution;
+  ShootingProblem problem(kind, robot, load, options);
+  if (options.rod_steps <= 0) {
+    problem.set_rod_steps(
+        std::min(std::max(warm.summary.rod_steps, options.min_rod_steps), options.max_rod_steps));
+  }
+  problem.set_input(u0);
+  ShootingVector z = problem.pack(shooting_point(robot, warm));
+  SolverSummary& summary = solution.summary;
+  const ArclengthTrace trace =
+      trace_arclength(problem, u0, u1, z, options, summary, options.max_arclength_steps,
+                      [&](const ShootingVector& point_z, double t) {
+                        Solution point;
+                        point.summary.status = SolveStatus::kConverged;
+                        point.summary.rod_steps = problem.rod_steps();
+                        point.summary.path_fraction = t;
+                        store_configuration(problem, point_z, point);
+                        check_stability(robot, options, point);
+                        visit(static_cast<const Solution&>(point));
+                      });
+  summary.folds_passed = trace.folds;
+  summary.first_fold = trace.first_fold;
+  if (trace.reached) {
+    // Back onto the input from the point just past it, by the regular solver.
+    Solution last;
+    last.summary.status = SolveStatus::kConverged;
+    last.summary.rod_steps = problem.rod_steps();
+    store_configuration(problem, z, last);
+    const ShootingVector u_last = u0 + trace.t * (u1 - u0);
+    Solution reached = solve_from_warm_start(kind, robot, u_last, u1, last, options, load);
+    reached.summary.iterations += summary.iterations;
+    reached.summary.residual_evaluations += summary.residual_evaluations;
+    reached.summary.continuation_steps += summary.continuation_steps;
+    reached.summary.folds_passed = trace.folds;
+    reached.summary.first_fold = trace.first_fold;
+    if (reached.summary.converged()) {
+      check_stability(robot, options, reached);
+      return reached;
+    }
+  }
+  store_configuration(problem, z, solution);
+  summary.status = SolveStatus::kSingular;
+  summary.path_fraction = trace.t;
+  summary.rod_steps = problem.rod_steps();
   return solution;
 }
 
@@ -57,15 +256,37 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
                                           const ForwardSolution& warm_start,
                                           const SolverOptions& options,
                                           const PlatformLoad<double>& load) {
-  if (!internal::valid_robot(robot) || q.size() != robot.num_limbs || !q.allFinite() ||
-      warm_start.q.size() != robot.num_limbs) {
-    ForwardSolution invalid;
-    invalid.q = q;
-    invalid.summary.status = SolveStatus::kInvalidInput;
-    return invalid;
-  }
-  return internal::solve_from_warm_start(internal::ShootingProblem::Kind::kForward, robot,
-                                         warm_start.q, q, warm_start, options, load);
+  ShootingVector u0, u1;
+  const SolveStatus input = internal::forward_path(robot, q, warm_start, u0, u1);
+  if (input != SolveStatus::kConverged) return internal::refused(q, input);
+  ForwardSolution solution = internal::solve_from_warm_start(
+      internal::ShootingProblem::Kind::kForward, robot, u0, u1, warm_start, options, load);
+  internal::check_stability(robot, options, solution);
+  return solution;
+}
+
+template <class Visitor>
+ForwardSolution forward_kinematics_through_folds(
+    const RobotParams<double>& robot, const JointVector& q, const ForwardSolution& warm_start,
+    const SolverOptions& options, const PlatformLoad<double>& load, Visitor&& visit) {
+  ShootingVector u0, u1;
+  const SolveStatus input = internal::forward_path(robot, q, warm_start, u0, u1);
+  if (input != SolveStatus::kConverged) return internal::refused(q, input);
+  return internal::solve_through_folds(internal::ShootingProblem::Kind::kForward, robot, u0, u1,
+                                       warm_start, options, load, visit);
+}
+
+template <class Visitor>
+InverseSolution inverse_kinematics_through_folds(
+    const RobotParams<double>& robot, const Pose2<double>& pose, const InverseSolution& warm_start,
+    const SolverOptions& options, const PlatformLoad<double>& load, Visitor&& visit) {
+  ShootingVector u0, u1;
+  const SolveStatus input = internal::inverse_path(robot, pose, warm_start, u0, u1);
+  if (input != SolveStatus::kConverged) return internal::refused(pose, input);
+  InverseSolution solution = internal::solve_through_folds(
+      internal::ShootingProblem::Kind::kInverse, robot, u0, u1, warm_start, options, load, visit);
+  internal::mark_out_of_range(robot, solution);
+  return solution;
 }
 
 inline ForwardSolution home_solution(const RobotParams<double>& robot, const SolverOptions& options,
@@ -83,13 +304,14 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot, const Sol
   home.summary.status = status;
   home.summary.path_fraction = 1.0;
   internal::store_configuration(problem, z, home);
+  internal::check_stability(robot, options, home);
   return home;
 }
 
 inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
                                           const SolverOptions& options,
                                           const PlatformLoad<double>& load) {
-  ForwardSolution home = home_solution(robot, options, load);
+  ForwardSolution home = home_solution(robot, internal::unchecked(options), load);
   if (!home.summary.converged()) return home;  // q = 0 then, path_fraction 0: nothing solved
   ForwardSolution solution = forward_kinematics(robot, q, home, options, load);
   solution.summary.iterations += home.summary.iterations;
@@ -115,6 +337,7 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
     }
     // Not found from the variant either: the path's own verdict stands.
     solution.summary.status = status == SolveStatus::kConverged ? status : path_status;
+    internal::check_stability(robot, options, solution);
   }
   return solution;
 }
@@ -124,29 +347,15 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
                                           const InverseSolution& warm_start,
                                           const SolverOptions& options,
                                           const PlatformLoad<double>& load) {
-  const int n = robot.num_limbs;
-  InverseSolution refused;
-  refused.pose = pose;
-  if (!internal::valid_robot(robot) || warm_start.q.size() != n || !std::isfinite(pose.x) ||
-      !std::isfinite(pose.y) || !std::isfinite(pose.theta)) {
-    refused.summary.status = SolveStatus::kInvalidInput;
-    return refused;
-  }
-  if (n > 3) {
-    refused.summary.status = SolveStatus::kUnsupported;
-    return refused;
-  }
-  ShootingVector u0(3), u1(3);
-  u0 << warm_start.pose.x, warm_start.pose.y, warm_start.pose.theta;
-  u1 << pose.x, pose.y, n == 2 ? warm_start.pose.theta : pose.theta;
+  ShootingVector u0, u1;
+  const SolveStatus input = internal::inverse_path(robot, pose, warm_start, u0, u1);
+  if (input != SolveStatus::kConverged) return internal::refused(pose, input);
   InverseSolution solution = internal::solve_from_warm_start(
       internal::ShootingProblem::Kind::kInverse, robot, u0, u1, warm_start, options, load);
-  if (solution.summary.converged()) {
-    for (int i = 0; i < n; ++i) {
-      if (solution.q(i) < robot.limb(i).q_min || solution.q(i) > robot.limb(i).q_max) {
-        solution.summary.status = SolveStatus::kOutOfRange;
-      }
-    }
+  internal::mark_out_of_range(robot, solution);
+  internal::check_stability(robot, options, solution);
+  if (solution.summary.stability == Stability::kUnstable && options.stable_inverse) {
+    internal::look_for_stable_inverse(robot, u1, options, load, solution);
   }
   return solution;
 }
@@ -154,7 +363,8 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
 inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
                                           const Pose2<double>& pose, const SolverOptions& options,
                                           const PlatformLoad<double>& load) {
-  const ForwardSolution home = home_solution(robot, options, load);  // no IK factorisation
+  // No IK factorisation, and a stability the IK solution checks for itself.
+  const ForwardSolution home = home_solution(robot, internal::unchecked(options), load);
   if (!home.summary.converged()) {
     InverseSolution failed = as_inverse_warm_start(home);
     failed.summary.path_fraction = 0.0;
@@ -180,13 +390,18 @@ inline bool usable_as_warm_start(const SolverSummary& summary) {
   return summary.converged() || summary.status == SolveStatus::kOutOfRange;
 }
 
+inline bool is_equilibrium(const SolverSummary& summary) {
+  return usable_as_warm_start(summary) || summary.status == SolveStatus::kUnstable;
+}
+
 namespace internal {
 
-/// A warm solve, then a cold one when the warm one is not usable (and the input is valid); the
-/// summary counts the iterations and residual evaluations of both.
-template <class Solution, class WarmSolve, class ColdSolve>
-Solution solve_with_cold_fallback(const Solution* warm, WarmSolve&& warm_solve,
-                                  ColdSolve&& cold_solve) {
+/// A warm solve; when it stops at a fold and through_folds, the trace through it; then a cold
+/// solve when neither is usable (and the input is valid). The summary counts the iterations and
+/// residual evaluations of all.
+template <class Solution, class WarmSolve, class FoldSolve, class ColdSolve>
+Solution solve_with_cold_fallback(const Solution* warm, WarmSolve&& warm_solve, bool through_folds,
+                                  FoldSolve&& fold_solve, ColdSolve&& cold_solve) {
   if (warm == nullptr) return cold_solve();
   Solution solution = warm_solve(*warm);
   const SolveStatus status = solution.summary.status;
@@ -194,11 +409,22 @@ Solution solve_with_cold_fallback(const Solution* warm, WarmSolve&& warm_solve,
       status == SolveStatus::kUnsupported) {
     return solution;
   }
-  const int iterations = solution.summary.iterations;
-  const int evaluations = solution.summary.residual_evaluations;
+  int iterations = solution.summary.iterations;
+  int evaluations = solution.summary.residual_evaluations;
+  const auto add_counts = [&](Solution& s) {
+    s.summary.iterations += iterations;
+    s.summary.residual_evaluations += evaluations;
+  };
+  if (through_folds &&
+      (status == SolveStatus::kSingular || status == SolveStatus::kMaxIterations)) {
+    solution = fold_solve(*warm);
+    add_counts(solution);
+    if (usable_as_warm_start(solution.summary)) return solution;
+    iterations = solution.summary.iterations;
+    evaluations = solution.summary.residual_evaluations;
+  }
   solution = cold_solve();
-  solution.summary.iterations += iterations;
-  solution.summary.residual_evaluations += evaluations;
+  add_counts(solution);
   return solution;
 }
 
@@ -211,6 +437,10 @@ inline ForwardSolution forward_kinematics_or_cold(const RobotParams<double>& rob
   return internal::solve_with_cold_fallback(
       warm,
       [&](const ForwardSolution& w) { return forward_kinematics(robot, q, w, options, load); },
+      options.through_folds,
+      [&](const ForwardSolution& w) {
+        return forward_kinematics_through_folds(robot, q, w, options, load);
+      },
       [&] { return forward_kinematics(robot, q, options, load); });
 }
 
@@ -222,6 +452,10 @@ inline InverseSolution inverse_kinematics_or_cold(const RobotParams<double>& rob
   return internal::solve_with_cold_fallback(
       warm,
       [&](const InverseSolution& w) { return inverse_kinematics(robot, pose, w, options, load); },
+      options.through_folds,
+      [&](const InverseSolution& w) {
+        return inverse_kinematics_through_folds(robot, pose, w, options, load);
+      },
       [&] { return inverse_kinematics(robot, pose, options, load); });
 }
 

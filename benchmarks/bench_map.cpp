@@ -1,0 +1,48 @@
+// Workspace maps (pcr/calib/workspace_map.hpp): the default robot's 200 x 200 map at theta = 0,
+// with and without the stability check, and the stability check of one solution on its own.
+#include <benchmark/benchmark.h>
+
+#include "pcr/calib/workspace_map.hpp"
+#include "pcr/stability.hpp"
+
+namespace {
+
+void BM_WorkspaceMap(benchmark::State& state) {
+  const pcr::RobotParams<double> robot = pcr::femto_3pf();
+  pcr::WorkspaceMapOptions options;
+  options.grid = static_cast<int>(state.range(0));
+  options.solver.check_stability = state.range(1) != 0;
+  options.range = pcr::stroke_pose_box(robot);  // fixed, so that only the map is timed
+  pcr::WorkspaceMap map;
+  for (auto _ : state) {
+    map = pcr::workspace_map(robot, options);
+    benchmark::DoNotOptimize(map.points.data());
+  }
+  state.counters["points"] = static_cast<double>(options.grid) * options.grid;
+  state.counters["reachable_mm2"] = map.reachable_area * 1e6;
+  state.counters["us_per_point"] = benchmark::Counter(
+      static_cast<double>(options.grid) * options.grid,
+      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_WorkspaceMap)
+    ->Args({200, 1})
+    ->Args({200, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_StabilityCheck(benchmark::State& state) {
+  const pcr::RobotParams<double> robot = pcr::femto_3pf();
+  pcr::JointVector q(3);
+  q << 0.004, -0.002, 0.001;
+  const pcr::ForwardSolution fk = pcr::forward_kinematics(robot, q);
+  for (auto _ : state) {
+    const pcr::EquilibriumStability s =
+        pcr::equilibrium_stability(robot, fk.q, fk.pose, fk.wrenches, fk.summary.rod_steps);
+    benchmark::DoNotOptimize(s.margin);
+  }
+}
+BENCHMARK(BM_StabilityCheck)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

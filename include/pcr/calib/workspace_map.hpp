@@ -1,0 +1,89 @@
+#pragma once
+// Where the robot can work: maps of reachability, elastic stability (pcr/stability.hpp),
+// singularity and predicted accuracy over a grid of platform positions at a fixed orientation,
+// the constant-orientation workspace's area, and the rotation range at a position.
+
+#include <array>
+#include <functional>
+#include <iosfwd>
+#include <limits>
+#include <optional>
+#include <vector>
+
+#include "pcr/kinematics.hpp"
+
+namespace pcr {
+
+/// One grid point of a map. NaN fields where the value does not apply.
+struct WorkspaceMapPoint {
+  double x = 0, y = 0;  ///< platform position (m)
+  /// IK found an equilibrium at this pose with its joints inside the stroke.
+  bool reachable = false;
+  /// That equilibrium (or, outside the stroke, the one IK found) holds with the joints held.
+  bool stable = false;
+  SolveStatus status = SolveStatus::kMaxIterations;
+  JointVector q;  ///< joints of the equilibrium (m), NaN when IK found none
+  double max_strain = std::numeric_limits<double>::quiet_NaN();
+  double stability_margin = std::numeric_limits<double>::quiet_NaN();
+  double singularity = std::numeric_limits<double>::quiet_NaN();
+  /// Predicted errors from the calibration's covariance (3 sigma) and the worst case over the
+  /// uncertainty intervals (m, rad); NaN unless WorkspaceMapOptions::accuracy fills them.
+  double position_3sigma = std::numeric_limits<double>::quiet_NaN();
+  double orientation_3sigma = std::numeric_limits<double>::quiet_NaN();
+  double worst_position = std::numeric_limits<double>::quiet_NaN();
+  double worst_orientation = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct WorkspaceMapOptions {
+  double theta = 0;  ///< platform orientation of the map (rad)
+  int grid = 200;    ///< points per side (>= 2)
+  /// x_min, x_max, y_min, y_max (m); default: stroke_pose_box, with a margin of a tenth.
+  std::optional<std::array<double, 4>> range;
+  SolverOptions solver;
+  PlatformLoad<double> load;
+  /// Fills the accuracy fields of a point from its equilibrium (for example from a calibration's
+  /// covariance); called on every point where IK found an equilibrium.
+  std::function<void(const InverseSolution&, WorkspaceMapPoint&)> accuracy;
+};
+
+struct WorkspaceMap {
+  double theta = 0;
+  int nx = 0, ny = 0;
+  double x_min = 0, x_max = 0, y_min = 0, y_max = 0;
+  std::vector<WorkspaceMapPoint> points;  ///< row by row: point (i, j) at j * nx + i, y_j rising
+  double reachable_area = 0;              ///< m^2: the reachable points times a cell's area
+  double stable_area = 0;                 ///< m^2: the points reachable and stable
+  double seconds = 0;                     ///< wall time of the solves
+  double cell_area() const { return (x_max - x_min) / (nx - 1) * (y_max - y_min) / (ny - 1); }
+};
+
+/// The bounding box x_min, x_max, y_min, y_max (m) of the platform positions of an FK scan of the
+/// stroke box (`levels` values per joint), over every orientation the scan reaches.
+std::array<double, 4> stroke_pose_box(const RobotParams<double>& robot, int levels = 7,
+                                      const SolverOptions& options = SolverOptions(),
+                                      const PlatformLoad<double>& load = PlatformLoad<double>());
+
+/// IK over the grid, warm-started along it in a serpentine order (each point from its neighbour in
+/// the row, else from the one in the row before; from home only when neither has a solution).
+/// Robots with 2 or 3 limbs (IK is square); throws std::invalid_argument otherwise, or on a grid
+/// below 2 or an empty range.
+WorkspaceMap workspace_map(const RobotParams<double>& robot, const WorkspaceMapOptions& options);
+
+/// The interval of orientations reachable (an equilibrium within the stroke, and stable) at the
+/// position (x, y), found by warm-started IK in steps of `step` from `theta` both ways, each end
+/// refined by bisection to `tolerance` (rad). reachable is false when theta itself is not.
+struct RotationRange {
+  bool reachable = false;
+  double theta_min = std::numeric_limits<double>::quiet_NaN();
+  double theta_max = std::numeric_limits<double>::quiet_NaN();
+};
+RotationRange rotation_range(const RobotParams<double>& robot, double x, double y, double theta = 0,
+                             const SolverOptions& options = SolverOptions(),
+                             const PlatformLoad<double>& load = PlatformLoad<double>(),
+                             double step = 0.01, double tolerance = 1e-5);
+
+/// The map as CSV: x, y, theta, reachable, stable, status, q1..qn, max_strain, stability_margin,
+/// singularity, position_3sigma, orientation_3sigma, worst_position, worst_orientation.
+void write_workspace_map_csv(const WorkspaceMap& map, int num_limbs, std::ostream& out);
+
+}  // namespace pcr

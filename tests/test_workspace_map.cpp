@@ -1,0 +1,174 @@
+// Workspace maps (pcr/calib/workspace_map.hpp) against brute force and symmetry: the reachable
+// region of a map at theta = 0 against an FK scan of the stroke box, the rotation range at the
+// default robot's centre against FK of equal joints.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "pcr/calib/workspace_map.hpp"
+#include "pcr/csv_io.hpp"
+
+namespace pcr {
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+#else
+constexpr bool kSanitized = false;
+#endif
+
+// The map's reachable points against a brute-force FK scan of the stroke box: the scan's poses
+// whose orientation lies within delta of the map's mark the grid cells they fall in. Each such cell
+// is reachable on the map or next to a reachable cell (a pose at |theta| <= delta lies up to the
+// platform's radius times delta, ~0.1 mm here, from the theta = 0 slice), and each reachable cell
+// is next to a scanned one, away from the scan's own sampling gaps at the border.
+TEST(WorkspaceMap, ReachableRegionMatchesAnFkScanOfTheStrokeBox) {
+  // 100,000 FK solves: ~6 s in Release, far longer under the sanitizers, where the map's code runs
+  // in the other tests.
+  if (kSanitized) GTEST_SKIP() << "Release build only (slow under the sanitizers)";
+  const RobotParams<double> robot = femto_3pf();
+  WorkspaceMapOptions options;
+  options.grid = 48;
+  const WorkspaceMap map = workspace_map(robot, options);
+  ASSERT_EQ(map.points.size(), 48u * 48u);
+  const double dx = (map.x_max - map.x_min) / (map.nx - 1);
+  const double dy = (map.y_max - map.y_min) / (map.ny - 1);
+
+  std::vector<int> scanned(map.points.size(), 0);
+  // The scan fills the joint grid outwards from home, each configuration solved by plain Newton
+  // from a solved neighbour (0.35 mm away): what FK reaches from home within the stroke box.
+  const int levels = 61;
+  const double delta = 0.003;
+  SolverOptions scan_options;
+  scan_options.continuation = false;
+  scan_options.check_stability = false;
+  const auto flat = [&](int a, int b, int c) { return (a * levels + b) * levels + c; };
+  std::vector<char> visited(static_cast<std::size_t>(levels * levels * levels), 0);
+  std::vector<std::pair<int, ForwardSolution>> queue;  // (grid index, solved neighbour)
+  const int centre = (levels - 1) / 2;                 // q = 0: the stroke is symmetric
+  queue.emplace_back(flat(centre, centre, centre), home_solution(robot, scan_options));
+  visited[static_cast<std::size_t>(queue.back().first)] = 1;
+  int in_slice = 0;
+  for (std::size_t next = 0; next < queue.size(); ++next) {
+    const int index = queue[next].first;
+    const int ijk[3] = {index / (levels * levels), index / levels % levels, index % levels};
+    JointVector q(3);
+    for (int i = 0; i < 3; ++i) {
+      const LimbParams<double>& limb = robot.limb(i);
+      q(i) = limb.q_min + (limb.q_max - limb.q_min) * ijk[i] / (levels - 1);
+    }
+    const ForwardSolution fk = forward_kinematics(robot, q, queue[next].second, scan_options);
+    if (!fk.summary.converged()) continue;
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int step : {-1, 1}) {
+        int n[3] = {ijk[0], ijk[1], ijk[2]};
+        n[axis] += step;
+        if (n[axis] < 0 || n[axis] >= levels) continue;
+        const int neighbour = flat(n[0], n[1], n[2]);
+        if (visited[static_cast<std::size_t>(neighbour)]) continue;
+        visited[static_cast<std::size_t>(neighbour)] = 1;
+        queue.emplace_back(neighbour, fk);
+      }
+    }
+    queue[next].second = ForwardSolution();  // keep the memory bounded
+    if (std::abs(fk.pose.theta - map.theta) > delta) continue;
+    ++in_slice;
+    const long i = std::lround((fk.pose.x - map.x_min) / dx);
+    const long j = std::lround((fk.pose.y - map.y_min) / dy);
+    ASSERT_TRUE(i >= 0 && i < map.nx && j >= 0 && j < map.ny)
+        << "an FK pose outside the map's range: " << fk.pose.x << " " << fk.pose.y;
+    scanned[static_cast<std::size_t>(j * map.nx + i)] = 1;
+  }
+  ASSERT_GT(in_slice, 1000);
+  const auto near = [&](const auto& marked, long i, long j) {
+    for (long v = std::max(0L, j - 1); v <= std::min<long>(map.ny - 1, j + 1); ++v) {
+      for (long u = std::max(0L, i - 1); u <= std::min<long>(map.nx - 1, i + 1); ++u) {
+        if (marked(u, v)) return true;
+      }
+    }
+    return false;
+  };
+  const auto reachable = [&](long i, long j) {
+    return map.points[static_cast<std::size_t>(j * map.nx + i)].reachable;
+  };
+  const auto was_scanned = [&](long i, long j) {
+    return scanned[static_cast<std::size_t>(j * map.nx + i)] == 1;
+  };
+  int scanned_cells = 0, reachable_cells = 0, reachable_far = 0;
+  for (long j = 0; j < map.ny; ++j) {
+    for (long i = 0; i < map.nx; ++i) {
+      if (was_scanned(i, j)) {
+        ++scanned_cells;
+        EXPECT_TRUE(near(reachable, i, j)) << "scanned cell " << i << " " << j;
+      }
+      if (reachable(i, j)) {
+        ++reachable_cells;
+        if (!near(was_scanned, i, j)) ++reachable_far;
+      }
+    }
+  }
+  EXPECT_LE(reachable_far, reachable_cells / 50) << reachable_cells;
+  EXPECT_NEAR(scanned_cells, reachable_cells, 0.1 * reachable_cells);
+  EXPECT_NEAR(map.reachable_area, reachable_cells * map.cell_area(), 1e-15);
+  // The default robot's stroke box at theta = 0: every reachable point is stable.
+  EXPECT_NEAR(map.stable_area, map.reachable_area, 1e-15);
+}
+
+// By the default robot's 120 degree symmetry, equal joints turn the platform about its centre:
+// pushed to q_max on every joint it turns to one end of the rotation range at (0, 0).
+TEST(WorkspaceMap, RotationRangeAtTheCentreIsThatOfEqualJoints) {
+  const RobotParams<double> robot = femto_3pf();
+  const RotationRange range = rotation_range(robot, 0.0, 0.0);
+  ASSERT_TRUE(range.reachable);
+  const double hi = robot.limb(0).q_max;
+  const ForwardSolution at_max = forward_kinematics(robot, JointVector::Constant(3, hi));
+  ASSERT_TRUE(at_max.summary.converged());
+  EXPECT_NEAR(at_max.pose.x, 0.0, 1e-12);
+  EXPECT_NEAR(at_max.pose.y, 0.0, 1e-12);
+  const double end = at_max.pose.theta;
+  EXPECT_NEAR(end > 0 ? range.theta_max : range.theta_min, end, 2e-5);
+  // The other end lies where equal pulls meet the forward problem's singularity (about -0.275
+  // rad, where FK from home stops): IK holds short of it.
+  const double other = end > 0 ? range.theta_min : range.theta_max;
+  EXPECT_LT(std::abs(other), 0.29);
+  EXPECT_GT(std::abs(other), 0.25);
+  EXPECT_LT(other * end, 0);
+}
+
+TEST(WorkspaceMap, WritesOneRowPerPointAndRefusesBadInput) {
+  const RobotParams<double> robot = femto_3pf();
+  WorkspaceMapOptions options;
+  options.grid = 5;
+  options.range = std::array<double, 4>{-0.002, 0.002, -0.001, 0.001};
+  const WorkspaceMap map = workspace_map(robot, options);
+  std::ostringstream out;
+  write_workspace_map_csv(map, 3, out);
+  const std::string text = out.str();
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 26);  // a header and 25 rows
+  EXPECT_EQ(text.rfind("x,y,theta,reachable,stable,status,q1,q2,q3,max_strain,", 0), 0u);
+  for (const WorkspaceMapPoint& p : map.points) EXPECT_TRUE(p.reachable && p.stable);
+  // Each point stands for the cell around it.
+  EXPECT_NEAR(map.reachable_area, 25 * (0.004 / 4) * (0.002 / 4), 1e-15);
+
+  options.grid = 1;
+  EXPECT_THROW(workspace_map(robot, options), std::invalid_argument);
+  options.grid = 5;
+  options.range = std::array<double, 4>{0.002, -0.002, -0.001, 0.001};
+  EXPECT_THROW(workspace_map(robot, options), std::invalid_argument);
+  RobotParams<double> four = robot;
+  four.num_limbs = 4;
+  four.limb(3) = robot.limb(0);
+  EXPECT_THROW(workspace_map(four, WorkspaceMapOptions()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace pcr
