@@ -2,7 +2,8 @@
 // independent references:
 // - d pose / d parameters at a given solution against central differences of FK;
 // - the pose covariance against the sample covariance of FK over Monte Carlo draws of the
-//   parameters from a known, correlated covariance (load included);
+//   parameters from a known, correlated covariance (load and extrinsics included), for ^W T_P
+//   and for the camera's measurement of it;
 // - the worst case against FK at random draws inside the intervals (never above it) and at the
 //   corner that attains it (within a few %), and against every corner of a 12-parameter box;
 // - the parameter covariance a calibration returns: its diagonal against the reported standard
@@ -164,7 +165,8 @@ TEST(PoseParameterJacobian, AtTheGivenSolutionMatchesCentralDifferences) {
   }
 }
 
-/// A covariance on a few limb parameters and the load, correlated, with the default robot's names.
+/// A covariance on a few limb parameters, the load and the extrinsics, correlated, with the default
+/// robot's names.
 ParameterCovariance known_covariance() {
   const int size = num_parameters(3) + kLoadParameters;
   ParameterCovariance c;
@@ -176,16 +178,19 @@ ParameterCovariance known_covariance() {
     double sigma;
   };
   const Entry entries[] = {
-      {ParameterKind::kLength, 0, 3e-6},      {ParameterKind::kAx, 1, 2e-6},
-      {ParameterKind::kAy, 2, 2e-6},          {ParameterKind::kAlpha, 0, 1e-3},
-      {ParameterKind::kBx, 1, 2e-6},          {ParameterKind::kDiameter, 2, 1e-6},
-      {ParameterKind::kGamma, 1, 1e-3},       {ParameterKind::kLoadForceX, -1, 2e-4},
-      {ParameterKind::kLoadMoment, -1, 2e-6},
+      {ParameterKind::kLength, 0, 3e-6},       {ParameterKind::kAx, 1, 2e-6},
+      {ParameterKind::kAy, 2, 2e-6},           {ParameterKind::kAlpha, 0, 1e-3},
+      {ParameterKind::kBx, 1, 2e-6},           {ParameterKind::kDiameter, 2, 1e-6},
+      {ParameterKind::kGamma, 1, 1e-3},        {ParameterKind::kLoadForceX, -1, 2e-4},
+      {ParameterKind::kLoadMoment, -1, 2e-6},  {ParameterKind::kCameraX, -1, 3e-6},
+      {ParameterKind::kCameraTheta, -1, 5e-4}, {ParameterKind::kPatternY, -1, 2e-6},
   };
   const auto index = [](const Entry& e) {
-    return e.limb >= 0 ? parameter_index(ParameterId{e.kind, e.limb}, 3)
-                       : num_parameters(3) + static_cast<int>(e.kind) -
-                             static_cast<int>(ParameterKind::kLoadForceX);
+    if (e.limb >= 0 || e.kind <= ParameterKind::kPatternTheta) {
+      return parameter_index(ParameterId{e.kind, e.limb}, 3);
+    }
+    return num_parameters(3) + static_cast<int>(e.kind) -
+           static_cast<int>(ParameterKind::kLoadForceX);
   };
   for (const Entry& e : entries) c.matrix(index(e), index(e)) = e.sigma * e.sigma;
   const auto correlate = [&](int a, int b, double rho) {
@@ -196,6 +201,8 @@ ParameterCovariance known_covariance() {
   correlate(2, 4, -0.5);  // A_y[2], B_x[1]
   correlate(0, 3, 0.3);   // l[0], alpha[0]
   correlate(7, 8, -0.4);  // load f_x, m_z
+  correlate(1, 9, 0.4);   // A_x[1], camera_x
+  correlate(3, 10, 0.2);  // alpha[0], camera_theta
   return c;
 }
 
@@ -237,20 +244,37 @@ TEST(PredictedAccuracy, PoseCovarianceMatchesMonteCarlo) {
   }
   PredictedAccuracyOptions options;
   options.load = load;
-  for (const JointVector& q : {joints(0, 0, 0), joints(3e-3, -2e-3, 1e-3),
-                               joints(-4e-3, 2e-3, 5e-3), joints(6e-3, 5e-3, -3e-3)}) {
+  struct Case {
+    JointVector q;
+    PoseFrame frame;
+  };
+  for (const Case& c : {Case{joints(0, 0, 0), PoseFrame::kPlatform},
+                        Case{joints(3e-3, -2e-3, 1e-3), PoseFrame::kPlatform},
+                        Case{joints(-4e-3, 2e-3, 5e-3), PoseFrame::kPlatform},
+                        Case{joints(6e-3, 5e-3, -3e-3), PoseFrame::kPlatform},
+                        Case{joints(3e-3, -2e-3, 1e-3), PoseFrame::kMeasurement},
+                        Case{joints(6e-3, 5e-3, -3e-3), PoseFrame::kMeasurement}}) {
+    const JointVector& q = c.q;
+    const bool measured = c.frame == PoseFrame::kMeasurement;
     const ForwardSolution solution = forward_kinematics(robot, q, tight(), load);
     ASSERT_TRUE(solution.summary.converged());
+    options.frame = c.frame;
     const PredictedAccuracy predicted = predicted_accuracy(robot, solution, covariance, options);
     ASSERT_TRUE(predicted.ok()) << to_string(predicted.status);
+    // The pose the prediction is of: ^W T_P, or the camera's measurement of it (Eq. 5) with the
+    // drawn extrinsics.
+    const auto pose_of = [&](const RobotParams<double>& r, const Pose2<double>& platform) {
+      return measured ? r.extrinsics.measurement_from_platform(platform) : platform;
+    };
+    const Pose2<double> reference = pose_of(robot, solution.pose);
 
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     std::vector<Eigen::Vector3d> errors;
     for (const Eigen::VectorXd& p : draws) {
-      const ForwardSolution s =
-          forward_kinematics(robot_of(robot, p), q, solution, tight(), load_of(p));
+      const RobotParams<double> drawn = robot_of(robot, p);
+      const ForwardSolution s = forward_kinematics(drawn, q, solution, tight(), load_of(p));
       ASSERT_TRUE(s.summary.converged());
-      errors.push_back(pose_difference(s.pose, solution.pose));
+      errors.push_back(pose_difference(pose_of(drawn, s.pose), reference));
       mean += errors.back() / kDraws;
     }
     Eigen::Matrix3d sample = Eigen::Matrix3d::Zero();
@@ -264,10 +288,11 @@ TEST(PredictedAccuracy, PoseCovarianceMatchesMonteCarlo) {
     const Eigen::Vector3d eigenvalues =
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(W).eigenvalues();
     std::printf(
-        "q = (%g, %g, %g) mm: 1 sigma %.4f um, %.4f urad; whitened sample covariance's "
+        "%s, q = (%g, %g, %g) mm: 1 sigma %.4f um, %.4f urad; whitened sample covariance's "
         "eigenvalues %.4f %.4f %.4f\n",
-        q(0) * 1e3, q(1) * 1e3, q(2) * 1e3, predicted.position_1sigma * 1e6,
-        predicted.orientation_1sigma * 1e6, eigenvalues(0), eigenvalues(1), eigenvalues(2));
+        measured ? "measurement" : "platform", q(0) * 1e3, q(1) * 1e3, q(2) * 1e3,
+        predicted.position_1sigma * 1e6, predicted.orientation_1sigma * 1e6, eigenvalues(0),
+        eigenvalues(1), eigenvalues(2));
     EXPECT_GT(eigenvalues(0), 0.85);
     EXPECT_LT(eigenvalues(2), 1.15);
     // The summaries, against the sample's own.

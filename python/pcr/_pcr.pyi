@@ -210,6 +210,7 @@ class Robot:
     # worst_orientation (rad).
     def predicted_accuracy(self, q: Union[Solution, ArrayLike],
                            covariance: Optional[ParameterCovariance] = None, *,
+                           frame: Literal["platform", "measurement"] = "platform",
                            measurement_covariance: Optional[ArrayLike] = None,
                            worst_case: bool = True, force: Vector = (0.0, 0.0),
                            moment: float = 0.0,

@@ -75,7 +75,7 @@ Eigen::Matrix3d measurement_matrix(const py::object& object) {
 }
 
 py::dict predict(const RobotDescription& robot, const py::object& q_in,
-                 const std::optional<ParameterCovariance>& covariance_in,
+                 const std::optional<ParameterCovariance>& covariance_in, const std::string& frame,
                  const py::object& measurement_covariance, bool worst_case, const py::object& force,
                  double moment, const std::optional<SolverOptions>& options_in) {
   const RobotParams<double>& params = robot.params;
@@ -83,6 +83,11 @@ py::dict predict(const RobotDescription& robot, const py::object& q_in,
   PredictedAccuracyOptions options;
   options.load = make_load(force, moment);
   if (options_in) options.solver = *options_in;
+  if (frame == "measurement") {
+    options.frame = PoseFrame::kMeasurement;
+  } else if (frame != "platform") {
+    throw std::invalid_argument("frame: expected 'platform' or 'measurement', got '" + frame + "'");
+  }
   if (!measurement_covariance.is_none()) {
     options.measurement_covariance = measurement_matrix(measurement_covariance);
   }
@@ -199,11 +204,14 @@ void wrap_predicted_accuracy(py::module_& m) {
   auto robot = py::reinterpret_borrow<py::class_<RobotDescription>>(m.attr("Robot"));
   robot.def(
       "predicted_accuracy", &predict, py::arg("q"), py::arg("covariance") = py::none(),
-      py::kw_only(), py::arg("measurement_covariance") = py::none(), py::arg("worst_case") = true,
-      py::arg("force") = no_force(), py::arg("moment") = 0.0, py::arg("options") = py::none(),
+      py::kw_only(), py::arg("frame") = "platform", py::arg("measurement_covariance") = py::none(),
+      py::arg("worst_case") = true, py::arg("force") = no_force(), py::arg("moment") = 0.0,
+      py::arg("options") = py::none(),
       "Predicted accuracy of this (identified) model at q: a Solution (no FK solve), n joint "
       "values (m), or an (N, n) array solved in sequence (then every value is an array over the "
-      "rows). The model's pose error from `covariance` (a ParameterCovariance; None: none): "
+      "rows). The error of the model's pose from `covariance` (a ParameterCovariance; None: "
+      "none), of ^W T_P in the model's (limb-0) frames with frame='platform', of the pattern pose "
+      "the camera measures (Eq. 5, the extrinsics' covariance included) with 'measurement': "
       "'covariance' (3, 3) of x, y, theta plus `measurement_covariance` (a (3, 3) covariance of "
       "a measured pose, for the scatter of measurements about the model), 'position_1sigma' "
       "(m, semi-major axis of the position ellipse, along 'position_axis'), 'position_3sigma', "

@@ -112,6 +112,15 @@ def test_predicted_accuracy_matches_monte_carlo(robot):
     assert worst["worst_position"] > 0
     assert max(worst["worst_components"][:2]) <= worst["worst_position"] <= np.hypot(
         *worst["worst_components"][:2])
+    # In the camera's frame, with the extrinsics' uncertainty: a camera offset adds its variance.
+    cov_camera = matrix.copy()
+    cov_camera[names.index("camera_x"), names.index("camera_x")] = (5e-6) ** 2
+    in_camera = robot.predicted_accuracy(solution, pcr.ParameterCovariance(names, cov_camera),
+                                         frame="measurement")
+    assert np.trace(in_camera["covariance"][:2, :2]) == pytest.approx(
+        np.trace(a["covariance"][:2, :2]) + (5e-6) ** 2, rel=1e-9)
+    with pytest.raises(ValueError, match="frame"):
+        robot.predicted_accuracy(solution, cov, frame="camera")
     with pytest.raises(ValueError, match="measurement_covariance"):
         robot.predicted_accuracy(solution, cov, measurement_covariance=[1.0, 2.0])
     with pytest.raises(ValueError, match=r"ParameterCovariance.*covariance\.parameters\[2\]"):

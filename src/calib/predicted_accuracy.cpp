@@ -161,9 +161,25 @@ PredictedAccuracy predicted_accuracy(const RobotParams<double>& robot,
     out.status = PredictionStatus::kNoCovariance;
     return out;
   }
-  // The parameters that move the platform: every limb parameter, and the load when the
-  // covariance has it (the extrinsics only map the pose into the camera's frame). Those whose
-  // variance is NaN are left out, and said so.
+  // In the camera's frame: chained through Eq. 5, d meas = D_P d(^W T_P) + D_e d(extrinsics).
+  const bool measurement = options.frame == PoseFrame::kMeasurement;
+  if (measurement) {
+    using J9 = ceres::Jet<double, 9>;
+    const Pose2<double>& p = solution.pose;
+    const Pose2<J9> platform{J9(p.x, 0), J9(p.y, 1), J9(p.theta, 2)};
+    const Pose2<double>& cam = robot.extrinsics.camera;
+    const Pose2<double>& pat = robot.extrinsics.pattern;
+    const Extrinsics<J9> extrinsics{Pose2<J9>{J9(cam.x, 3), J9(cam.y, 4), J9(cam.theta, 5)},
+                                    Pose2<J9>{J9(pat.x, 6), J9(pat.y, 7), J9(pat.theta, 8)}};
+    const Pose2<J9> m = extrinsics.measurement_from_platform(platform);
+    Eigen::Matrix<double, 3, 9, Eigen::RowMajor> D;
+    D << m.x.v.transpose(), m.y.v.transpose(), m.theta.v.transpose();
+    J = D.leftCols<3>() * J;  // the extrinsic columns of J are zero
+    J.middleCols<kExtrinsicParameters>(kLimbParameters * n) = D.rightCols<6>();
+  }
+  // The parameters that move the pose: every limb parameter, the extrinsics for the measured
+  // pose, and the load when the covariance has it. Those whose variance is NaN are left out, and
+  // said so.
   std::array<int, kMaxPoseJacobianColumns> moving;
   int m = 0;
   bool all_known = true;
@@ -174,7 +190,7 @@ PredictedAccuracy predicted_accuracy(const RobotParams<double>& robot,
       moving[static_cast<std::size_t>(m++)] = k;
     }
   };
-  for (int k = 0; k < kLimbParameters * n; ++k) take(k);
+  for (int k = 0; k < (measurement ? count : kLimbParameters * n); ++k) take(k);
   if (covariance.has_load()) {
     for (int j = 0; j < kLoadParameters; ++j) take(count + j);
   }
