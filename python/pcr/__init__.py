@@ -64,6 +64,12 @@ if has_calibration:
         measured_to_csv,
         square_path,
     )
+    # Predicted accuracy of a calibrated robot (pcr/calib/predicted_accuracy.hpp); also
+    # Robot.predicted_accuracy.
+    from ._pcr import (  # noqa: F401
+        ParameterCovariance,
+        read_parameter_covariance,
+    )
 
 from ._pcr import has_vision  # noqa: E402,F401
 

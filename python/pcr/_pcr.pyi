@@ -215,6 +215,18 @@ class Robot:
                 options: Optional[SolverOptions] = None) -> Union[Solution, BatchResult]: ...
     def home(self, *, shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
              options: Optional[SolverOptions] = None) -> Solution: ...
+    # When has_calibration. q: a Solution (no FK solve), n joint values, or (N, n) (every value
+    # then an array over the rows). Keys: status, ok, pose, covariance (3, 3), position_1sigma,
+    # position_3sigma (m), position_axis (2,), orientation_1sigma, orientation_3sigma (rad),
+    # worst_components (3,), worst_position (m), worst_position_direction (2,),
+    # worst_orientation (rad).
+    def predicted_accuracy(self, q: Union[Solution, ArrayLike],
+                           covariance: Optional[ParameterCovariance] = None, *,
+                           frame: Literal["platform", "measurement"] = "platform",
+                           measurement_covariance: Optional[ArrayLike] = None,
+                           worst_case: bool = True, force: Vector = (0.0, 0.0),
+                           moment: float = 0.0,
+                           options: Optional[SolverOptions] = None) -> dict[str, Any]: ...
 
 # ---- calibration (when has_calibration) ----------------------------------------------------
 class VirtualRobot:
@@ -267,6 +279,20 @@ def calibrate(nominal: Robot, q: ArrayLike, measured: ArrayLike, *,
               gauge_prior_weight: float = 1e-3, compute_covariance: bool = True,
               progress: Optional[Callable[[str], None]] = None) -> tuple[Robot, dict[str, Any]]: ...
 # the report dict holds, with a stage that frees "load", load = (f_x N, f_y N, m_z N m), load_identified
+# and covariance: a ParameterCovariance (None without compute_covariance)
+
+class ParameterCovariance:
+    def __init__(self, names: Sequence[str], matrix: ArrayLike) -> None: ...
+    @property
+    def names(self) -> list[str]: ...  # parameter_names order, then load_f_x, load_f_y, load_m_z
+    @property
+    def matrix(self) -> FloatArray: ...  # (p, p) SI; 0 rows: held; NaN rows: not identifiable
+    @property
+    def num_limbs(self) -> int: ...
+    @property
+    def has_load(self) -> bool: ...
+
+def read_parameter_covariance(path: StrPath, num_limbs: int = 0) -> ParameterCovariance: ...
 
 # ---- trajectories and ISO 9283 accuracy (when has_calibration) -----------------------------
 PAPER_SQUARE_SIDE: float  # 2e-3 m

@@ -26,8 +26,9 @@ namespace py = pybind11;
 void wrap_robot(py::module_& m);
 void wrap_kinematics(py::module_& m);
 void wrap_calibration(py::module_& m);
-void wrap_accuracy(py::module_& m);  // needs pcr::calib
-void wrap_vision(py::module_& m);    // needs pcr::vision
+void wrap_accuracy(py::module_& m);            // needs pcr::calib
+void wrap_predicted_accuracy(py::module_& m);  // needs pcr::calib
+void wrap_vision(py::module_& m);              // needs pcr::vision
 
 /// A solved configuration (FK or IK) as Python sees it: the solver's result plus, on request,
 /// the rods' shapes (one (steps + 1, 4) array per rod: s, x, y, theta in m, m, m, rad).
@@ -43,6 +44,10 @@ struct Solution {
   internal::ChordMatrix jacobian;
   bool inverse = false;
 };
+
+/// A Solution as the C++ FK takes it (a warm start, a solved configuration); the solver's chord
+/// matrix only when it was an FK solve (defined in wrap_kinematics.cpp).
+ForwardSolution as_forward(const Solution& s);
 
 // ---- arguments (defined in wrap_robot.cpp, make_load in wrap_kinematics.cpp) -----------------
 // File paths are taken as std::filesystem::path (pybind11's caster: str, bytes or any

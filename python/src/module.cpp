@@ -16,6 +16,7 @@ PYBIND11_MODULE(_pcr, m) {
 #ifdef PCR_PYTHON_HAS_CALIB
   pcr::python::wrap_calibration(m);
   pcr::python::wrap_accuracy(m);  // after wrap_calibration: uses VirtualRobot
+  pcr::python::wrap_predicted_accuracy(m);
   m.attr("has_calibration") = true;
 #else
   m.attr("has_calibration") = false;

@@ -9,6 +9,7 @@
 #include "bindings.hpp"
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/calib/dataset.hpp"
+#include "pcr/calib/predicted_accuracy.hpp"
 #include "pcr/calib/sampling.hpp"
 #include "pcr/calib/sensitivity.hpp"
 #include "pcr/calib/virtual_robot.hpp"
@@ -205,6 +206,9 @@ py::dict report_dict(const CalibrationResult& r) {
   d["singular_values"] = r.singular_values;
   d["residual_variance"] = r.residual_variance;
   d["covariance_ok"] = r.covariance_ok;
+  // A pcr.ParameterCovariance (Robot.predicted_accuracy), or None without compute_covariance.
+  d["covariance"] =
+      r.covariance.size() > 0 ? py::cast(parameter_covariance(r)) : py::object(py::none());
   d["dropped"] = r.dropped;
   d["outliers"] = r.outliers;
   d["unidentifiable"] = r.unidentifiable;

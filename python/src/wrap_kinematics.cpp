@@ -64,16 +64,6 @@ Solution to_python(const RobotParams<double>& robot, const S& s, bool usable, bo
   return out;
 }
 
-ForwardSolution as_forward(const Solution& s) {
-  ForwardSolution out;
-  out.q = s.q;
-  out.pose = s.pose;
-  out.wrenches = s.wrenches;
-  out.summary = s.summary;
-  if (!s.inverse) out.jacobian = s.jacobian;
-  return out;
-}
-
 InverseSolution as_inverse(const Solution& s) {
   InverseSolution out;
   out.q = s.q;
@@ -221,6 +211,16 @@ py::object inverse(const RobotDescription& robot, const py::object& pose_in,
 }
 
 }  // namespace
+
+ForwardSolution as_forward(const Solution& s) {
+  ForwardSolution out;
+  out.q = s.q;
+  out.pose = s.pose;
+  out.wrenches = s.wrenches;
+  out.summary = s.summary;
+  if (!s.inverse) out.jacobian = s.jacobian;
+  return out;
+}
 
 void wrap_kinematics(py::module_& m) {
   py::enum_<SolveStatus>(m, "SolveStatus", "Outcome of a kinematics solve.")

@@ -287,7 +287,7 @@ std::string calibration_report_json(const CalibrationResult& result,
                      {"present", g.present},
                      {"relative_gain", g.relative_gain}});
   }
-  const ordered_json report{
+  ordered_json report{
       {"table3", table3},
       {"stages", stages},
       {"parameters", parameters},
@@ -310,6 +310,20 @@ std::string calibration_report_json(const CalibrationResult& result,
       {"outlier_rows", result.outliers},
       {"unidentifiable_combinations", result.unidentifiable},
       {"warnings", calibration_warnings(result, table)}};
+  if (result.covariance.size() > 0) {
+    // Row by row in `parameters` order; null (NaN) for the parameters that are not identifiable,
+    // zero for the held ones (read_parameter_covariance, pcr/calib/predicted_accuracy.hpp).
+    ordered_json names = ordered_json::array();
+    for (const ParameterEstimate& p : result.parameters) names.push_back(p.name);
+    ordered_json matrix = ordered_json::array();
+    for (Eigen::Index r = 0; r < result.covariance.rows(); ++r) {
+      ordered_json row = ordered_json::array();
+      for (Eigen::Index c = 0; c < result.covariance.cols(); ++c)
+        row.push_back(result.covariance(r, c));
+      matrix.push_back(row);
+    }
+    report["covariance"] = {{"parameters", names}, {"units", "SI, flat order"}, {"matrix", matrix}};
+  }
   // NaN (a failed covariance, an empty set) is not JSON: nlohmann writes null.
   return report.dump(2) + "\n";
 }

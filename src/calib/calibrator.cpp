@@ -1551,6 +1551,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   for (int k : free) {
     if (!result.parameters[static_cast<std::size_t>(k)].gauge_reference) estimated.push_back(k);
   }
+  if (options.compute_covariance) result.covariance = Eigen::MatrixXd::Zero(block, block);
   if (options.compute_covariance && evaluated && !estimated.empty() &&
       std::isfinite(result.residual_variance)) {
     const Eigen::Index p = static_cast<Eigen::Index>(estimated.size());
@@ -1594,14 +1595,23 @@ CalibrationResult calibrate(const RobotDescription& nominal,
       if (terms.size() > 6) words += " ...";
       result.unidentifiable.push_back(words);
     }
-    for (Eigen::Index c = 0; c < p; ++c) {
-      ParameterEstimate& e =
-          result.parameters[static_cast<std::size_t>(estimated[static_cast<std::size_t>(c)])];
-      e.identifiable = identifiable[static_cast<std::size_t>(c)];
-      const double variance = V.row(c).cwiseAbs2().dot(inverse_squares);
-      e.std_dev = result.covariance_ok && e.identifiable
-                      ? e.half_width * std::sqrt(variance * result.residual_variance)
-                      : kNaN;
+    // The covariance in half-width units, then in SI: C_ab = h_a h_b (V S^-2 V^T)_ab sigma^2.
+    const Eigen::MatrixXd scaled =
+        V * inverse_squares.asDiagonal() * V.transpose() * result.residual_variance;
+    for (Eigen::Index a = 0; a < p; ++a) {
+      const std::size_t ka = static_cast<std::size_t>(estimated[static_cast<std::size_t>(a)]);
+      ParameterEstimate& e = result.parameters[ka];
+      e.identifiable = identifiable[static_cast<std::size_t>(a)];
+      const bool known = result.covariance_ok && e.identifiable;
+      for (Eigen::Index b = 0; b < p; ++b) {
+        const std::size_t kb = static_cast<std::size_t>(estimated[static_cast<std::size_t>(b)]);
+        const bool both = known && identifiable[static_cast<std::size_t>(b)];
+        result.covariance(static_cast<Eigen::Index>(ka), static_cast<Eigen::Index>(kb)) =
+            both ? 0.5 * (scaled(a, b) + scaled(b, a)) * e.half_width *
+                       result.parameters[kb].half_width
+                 : kNaN;
+      }
+      e.std_dev = known ? e.half_width * std::sqrt(scaled(a, a)) : kNaN;
     }
     if (!result.unidentifiable.empty()) {
       result.warnings.push_back(
@@ -1611,7 +1621,11 @@ CalibrationResult calibrate(const RobotDescription& nominal,
           listing(result.unidentifiable, 3));
     }
   } else {
-    for (int k : estimated) result.parameters[static_cast<std::size_t>(k)].std_dev = kNaN;
+    for (int k : estimated) {
+      result.parameters[static_cast<std::size_t>(k)].std_dev = kNaN;
+      if (!options.compute_covariance) continue;
+      for (int j : estimated) result.covariance(k, j) = kNaN;  // zero against the held ones
+    }
   }
   for (int k = 0; k < block; ++k) {
     result.parameters[static_cast<std::size_t>(k)].value = id.values()[static_cast<std::size_t>(k)];

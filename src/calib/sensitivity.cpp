@@ -7,14 +7,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "pcr/calib/jet_traits.hpp"
+#include "pcr/calib/cost.hpp"
 #include "pcr/csv_io.hpp"
-#include "pcr/implicit_kinematics.hpp"
 
 namespace pcr {
 namespace {
-
-using LimbJet = ceres::Jet<double, kLimbParameters>;
 
 /// Table 2 rows: kind name and the per-limb parameter it differentiates; E and D sum all limbs.
 struct RowSpec {
@@ -102,29 +99,31 @@ std::vector<JointVector> sensitivity_configurations(const RobotParams<double>& r
   return out;
 }
 
+bool pose_parameter_jacobian(const RobotParams<double>& robot, const ForwardSolution& solution,
+                             PoseParameterJacobian* jacobian, const PlatformLoad<double>& load,
+                             const SolverOptions& solver) {
+  static_assert(kMaxPoseJacobianColumns == kMaxParameters + kLoadParameters,
+                "the load columns are the calibration's");
+  const int count = num_parameters(robot.num_limbs);
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor, 3, kMaxParameters> flat(3, count);
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> by_load;
+  if (!platform_pose_jacobian(robot, load, solution, solver, flat.data(), by_load.data())) {
+    return false;
+  }
+  jacobian->resize(3, count + kLoadParameters);
+  jacobian->leftCols(count) = flat;
+  jacobian->rightCols(kLoadParameters) = by_load;
+  return true;
+}
+
 bool platform_parameter_jacobian(const RobotParams<double>& robot, const JointVector& q,
                                  Eigen::MatrixXd* jacobian, const PlatformLoad<double>& load,
                                  const SolverOptions& solver) {
-  const int n = robot.num_limbs;
   const ForwardSolution fk = forward_kinematics(robot, q, solver, load);
   if (!fk.summary.converged()) return false;
-  jacobian->setZero(3, kLimbParameters * n);
-  const PlatformLoad<LimbJet> load_t = load.cast<LimbJet>();
-  // One limb at a time with a 10-wide Jet: small Jets, and the Newton matrix is shared anyway.
-  for (int limb = 0; limb < n; ++limb) {
-    RobotParams<LimbJet> robot_t = robot.cast<LimbJet>();
-    for (int k = 0; k < kLimbParameters; ++k) {
-      parameter_ref(robot_t, ParameterId{static_cast<ParameterKind>(k), limb}).v[k] = 1.0;
-    }
-    Pose2<LimbJet> pose;
-    if (!forward_pose_implicit(robot_t, load_t, robot, load, fk, solver, &pose)) return false;
-    for (int k = 0; k < kLimbParameters; ++k) {
-      const int column = limb * kLimbParameters + k;
-      (*jacobian)(0, column) = pose.x.v[k];
-      (*jacobian)(1, column) = pose.y.v[k];
-      (*jacobian)(2, column) = pose.theta.v[k];
-    }
-  }
+  PoseParameterJacobian J;
+  if (!pose_parameter_jacobian(robot, fk, &J, load, solver)) return false;
+  *jacobian = J.leftCols(kLimbParameters * robot.num_limbs);
   return true;
 }
 

@@ -222,7 +222,21 @@ struct CalibrationResult {
   /// Of the whitened residuals: ~1 at the noise floor; NaN when the model could not be
   /// evaluated at the result.
   double residual_variance = 0;
+  /// The standard deviations and the covariance were computed (a Jacobian that evaluated, a
+  /// finite residual variance, compute_covariance). True even when some directions are not
+  /// identifiable: those parameters' entries are NaN (see covariance).
   bool covariance_ok = false;
+  /// Covariance of the identified values, in `parameters` order (the flat parameters, then the
+  /// load's three when identified), SI units (m, rad, Pa, N, N m): the pseudo-inverse of J^T J
+  /// from the same SVD as the standard deviations (scaled Jacobian on the free parameters less the
+  /// gauge references), times the residual variance, the half-widths scaled back. Its diagonal is
+  /// std_dev^2: zero rows and columns for the parameters that are not free and the gauge
+  /// references (held exactly in the limb-0 gauge); NaN rows and columns for the parameters that
+  /// are not identifiable (a share >= 0.1 in a direction below the rank threshold) and, when the
+  /// covariance could not be computed (covariance_ok false), for every estimated parameter, except
+  /// at the held parameters (zero: a held value has no covariance with any). The other entries
+  /// leave out the unidentifiable directions (pseudo-inverse). Empty without compute_covariance.
+  Eigen::MatrixXd covariance;
   /// Rows left out (drop_unreachable): origin, joints and the nominal FK status.
   std::vector<std::string> dropped;
   /// Rows whose whitened residual norm at the result exceeds robust_scale: origin and norm. The

@@ -3,8 +3,9 @@
 //
 // Configurations: a 3^n grid of joint values around the centre of the strokes with a step of
 // `step` (default 1 mm), minus its centre: 26 configurations for 3 limbs.
-// Derivatives: exact, by the implicit function theorem (forward_pose_implicit with ceres::Jet),
-// of the platform pose ^W T_P w.r.t. each limb parameter. Rows, as in Table 2 (SI units):
+// Derivatives: exact, by the implicit function theorem at the FK solution
+// (pose_parameter_jacobian), of the platform pose ^W T_P w.r.t. each limb parameter. Rows, as in
+// Table 2 (SI units):
 //   E  all Young moduli together (d pose / dE, per Pa),  D  all diameters together,
 //   d_i, alpha_i, beta_i, gamma_i, l_i, A_xi, A_yi, B_xi, B_yi  one limb at a time;
 // each value is max over configurations (and limbs) of |dx/dp|, |dy/dp|, |dtheta/dp|.
@@ -49,9 +50,30 @@ struct SensitivityReport {
 std::vector<JointVector> sensitivity_configurations(const RobotParams<double>& robot, double step,
                                                     const JointVector& centre = JointVector());
 
+/// Columns of a PoseParameterJacobian: every flat parameter, then the platform load's three.
+inline constexpr int kMaxPoseJacobianColumns = kMaxParameters + 3;
+
+/// d(^W T_P)/d(parameters) at a solved configuration: 3 rows (x, y, theta); num_parameters(n) + 3
+/// columns: the flat parameters in parameters.hpp order (the extrinsic columns are zero: they do
+/// not move the platform), then the constant platform load (f_x, f_y in N, m_z in N m, in W, about
+/// the platform origin), as the calibration appends it (pcr/calib/cost.hpp, kLoadParameters).
+/// Units: m or rad per parameter unit. Fixed maximum size: no heap.
+using PoseParameterJacobian =
+    Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor, 3, kMaxPoseJacobianColumns>;
+
+/// The PoseParameterJacobian at `solution`, a converged FK solution of `robot` under `load`, by the
+/// implicit function theorem at that solution (the per-limb assembly of the calibration's cost,
+/// platform_pose_jacobian): no FK solve, one RK4 pass with sensitivities at the solution's step
+/// count and one LU. Returns false when the solution did not converge or its Jacobian is singular.
+bool pose_parameter_jacobian(const RobotParams<double>& robot, const ForwardSolution& solution,
+                             PoseParameterJacobian* jacobian,
+                             const PlatformLoad<double>& load = PlatformLoad<double>(),
+                             const SolverOptions& solver = SolverOptions());
+
 /// d(^W T_P)/d(limb parameters) at q: 3 rows (x, y, theta), kLimbParameters * n columns in
 /// parameters.hpp order (the extrinsics do not move the platform). Exact (implicit function
-/// theorem). Returns false when FK from home does not converge at q.
+/// theorem): FK from home, then pose_parameter_jacobian at its solution. Returns false when FK
+/// from home does not converge at q.
 bool platform_parameter_jacobian(const RobotParams<double>& robot, const JointVector& q,
                                  Eigen::MatrixXd* jacobian,
                                  const PlatformLoad<double>& load = PlatformLoad<double>(),
