@@ -17,6 +17,7 @@
 #include "commands.hpp"
 #include "pcr/calib/accuracy.hpp"
 #include "pcr/calib/calibration_report.hpp"
+#include "pcr/calib/predicted_accuracy.hpp"
 #include "pcr/calib/sampling.hpp"
 #include "pcr/calib/sensitivity.hpp"
 #include "pcr/calib/virtual_robot.hpp"
@@ -313,10 +314,29 @@ std::string accuracy_section(const pcr::CalibrationResult& calibrated, pcr::Virt
 
 /// Step 6: where the identified robot can work at theta = 0: the maps of `pcr map` (CSV) and, with
 /// the vision library, heat maps of the stability margin, the singularity and the strain.
-std::string workspace_section(const pcr::RobotDescription& identified, const fs::path& out,
+std::string workspace_section(const pcr::RobotDescription& identified,
+                              const pcr::CalibrationResult& calibrated, const fs::path& out,
                               json& report, const Progress& progress) {
   pcr::WorkspaceMapOptions options;
   options.grid = 200;
+  // The calibration's covariance predicts each point's error as the camera would measure it.
+  const pcr::ParameterCovariance covariance = pcr::parameter_covariance(calibrated);
+  pcr::PredictedAccuracyOptions accuracy;
+  accuracy.frame = pcr::PoseFrame::kMeasurement;
+  accuracy.load = calibrated.load;
+  options.load = calibrated.load;
+  options.accuracy = [&](const pcr::InverseSolution& s, pcr::WorkspaceMapPoint& p) {
+    pcr::ForwardSolution fk;
+    fk.q = s.q;
+    fk.pose = s.pose;
+    fk.wrenches = s.wrenches;
+    fk.summary = s.summary;
+    fk.summary.status = pcr::SolveStatus::kConverged;
+    const pcr::PredictedAccuracy a =
+        pcr::predicted_accuracy(identified.params, fk, covariance, accuracy);
+    p.position_3sigma = a.position_3sigma;
+    p.orientation_3sigma = a.orientation_3sigma;
+  };
   const pcr::WorkspaceMap map = pcr::workspace_map(identified.params, options);
   const int n = identified.params.num_limbs;
   {
@@ -325,12 +345,13 @@ std::string workspace_section(const pcr::RobotDescription& identified, const fs:
     file.commit();
   }
   int reachable = 0, unstable = 0;
-  double min_singularity = HUGE_VAL;
+  double min_singularity = HUGE_VAL, max_3sigma = 0;
   for (const pcr::WorkspaceMapPoint& p : map.points) {
     if (!p.reachable) continue;
     ++reachable;
     unstable += p.stable ? 0 : 1;
     min_singularity = std::min(min_singularity, p.singularity);
+    if (p.stable) max_3sigma = std::max(max_3sigma, p.position_3sigma);
   }
   const pcr::RotationRange rotation = pcr::rotation_range(identified.params, 0.0, 0.0);
   std::vector<std::string> images;
@@ -357,6 +378,7 @@ std::string workspace_section(const pcr::RobotDescription& identified, const fs:
   });
   field("singularity", [](const pcr::WorkspaceMapPoint& p) { return std::log10(p.singularity); });
   field("max-strain", [](const pcr::WorkspaceMapPoint& p) { return p.max_strain; });
+  field("position-3sigma", [](const pcr::WorkspaceMapPoint& p) { return p.position_3sigma; });
 #endif
   report["workspace"] = {{"theta", map.theta},
                          {"grid", map.nx},
@@ -366,6 +388,7 @@ std::string workspace_section(const pcr::RobotDescription& identified, const fs:
                          {"reachable_points", reachable},
                          {"unstable_reachable_points", unstable},
                          {"min_singularity", reachable ? min_singularity : NAN},
+                         {"max_position_3sigma_m", max_3sigma},
                          {"rotation_range_at_centre_rad", {rotation.theta_min, rotation.theta_max}},
                          {"seconds", map.seconds},
                          {"files", {"map-identified.csv"}},
@@ -381,11 +404,13 @@ std::string workspace_section(const pcr::RobotDescription& identified, const fs:
       "Identified robot at theta = 0, %d x %d positions over x [%.2f, %.2f] mm, y [%.2f, %.2f] "
       "mm (map-identified.csv, %.2f s): reachable within the stroke %.2f mm^2, of which stable "
       "%.2f mm^2 (%d of %d reachable points only by an unstable equilibrium); smallest "
-      "singular value of the scaled FK Jacobian there %.3g. Rotation range at the centre: "
-      "[%.4f, %.4f] rad.\n",
+      "reciprocal condition number of the scaled FK Jacobian there %.3g. Rotation range at the "
+      "centre: [%.4f, %.4f] rad. Predicted 3-sigma position error of what the camera measures, "
+      "from "
+      "the calibration's covariance: at most %.3g nm over the stable points.\n",
       map.nx, map.ny, map.x_min * 1e3, map.x_max * 1e3, map.y_min * 1e3, map.y_max * 1e3,
       map.seconds, map.reachable_area * 1e6, map.stable_area * 1e6, unstable, reachable,
-      min_singularity, rotation.theta_min, rotation.theta_max);
+      min_singularity, rotation.theta_min, rotation.theta_max, max_3sigma * 1e9);
   std::string md = text;
   for (const std::string& image : images) md += "\n![" + image + "](" + image + ")\n";
   return md;
@@ -527,7 +552,7 @@ void run_demo(const DemoArgs& args) {
   // 6. Workspace maps.
   progress.begin("workspace maps of the identified robot (reachability, stability, singularity)");
   md += "\n## 5. Where the identified robot can work\n\n" +
-        workspace_section(identified, out, report, progress);
+        workspace_section(identified, calibrated, out, report, progress);
   progress.end();
 
   report["files"] = {"report.md",

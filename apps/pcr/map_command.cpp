@@ -4,6 +4,8 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "pcr/calib/calibrator.hpp"
+#include "pcr/calib/predicted_accuracy.hpp"
 #include "pcr/calib/workspace_map.hpp"
 #include "pcr/files.hpp"
 
@@ -13,7 +15,8 @@ struct MapArguments {
   std::string robot, output, range;
   double theta = 0;
   int grid = 200;
-  std::string rotation_at;
+  std::string rotation_at, covariance, frame = "measurement";
+  bool worst_case = false;
   pcr::cli::SolveArguments solve;
 };
 
@@ -47,11 +50,50 @@ void run_map(const MapArguments& args) {
   options.load = args.solve.load();
   if (!args.range.empty()) {
     const std::vector<double> r = parse_numbers(args.range, 4, "--range");
+    for (double v : r) {
+      if (!(std::abs(v) <= 1.0)) {  // as pcr ik's poses: no robot of this kind reaches further
+        throw InputError("--range: " + format_double(v) + " m is outside [-1, 1] m");
+      }
+    }
     if (!(r[0] < r[1] && r[2] < r[3])) {
       throw InputError("--range: expected x_min < x_max and y_min < y_max (m), got '" + args.range +
                        "'");
     }
     options.range = std::array<double, 4>{r[0], r[1], r[2], r[3]};
+  }
+  // Predicted accuracy: from the calibration's covariance, and the worst case over the robot's
+  // uncertainty intervals.
+  ParameterCovariance covariance;
+  PredictedAccuracyOptions accuracy;
+  accuracy.frame = args.frame == "platform" ? PoseFrame::kPlatform : PoseFrame::kMeasurement;
+  accuracy.load = options.load;
+  if (!args.covariance.empty()) covariance = read_parameter_covariance(args.covariance, n);
+  if (args.worst_case || !args.covariance.empty()) {
+    if (!robot.uncertainty) {
+      if (args.worst_case) {
+        throw InputError((args.robot.empty() ? std::string("<default robot>") : args.robot) +
+                         ": --worst-case needs the description's uncertainty section");
+      }
+    } else {
+      accuracy.half_widths = parameter_half_widths(*robot.uncertainty, n);
+    }
+  }
+  if (!covariance.names.empty() || !accuracy.half_widths.empty()) {
+    options.accuracy = [&](const InverseSolution& s, WorkspaceMapPoint& p) {
+      ForwardSolution fk;
+      fk.q = s.q;
+      fk.pose = s.pose;
+      fk.wrenches = s.wrenches;
+      fk.summary = s.summary;
+      fk.summary.status = SolveStatus::kConverged;  // an equilibrium (IK's status aside)
+      const PredictedAccuracy a = predicted_accuracy(robot.params, fk, covariance, accuracy);
+      if (!covariance.names.empty()) {
+        p.position_3sigma = a.position_3sigma;
+        p.orientation_3sigma = a.orientation_3sigma;
+      }
+      p.worst_position = a.worst_position;
+      p.worst_orientation = a.worst_orientation;
+    };
   }
   if (!args.rotation_at.empty()) {
     const std::vector<double> at = parse_numbers(args.rotation_at, 2, "--rotation-range");
@@ -105,6 +147,16 @@ void register_map_command(CLI::App& app) {
                   "box reaches, a tenth wider");
   map->add_option("--rotation-range", args->rotation_at,
                   "x,y (m): print the rotation range at this position and stop");
+  map->add_option("--covariance", args->covariance,
+                  "calibration report (pcr_calibrate's REPORT.json) whose covariance gives the "
+                  "predicted 3-sigma errors per point (and the worst case over the robot's "
+                  "uncertainty intervals)");
+  map->add_option("--frame", args->frame,
+                  "pose whose error is predicted: measurement (what the camera measures, "
+                  "^Se T_M, default) or platform (^W T_P in the limb-0 frames)")
+      ->check(CLI::IsMember({"measurement", "platform"}));
+  map->add_flag("--worst-case", args->worst_case,
+                "worst-case errors over the robot's uncertainty intervals (no covariance needed)");
   map->add_option("--output", args->output, "output CSV (default: stdout)");
   args->solve.add_to(*map);
   map->callback([args] { run_map(*args); });
