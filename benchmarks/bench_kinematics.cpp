@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "pcr/kinematics.hpp"
+#include "pcr/stability.hpp"
+#include "random_robots.hpp"
 
 namespace {
 
@@ -80,6 +82,54 @@ void BM_ResidualAndJacobian(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ResidualAndJacobian);
+
+/// A converged solution of the n-limb variant of the default robot (tests/random_robots.hpp),
+/// its joints up to 2 mm from home, and the shooting point of it, for the paired benchmarks below.
+struct CheckedPoint {
+  RobotParams<double> robot;
+  ForwardSolution fk;
+  ShootingPoint<double> point;
+
+  explicit CheckedPoint(int n) : robot(testing::regular_robot(n)) {
+    JointVector q(n);
+    for (int i = 0; i < n; ++i) q(i) = 0.002 * std::cos(1.0 + 2.0 * i);
+    fk = forward_kinematics(robot, q);
+    point.pose = fk.pose;
+    for (int i = 0; i < n; ++i) {
+      point.q[i] = fk.q(i);
+      point.wrenches[i] = fk.wrenches[i];
+    }
+  }
+};
+
+// The stability check of a solution of (limbs, RK4 steps) as the solvers run it
+// (stability_rod_steps), and the residual-plus-Jacobian evaluation of that solution, to compare.
+void BM_StabilityCheck(benchmark::State& state) {
+  const CheckedPoint p(static_cast<int>(state.range(0)));
+  const int steps = stability_rod_steps(static_cast<int>(state.range(1)));
+  for (auto _ : state) {
+    const EquilibriumStability s =
+        equilibrium_stability(p.robot, p.fk.q, p.fk.pose, p.fk.wrenches, steps);
+    benchmark::DoNotOptimize(s.margin);
+  }
+  state.counters["check_rod_steps"] = steps;
+}
+void BM_EvaluationOfTheCheckedSolution(benchmark::State& state) {
+  const CheckedPoint p(static_cast<int>(state.range(0)));
+  const ShootingScale scale = shooting_scale(p.robot);
+  ResidualVector<double> r;
+  ShootingMatrix partials;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(shooting_residual(p.robot, p.point, PlatformLoad<double>(), scale,
+                                               static_cast<int>(state.range(1)), r, &partials));
+  }
+}
+// The solvers' least step count (SolverOptions::min_rod_steps), the default robot's usual ones,
+// and a fine one; 2 to 6 limbs (2, 4 and 8 SIMD lanes).
+#define PCR_CHECK_ARGS ArgsProduct({{2, 3, 4, 6}, {16, 24, 32, 64}})
+BENCHMARK(BM_StabilityCheck)->PCR_CHECK_ARGS;
+BENCHMARK(BM_EvaluationOfTheCheckedSolution)->PCR_CHECK_ARGS;
+#undef PCR_CHECK_ARGS
 
 /// Times each solve of a warm-start benchmark: the target is on the median solve, which the
 /// mean Google Benchmark reports is not (a rare slow solve moves the mean, not the median).

@@ -1,9 +1,8 @@
 // Workspace maps (pcr/calib/workspace_map.hpp): the default robot's 200 x 200 map at theta = 0,
-// with and without the stability check, and the stability check of one solution on its own.
+// with and without the stability check (timed on its own in bench_kinematics).
 #include <benchmark/benchmark.h>
 
 #include "pcr/calib/workspace_map.hpp"
-#include "pcr/stability.hpp"
 
 namespace {
 
@@ -29,19 +28,6 @@ BENCHMARK(BM_WorkspaceMap)
     ->Args({200, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
-
-void BM_StabilityCheck(benchmark::State& state) {
-  const pcr::RobotParams<double> robot = pcr::femto_3pf();
-  pcr::JointVector q(3);
-  q << 0.004, -0.002, 0.001;
-  const pcr::ForwardSolution fk = pcr::forward_kinematics(robot, q);
-  for (auto _ : state) {
-    const pcr::EquilibriumStability s =
-        pcr::equilibrium_stability(robot, fk.q, fk.pose, fk.wrenches, fk.summary.rod_steps);
-    benchmark::DoNotOptimize(s.margin);
-  }
-}
-BENCHMARK(BM_StabilityCheck)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -4,9 +4,12 @@
 // energy-based check (pcr::energy_stability) on both sides of a fold.
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include "pcr/kinematics.hpp"
 #include "pcr/reference.hpp"
@@ -232,6 +235,19 @@ TEST(Stability, RandomRobotsAgreeWithDifferencesAndTheEnergy) {
       EXPECT_LT((k - k.transpose()).norm(), 1e-4 * size) << trial;
       EXPECT_LT((inextensible.stiffness - k).norm(), 1e-4 * size) << trial;
       EXPECT_EQ(inextensible.stable, s.stable) << trial;
+      // The singularity measure against the forward Jacobian's rcond from its inverse by a
+      // pivoted LU of the whole matrix (the check's comes from its 3 x 3 blocks).
+      ResidualVector<double> r;
+      ShootingMatrix partials;
+      shooting_residual(robot, point, PlatformLoad<double>(), shooting_scale(robot), steps, r,
+                        &partials);
+      const Eigen::MatrixXd forward = partials.leftCols(3 * n + 3);
+      const auto norm1 = [](const Eigen::MatrixXd& m) {
+        return m.cwiseAbs().colwise().sum().maxCoeff();
+      };
+      const double rcond =
+          1.0 / (norm1(forward) * norm1(Eigen::FullPivLU<Eigen::MatrixXd>(forward).inverse()));
+      EXPECT_NEAR(inextensible.singularity, rcond, 1e-6 * rcond) << trial;
     }
     EXPECT_GT(s.singularity, 0) << trial;
     const EnergyStability e = energy_stability(
@@ -242,6 +258,40 @@ TEST(Stability, RandomRobotsAgreeWithDifferencesAndTheEnergy) {
   }
   EXPECT_EQ(checked, 24);
   EXPECT_GE(differenced, 18);
+}
+
+// The solvers check a solution at half its RK4 steps (stability_rod_steps): on random robots at
+// random joints, the verdict is that of a fine integration (four times the solution's steps), and
+// the margin within 1e-4 of it where the platform's softest direction bends the rods (margins
+// below 10^3, where stability can be lost), within 10 % where it stretches them (margins of 10^4
+// to 10^6, set by the rods' axial stiffness: a difference of nearly equal bending terms).
+TEST(Stability, CheckAtHalfTheStepsAgreesWithAFineIntegration) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int soft = 0, stiff = 0;
+  for (int trial = 0; trial < 80; ++trial) {
+    const int n = 2 + trial % 4;
+    const RobotParams<double> robot = testing::perturbed(testing::regular_robot(n), rng);
+    JointVector q(n);
+    for (int i = 0; i < n; ++i) q(i) = 0.004 * u(rng);
+    const ForwardSolution fk = forward_kinematics(robot, q);
+    if (!fk.summary.converged()) continue;
+    const int steps = fk.summary.rod_steps;
+    const EquilibriumStability fine =
+        equilibrium_stability(robot, fk.q, fk.pose, fk.wrenches, 4 * steps);
+    EXPECT_EQ(fk.summary.stability == Stability::kStable, fine.stable) << trial;
+    const double margin = std::abs(fine.margin);
+    if (margin < 1e3) {
+      ++soft;
+      EXPECT_NEAR(fk.summary.stability_margin, fine.margin, 1e-4 * margin) << trial;
+    } else {
+      ++stiff;
+      EXPECT_NEAR(fk.summary.stability_margin, fine.margin, 0.1 * margin) << trial;
+    }
+    EXPECT_NEAR(fk.summary.singularity, fine.singularity, 0.1 * fine.singularity) << trial;
+  }
+  EXPECT_GE(soft, 20);
+  EXPECT_GE(stiff, 20);
 }
 
 // The default robot at home: straight rods, stable, and stiff (the rods' axial stiffness holds
@@ -363,14 +413,7 @@ TEST(Stability, FlagAgreesWithTheEnergyThroughAFoldTracedByArclength) {
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(forward, Eigen::ComputeFullU);
   Eigen::Vector3d across = partials.middleCols(12, 3).transpose() * svd.matrixU().col(11);
   across.normalize();
-  const ForwardSolution warm = [&] {
-    ForwardSolution w;
-    w.q = near_fold.q;
-    w.pose = near_fold.pose;
-    w.wrenches = near_fold.wrenches;
-    w.summary = near_fold.summary;
-    return w;
-  }();
+  const ForwardSolution warm = as_forward_solution(near_fold);
   // The side of the fold with solutions is where FK converges.
   const double h = 2e-4;
   const double side =
@@ -384,10 +427,21 @@ TEST(Stability, FlagAgreesWithTheEnergyThroughAFoldTracedByArclength) {
   // The energy check is a reference where it finds the same equilibrium (within 10 um; next to
   // the fold its own discrete fold, O(1 / N^2) away, can make it fail or change branch).
   int stable = 0, unstable = 0, compared_stable = 0, compared_unstable = 0;
+  // The singularity measure and the forward Jacobian's own sigma_min / sigma_max (SVD) along the
+  // trace: both least at the same point, the one nearest the fold.
+  std::vector<double> singularity, singular_value_ratio;
   const ForwardSolution traced = forward_kinematics_through_folds(
       robot, beyond, start, SolverOptions(), PlatformLoad<double>(), [&](const ForwardSolution& p) {
         ASSERT_NE(p.summary.stability, Stability::kUnchecked);
         (p.summary.stability == Stability::kStable ? stable : unstable) += 1;
+        ResidualVector<double> rp;
+        ShootingMatrix jp;
+        shooting_residual(robot, internal::shooting_point(robot, p), PlatformLoad<double>(),
+                          shooting_scale(robot), p.summary.rod_steps, rp, &jp);
+        const Eigen::VectorXd sv =
+            Eigen::JacobiSVD<Eigen::MatrixXd>(jp.leftCols(12)).singularValues();
+        singularity.push_back(p.summary.singularity);
+        singular_value_ratio.push_back(sv(11) / sv(0));
         const EnergyStability e = energy_stability(
             energy_problem(robot, p.q), energy_start(robot, p.q, p.pose, p.wrenches, 100));
         if (!e.converged ||
@@ -406,6 +460,13 @@ TEST(Stability, FlagAgreesWithTheEnergyThroughAFoldTracedByArclength) {
   EXPECT_GE(unstable, 1);
   EXPECT_GE(compared_stable, 2);
   EXPECT_GE(compared_unstable, 1);
+  const auto least = [](const std::vector<double>& v) {
+    return std::min_element(v.begin(), v.end()) - v.begin();
+  };
+  ASSERT_GE(singularity.size(), 3u);
+  EXPECT_EQ(least(singularity), least(singular_value_ratio));
+  EXPECT_LT(*std::min_element(singularity.begin(), singularity.end()),
+            0.1 * *std::max_element(singularity.begin(), singularity.end()));
 }
 
 }  // namespace

@@ -325,18 +325,7 @@ std::string workspace_section(const pcr::RobotDescription& identified,
   accuracy.frame = pcr::PoseFrame::kMeasurement;
   accuracy.load = calibrated.load;
   options.load = calibrated.load;
-  options.accuracy = [&](const pcr::InverseSolution& s, pcr::WorkspaceMapPoint& p) {
-    pcr::ForwardSolution fk;
-    fk.q = s.q;
-    fk.pose = s.pose;
-    fk.wrenches = s.wrenches;
-    fk.summary = s.summary;
-    fk.summary.status = pcr::SolveStatus::kConverged;
-    const pcr::PredictedAccuracy a =
-        pcr::predicted_accuracy(identified.params, fk, covariance, accuracy);
-    p.position_3sigma = a.position_3sigma;
-    p.orientation_3sigma = a.orientation_3sigma;
-  };
+  options.accuracy = pcr::predicted_accuracy_of_points(identified.params, covariance, accuracy);
   const pcr::WorkspaceMap map = pcr::workspace_map(identified.params, options);
   const int n = identified.params.num_limbs;
   {

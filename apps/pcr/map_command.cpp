@@ -79,21 +79,7 @@ void run_map(const MapArguments& args) {
     }
   }
   if (!covariance.names.empty() || !accuracy.half_widths.empty()) {
-    options.accuracy = [&](const InverseSolution& s, WorkspaceMapPoint& p) {
-      ForwardSolution fk;
-      fk.q = s.q;
-      fk.pose = s.pose;
-      fk.wrenches = s.wrenches;
-      fk.summary = s.summary;
-      fk.summary.status = SolveStatus::kConverged;  // an equilibrium (IK's status aside)
-      const PredictedAccuracy a = predicted_accuracy(robot.params, fk, covariance, accuracy);
-      if (!covariance.names.empty()) {
-        p.position_3sigma = a.position_3sigma;
-        p.orientation_3sigma = a.orientation_3sigma;
-      }
-      p.worst_position = a.worst_position;
-      p.worst_orientation = a.worst_orientation;
-    };
+    options.accuracy = predicted_accuracy_of_points(robot.params, covariance, accuracy);
   }
   if (!args.rotation_at.empty()) {
     const std::vector<double> at = parse_numbers(args.rotation_at, 2, "--rotation-range");

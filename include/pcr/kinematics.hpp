@@ -89,6 +89,11 @@ inline InverseSolution inverse_kinematics(
 /// evaluates its own.
 inline InverseSolution as_inverse_warm_start(const ForwardSolution& fk);
 
+/// The equilibrium an IK solution found (is_equilibrium: its joints may lie outside the stroke, or
+/// it may not hold) as a converged forward solution at those joints: for what takes one, such as
+/// a forward warm start or pcr::predicted_accuracy. The IK factorisation is left behind.
+inline ForwardSolution as_forward_solution(const InverseSolution& ik);
+
 /// Whether a solution can warm-start the next solve: a converged one, or (IK) a valid equilibrium
 /// whose joints lie outside their stroke.
 inline bool usable_as_warm_start(const SolverSummary& summary);

@@ -303,6 +303,15 @@ void integrate_rods_bundled(RodStepper<double, Sens>* rods, int n, int steps,
   for (int r = 0; r < n; ++r) rods[r] = get_lane(bundle, r);
 }
 
+/// Calls f(std::integral_constant<int, N>()) with the lane count N of the smallest bundle (2, 4 or
+/// 8 lanes) that holds n rods (n <= 8).
+template <class F>
+decltype(auto) with_lane_count(int n, F&& f) {
+  if (n <= 2) return f(std::integral_constant<int, 2>());
+  if (n <= 4) return f(std::integral_constant<int, 4>());
+  return f(std::integral_constant<int, 8>());
+}
+
 /// Integrates n initialised rods (n <= 8) over `steps` steps in SIMD lanes: in a bundle of 2, 4 or
 /// 8 lanes, the smallest that holds them. after_step(k, bundle) as in integrate_rods_bundled (rod
 /// r in lane r).
@@ -310,13 +319,9 @@ template <bool Sens, class AfterStep = NoStepVisitor>
 void integrate_rods_in_lanes(RodStepper<double, Sens>* rods, int n, int steps,
                              AfterStep&& after_step = AfterStep()) {
   if (n <= 0) return;
-  if (n <= 2) {
-    integrate_rods_bundled<2>(rods, n, steps, after_step);
-  } else if (n <= 4) {
-    integrate_rods_bundled<4>(rods, n, steps, after_step);
-  } else {
-    integrate_rods_bundled<8>(rods, n, steps, after_step);
-  }
+  with_lane_count(n, [&](auto lanes) {
+    integrate_rods_bundled<decltype(lanes)::value>(rods, n, steps, after_step);
+  });
 }
 
 template <class T, bool Sens, class Visitor>

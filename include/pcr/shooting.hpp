@@ -151,11 +151,11 @@ T shooting_residual_from_tips(const RobotParams<T>& robot, const ShootingPoint<T
 }
 
 /// The columns of the scaled partials (see shooting_residual) w.r.t. the pose (3n, 3n + 3) and the
-/// joints (3n + 3, 4n + 3): the problems' inputs. Neither needs the rods integrated: the clamps
-/// move rigidly with the pose and the rods translate with their joints.
+/// joints (3n + 3, 4n + 3, unless not `joints`): the problems' inputs. Neither needs the rods
+/// integrated: the clamps move rigidly with the pose and the rods translate with their joints.
 template <class T>
 void input_partials(const RobotParams<T>& robot, const ShootingPoint<T>& point,
-                    const ShootingScale& scale, ShootingMatrix& partials) {
+                    const ShootingScale& scale, ShootingMatrix& partials, bool joints = true) {
   const int n = robot.num_limbs;
   const double c = std::cos(scalar_value(point.pose.theta));
   const double s = std::sin(scalar_value(point.pose.theta));
@@ -174,6 +174,7 @@ void input_partials(const RobotParams<T>& robot, const ShootingPoint<T>& point,
     const double nx = scalar_value(point.wrenches[i].nx), ny = scalar_value(point.wrenches[i].ny);
     // d/dtheta of (arm x n) = (-arm_y, arm_x) x n = -arm_y ny - arm_x nx.
     partials(3 * n + 2, pose_col + 2) += (-arm_y * ny - arm_x * nx) / scale.moment();
+    if (!joints) continue;
     // Joints: the whole rod translates along the actuator direction.
     const Vector2<T> dir = limb.actuator_direction();
     partials(3 * i + 0, 3 * n + 3 + i) = scalar_value(dir.x());
@@ -182,13 +183,13 @@ void input_partials(const RobotParams<T>& robot, const ShootingPoint<T>& point,
 }
 
 /// The scaled partials of the residual (see shooting_residual) from the rods' tips with their
-/// sensitivities.
+/// sensitivities; without `joints`, the forward Jacobian alone (3n + 3 columns).
 template <class T>
 void shooting_partials_from_tips(const RobotParams<T>& robot, const ShootingPoint<T>& point,
                                  const ShootingScale& scale, const RodTip<T>* tips,
-                                 ShootingMatrix& partials) {
+                                 ShootingMatrix& partials, bool joints = true) {
   const int n = robot.num_limbs;
-  partials.setZero(3 * n + 3, 4 * n + 3);
+  partials.setZero(3 * n + 3, joints ? 4 * n + 3 : 3 * n + 3);
   const double c = std::cos(scalar_value(point.pose.theta));
   const double s = std::sin(scalar_value(point.pose.theta));
   for (int i = 0; i < n; ++i) {
@@ -212,7 +213,7 @@ void shooting_partials_from_tips(const RobotParams<T>& robot, const ShootingPoin
     partials(3 * n + 0, 3 * i + 0) = 1.0;
     partials(3 * n + 1, 3 * i + 1) = 1.0;
   }
-  input_partials(robot, point, scale, partials);
+  input_partials(robot, point, scale, partials, joints);
 }
 
 /// Evaluates the scaled residual (3n + 3) at a point. With `partials`, also fills

@@ -87,8 +87,9 @@ struct SolverOptions {
   int max_continuation_iterations = 8;
   /// Smallest continuation increment, as a fraction of the whole path.
   double min_continuation_step = 1.0 / 1024.0;
-  /// Check the elastic stability of every converged solution (pcr/stability.hpp): the cost of one
-  /// more residual-plus-Jacobian evaluation (~1 us for 3 limbs), not counted in
+  /// Check the elastic stability of every converged solution (pcr/stability.hpp, at half its RK4
+  /// steps: stability_rod_steps), and measure its distance to a singularity: about the cost of one
+  /// residual-plus-Jacobian evaluation (0.8-1 us for 3 limbs), not counted in
   /// SolverSummary::residual_evaluations (the solve's own).
   bool check_stability = true;
   /// When IK converges on an unstable equilibrium, look for a stable one at the same pose

@@ -18,11 +18,13 @@
 // themselves stay those of the inextensible model.
 //
 // Real-time safe like the solvers: no heap, no exceptions; one pass over the rods with their
-// sensitivities, the cost of one residual-plus-Jacobian evaluation.
+// sensitivities (at half a solution's RK4 steps in the solvers: stability_rod_steps) and a few
+// 3 x 3 blocks, less than one residual-plus-Jacobian evaluation.
 
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -40,10 +42,12 @@ struct EquilibriumStability {
   /// ShootingScale), positive when stable and negated otherwise. It passes through zero where the
   /// equilibrium meets a fold of the forward problem, where stability is gained or lost.
   double margin = std::numeric_limits<double>::quiet_NaN();
-  /// Reciprocal condition number (1-norm, estimated from the LU factors) of the scaled forward
-  /// Jacobian d residual / d (wrenches, pose) of the inextensible model, the one the solvers
-  /// use: zero at a fold or a bifurcation; it stands for the smallest singular value relative to
-  /// the largest at a fraction of an SVD's cost.
+  /// How near the forward problem is to a singularity: the reciprocal condition number
+  /// 1 / (|J|_1 |J^-1|_1), computed exactly, of the scaled forward Jacobian
+  /// J = d residual / d (wrenches, pose) with the rods' axial compliance (as in the stiffness; it
+  /// differs from the inextensible solvers' Jacobian by O((d / l)^2) relative): zero at a fold or
+  /// a bifurcation; it stands for the smallest singular value relative to the largest (within a
+  /// factor of 3n + 3) at a fraction of an SVD's cost.
   double singularity = std::numeric_limits<double>::quiet_NaN();
   /// The first rod with a conjugate point in (0, l] and where it lies (m), or -1 and NaN.
   int conjugate_limb = -1;
@@ -54,128 +58,190 @@ struct EquilibriumStability {
 
 namespace internal {
 
-/// One rod's conjugate-point test as it is integrated: the running integral of t t^T / EA (the
-/// axial compliance taken into the tip's position) and the sign of the Jacobi determinant.
-struct JacobiMonitor {
-  double inv_ea = 0;                 ///< 1 / EA (1 / N)
-  double cxx = 0, cxy = 0, cyy = 0;  ///< int_0^s t t^T ds / EA (m / N)
-  double c_prev = 1, s_prev = 0;     ///< tangent at the previous node
-  double det_prev = 0;               ///< Jacobi determinant (scaled) at the previous node
-  double conjugate = std::numeric_limits<double>::quiet_NaN();  ///< first conjugate point (m)
+/// The conjugate-point test of the rods in the N lanes of a bundle (RodBundle), node by node as
+/// they are integrated, lane by lane in SIMD: the running integral of t t^T / EA (the axial
+/// compliance taken into the tips' positions) and the sign of the Jacobi determinant.
+template <int N>
+struct LaneJacobiMonitor {
+  using Lanes = LaneArray<N>;
+  Lanes half_h_over_ea;                ///< trapezoid weight h / 2 / EA (m / N)
+  Lanes cxx{0.0}, cxy{0.0}, cyy{0.0};  ///< int_0^s t t^T ds / EA (m / N)
+  Lanes txx, txy, tyy;                 ///< t t^T at the previous node
+  Lanes det_prev{0.0};                 ///< Jacobi determinant at the previous node
+  double conjugate[N];                 ///< first conjugate point (m), else NaN
+  int rods = 0;
 
-  void start(const RodState<double>& proximal, double axial_stiffness) {
-    inv_ea = 1.0 / axial_stiffness;
-    c_prev = std::cos(proximal.theta);
-    s_prev = std::sin(proximal.theta);
+  /// For n initialised rods (before their first step) of axial stiffnesses ea[i] (N).
+  LaneJacobiMonitor(const RodStepper<double, true>* start, int n, const double* ea) : rods(n) {
+    for (int i = 0; i < N; ++i) {
+      const RodStepper<double, true>& rod = start[i < n ? i : 0];  // as in integrate_rods_bundled
+      half_h_over_ea[i] = rod.half_h / ea[i < n ? i : 0];
+      txx[i] = rod.c * rod.c;
+      txy[i] = rod.c * rod.s;
+      tyy[i] = rod.s * rod.s;
+      conjugate[i] = std::numeric_limits<double>::quiet_NaN();
+    }
   }
 
-  /// After a step of length h to arc length s, where the tangent is (c, sn) and the Jacobi
-  /// matrix without the axial compliance is `a` (scaled: see scaled_jacobi_block).
-  void step(double s, double h, double c, double sn, const Eigen::Matrix3d& a,
-            const ShootingScale& scale) {
-    // Trapezoidal rule: the compliance is a regularisation, its O(h^2) error moves nothing
-    // that matters.
-    const double w = 0.5 * h * inv_ea;
-    cxx += w * (c_prev * c_prev + c * c);
-    cxy += w * (c_prev * s_prev + c * sn);
-    cyy += w * (s_prev * s_prev + sn * sn);
-    c_prev = c;
-    s_prev = sn;
-    const double det = with_axial_compliance(a, scale).determinant();
-    if (std::isnan(conjugate) && !(det > 0)) {
-      // Where the determinant crosses zero, linearly between the nodes.
-      const double t = det_prev > 0 && std::isfinite(det) ? det_prev / (det_prev - det) : 1.0;
-      conjugate = s - h + t * h;
+  /// At node k of the bundle b. Built for AVX2 as well, like the step itself (four lanes in one
+  /// instruction: half the cost on the machines that have it).
+  PCR_SIMD_CLONES void step(int k, const RodBundle<N, true>& b) {
+    Lanes det;
+    // One lane at a time in a loop the compiler vectorises (ivdep: the bundle is not the
+    // monitor; as LaneArray expressions, GCC scalarised this through memory).
+#pragma GCC ivdep
+    for (int i = 0; i < N; ++i) {
+      // Trapezoidal rule: its O(h^2) error is well below RK4's effect on the stiffness (the
+      // Jacobi fields along a bent rod, tests/test_stability.cpp).
+      const double c = b.c[i], s = b.s[i];
+      const double xx = c * c, xy = c * s, yy = s * s;
+      cxx[i] += half_h_over_ea[i] * (txx[i] + xx);
+      cxy[i] += half_h_over_ea[i] * (txy[i] + xy);
+      cyy[i] += half_h_over_ea[i] * (tyy[i] + yy);
+      txx[i] = xx;
+      txy[i] = xy;
+      tyy[i] = yy;
+      // The determinant of [dx; dy; dtheta] / d(n_x, n_y, m)(0) with the compliance added, in
+      // physical units: positive scalings of rows and columns change neither its sign nor where
+      // it crosses zero.
+      const double a00 = b.tx[0][i] + cxx[i], a01 = b.tx[1][i] + cxy[i], a02 = b.tx[2][i];
+      const double a10 = b.ty[0][i] + cxy[i], a11 = b.ty[1][i] + cyy[i], a12 = b.ty[2][i];
+      const double t0 = b.tth[0][i], t1 = b.tth[1][i], t2 = b.tth[2][i];
+      det[i] =
+          a00 * (a11 * t2 - a12 * t1) - a01 * (a10 * t2 - a12 * t0) + a02 * (a10 * t1 - a11 * t0);
+    }
+    bool all_positive = true;
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) all_positive &= det[i] > 0;
+    if (!all_positive) {
+      for (int i = 0; i < rods; ++i) {
+        if (det[i] > 0 || !std::isnan(conjugate[i])) continue;
+        // Where the determinant crosses zero, linearly between the nodes.
+        const double t =
+            det_prev[i] > 0 && std::isfinite(det[i]) ? det_prev[i] / (det_prev[i] - det[i]) : 1.0;
+        conjugate[i] = (k - 1 + t) * b.h[i];
+      }
     }
     det_prev = det;
   }
 
-  /// A Jacobi matrix (scaled) with the axial compliance up to the current node added.
-  Eigen::Matrix3d with_axial_compliance(Eigen::Matrix3d a, const ShootingScale& scale) const {
+  /// Rod i's scaled Jacobi matrix a (a block of the forward Jacobian) with its axial compliance
+  /// up to the current node added.
+  Eigen::Matrix3d with_axial_compliance(int i, Eigen::Matrix3d a,
+                                        const ShootingScale& scale) const {
     const double axial = scale.force / scale.length;
-    a(0, 0) += cxx * axial;
-    a(0, 1) += cxy * axial;
-    a(1, 0) += cxy * axial;
-    a(1, 1) += cyy * axial;
+    a(0, 0) += cxx[i] * axial;
+    a(0, 1) += cxy[i] * axial;
+    a(1, 0) += cxy[i] * axial;
+    a(1, 1) += cyy[i] * axial;
     return a;
   }
 };
 
-/// d(x / L, y / L, theta) / d(n_x / F, n_y / F, m / (F L)): physical tangents (tx[j], ty[j],
-/// tth[j] for the three proximal wrench components) in the shooting residual's units.
-template <class Tangent>
-Eigen::Matrix3d scaled_jacobi_block(const Tangent& tx, const Tangent& ty, const Tangent& tth,
-                                    const ShootingScale& scale) {
-  const double to_scaled[3] = {scale.force, scale.force, scale.moment()};
-  Eigen::Matrix3d a;
-  for (int j = 0; j < 3; ++j) {
-    a(0, j) = tx(j) * to_scaled[j] / scale.length;
-    a(1, j) = ty(j) * to_scaled[j] / scale.length;
-    a(2, j) = tth(j) * to_scaled[j];
+/// The forward Jacobian J = [A B; C D] (3n + 3 square, scaled) of the rods with their axial
+/// compliance, by its 3 x 3 blocks: A block-diagonal (A_i: rod i's closure by its proximal
+/// wrench, compliance included), B_i (rod i's closure by the pose), C_i (the platform's
+/// equilibrium by rod i's wrench) and D (by the pose). Eliminating the rods leaves the platform's
+/// tangent stiffness, the Schur complement K = D - sum_i C_i A_i^-1 B_i.
+struct ForwardJacobianBlocks {
+  /// Row blocks of n limbs, stacked (3n rows).
+  using Stacked = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, 3 * kMaxLimbs, 3>;
+
+  int n = 0;
+  Eigen::Matrix3d a_inv[kMaxLimbs];  ///< A_i^-1
+  Eigen::Matrix3d y[kMaxLimbs];      ///< C_i A_i^-1
+  Stacked x;                         ///< A_i^-1 B_i
+  Eigen::Matrix3d stiffness;         ///< K
+  double norm = 0;                   ///< |J|_1, the largest column sum of magnitudes
+
+  /// The blocks of the first 3n + 3 columns of `partials` (shooting_partials_from_tips, the
+  /// inextensible rods), with_compliance(i, A_i) adding rod i's.
+  template <class Compliance>
+  ForwardJacobianBlocks(const ShootingMatrix& partials, int limbs, Compliance&& with_compliance)
+      : n(limbs), x(3 * limbs, 3) {
+    stiffness = partials.block<3, 3>(3 * n, 3 * n);
+    Eigen::RowVector3d pose_sums = stiffness.cwiseAbs().colwise().sum();
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Matrix3d a = with_compliance(i, partials.block<3, 3>(3 * i, 3 * i));
+      const Eigen::Matrix3d b = partials.block<3, 3>(3 * i, 3 * n);
+      const Eigen::Matrix3d c = partials.block<3, 3>(3 * n, 3 * i);
+      a_inv[i] = a.inverse();
+      const Eigen::Matrix3d xi = a_inv[i].lazyProduct(b);
+      x.middleRows<3>(3 * i) = xi;
+      y[i] = c.lazyProduct(a_inv[i]);
+      stiffness -= c.lazyProduct(xi);
+      pose_sums += b.cwiseAbs().colwise().sum();
+      norm =
+          std::max(norm, (a.cwiseAbs().colwise().sum() + c.cwiseAbs().colwise().sum()).maxCoeff());
+    }
+    norm = std::max(norm, pose_sums.maxCoeff());
   }
-  return a;
-}
 
-}  // namespace internal
-
-namespace internal {
+  /// The reciprocal condition number 1 / (|J|_1 |J^-1|_1) (call with a finite stiffness),
+  /// exactly, with J^-1 from the blocks:
+  ///   J^-1 = [A^-1 + X K^-1 Y, -X K^-1; -K^-1 Y, K^-1],  X = A^-1 B,  Y = C A^-1,
+  /// a tenth of an LU factorisation with a condition estimate at 12 x 12. Zero when K is
+  /// singular (so is J).
+  double rcond() const {
+    if (stiffness.determinant() == 0) return 0.0;
+    const Eigen::Matrix3d k_inv = stiffness.inverse();
+    // The pose's block column: [-X K^-1; K^-1].
+    Stacked column = x.lazyProduct(k_inv);
+    double inverse_norm =
+        (column.cwiseAbs().colwise().sum() + k_inv.cwiseAbs().colwise().sum()).maxCoeff();
+    // Rod j's block column: [A_j^-1 in row block j + X W_j; -W_j], W_j = K^-1 Y_j.
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Matrix3d w = k_inv.lazyProduct(y[j]);
+      column = x.lazyProduct(w);
+      column.middleRows<3>(3 * j) += a_inv[j];
+      inverse_norm =
+          std::max(inverse_norm,
+                   (column.cwiseAbs().colwise().sum() + w.cwiseAbs().colwise().sum()).maxCoeff());
+    }
+    return 1.0 / (norm * inverse_norm);
+  }
+};
 
 /// equilibrium_stability, optionally without the rods' axial compliance (tests compare the
 /// platform stiffness of the inextensible model with finite differences).
-inline EquilibriumStability equilibrium_stability(
+template <int N>
+EquilibriumStability equilibrium_stability_in_lanes(
     const RobotParams<double>& robot, const JointVector& q, const Pose2<double>& pose,
     const std::array<Wrench<double>, kMaxLimbs>& wrenches, int rod_steps, bool axial_compliance) {
   EquilibriumStability result;
   const int n = robot.num_limbs;
-  if (n < 1 || n > kMaxLimbs || q.size() != n || rod_steps < 1) return result;
   const ShootingScale scale = shooting_scale(robot);
   ShootingPoint<double> point;
   point.pose = pose;
   internal::RodStepper<double, true> rods[kMaxLimbs];
-  internal::JacobiMonitor monitors[kMaxLimbs];
+  double ea[kMaxLimbs];
   for (int i = 0; i < n; ++i) {
     const LimbParams<double>& limb = robot.limb(i);
     point.q[i] = q(i);
     point.wrenches[i] = wrenches[i];
     const RodState<double> start = proximal_rod_state(limb, q(i), wrenches[i]);
     rods[i].init(start, limb.bending_stiffness(), limb.length, rod_steps);
-    monitors[i].start(start, axial_compliance ? limb.axial_stiffness() : HUGE_VAL);
+    ea[i] = axial_compliance ? limb.axial_stiffness() : HUGE_VAL;
   }
-  internal::integrate_rods_in_lanes(rods, n, rod_steps, [&](int k, const auto& bundle) {
-    for (int i = 0; i < n; ++i) {
-      const auto lane = [&](const auto& field) {
-        return [&field, i](int j) { return field[j][i]; };
-      };
-      const Eigen::Matrix3d a =
-          internal::scaled_jacobi_block(lane(bundle.tx), lane(bundle.ty), lane(bundle.tth), scale);
-      const double h = bundle.h[i];
-      monitors[i].step(k * h, h, bundle.c[i], bundle.s[i], a, scale);
-    }
-  });
+  LaneJacobiMonitor<N> monitor(rods, n, ea);
+  internal::integrate_rods_bundled<N>(rods, n, rod_steps,
+                                      [&](int k, const auto& bundle) { monitor.step(k, bundle); });
   RodTip<double> tips[kMaxLimbs];
   for (int i = 0; i < n; ++i) {
     tips[i] = internal::tip_of(rods[i]);
-    if (result.conjugate_limb < 0 && !std::isnan(monitors[i].conjugate)) {
+    if (result.conjugate_limb < 0 && !std::isnan(monitor.conjugate[i])) {
       result.conjugate_limb = i;
-      result.conjugate_arc_length = monitors[i].conjugate;
+      result.conjugate_arc_length = monitor.conjugate[i];
     }
   }
   ShootingMatrix partials;
-  shooting_partials_from_tips(robot, point, scale, tips, partials);
-  const int m = 3 * n + 3;
-  const JacobianMatrix jacobian = partials.leftCols(m);
-  if (!jacobian.allFinite()) return result;
-  result.singularity = Eigen::PartialPivLU<JacobianMatrix>(jacobian).rcond();
-
-  // Platform stiffness: the Schur complement D - sum_i C_i A_i^-1 B_i of the rods' blocks.
-  Eigen::Matrix3d stiffness = jacobian.block<3, 3>(3 * n, 3 * n);
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Matrix3d a =
-        monitors[i].with_axial_compliance(jacobian.block<3, 3>(3 * i, 3 * i), scale);
-    stiffness -=
-        jacobian.block<3, 3>(3 * n, 3 * i) * a.inverse() * jacobian.block<3, 3>(3 * i, 3 * n);
-  }
+  shooting_partials_from_tips(robot, point, scale, tips, partials, /*joints=*/false);
+  const ForwardJacobianBlocks blocks(partials, n, [&](int i, const Eigen::Matrix3d& a) {
+    return monitor.with_axial_compliance(i, a, scale);
+  });
+  const Eigen::Matrix3d& stiffness = blocks.stiffness;
   if (!stiffness.allFinite()) return result;
+  result.singularity = blocks.rcond();
   result.stiffness = 0.5 * (stiffness + stiffness.transpose());
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
   eigen.computeDirect(result.stiffness, Eigen::EigenvaluesOnly);
@@ -187,7 +253,28 @@ inline EquilibriumStability equilibrium_stability(
   return result;
 }
 
+inline EquilibriumStability equilibrium_stability(
+    const RobotParams<double>& robot, const JointVector& q, const Pose2<double>& pose,
+    const std::array<Wrench<double>, kMaxLimbs>& wrenches, int rod_steps, bool axial_compliance) {
+  const int n = robot.num_limbs;
+  if (n < 1 || n > kMaxLimbs || q.size() != n || rod_steps < 1) return EquilibriumStability();
+  return with_lane_count(n, [&](auto lanes) {
+    return equilibrium_stability_in_lanes<decltype(lanes)::value>(robot, q, pose, wrenches,
+                                                                  rod_steps, axial_compliance);
+  });
+}
+
 }  // namespace internal
+
+/// The RK4 steps per rod over which the solvers check a solution of rod_steps steps
+/// (SolverOptions::check_stability): half of them, at least 8 (at most rod_steps). A solution's
+/// step count is set by its positions' accuracy target; at half the steps RK4's error is 2^4 = 16
+/// times that, a relative 1e-4 or less of the rods' stiffness (tests/test_stability.cpp), far
+/// below what a margin's sign needs, and the check then costs less than one residual-plus-Jacobian
+/// evaluation of the solution.
+inline int stability_rod_steps(int rod_steps) {
+  return std::min(rod_steps, std::max(8, rod_steps / 2));
+}
 
 /// The stability of the equilibrium (q, pose, proximal wrenches) of a robot (1 to kMaxLimbs
 /// limbs) under a dead platform load (which adds no term: a force at the platform's origin and a

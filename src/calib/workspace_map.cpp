@@ -7,6 +7,7 @@
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "pcr/csv_io.hpp"
 
@@ -76,6 +77,22 @@ std::array<double, 4> stroke_pose_box(const RobotParams<double>& robot, int leve
     throw std::runtime_error("stroke_pose_box: no configuration of the stroke box was solved");
   }
   return box;
+}
+
+std::function<void(const InverseSolution&, WorkspaceMapPoint&)> predicted_accuracy_of_points(
+    const RobotParams<double>& robot, ParameterCovariance covariance,
+    PredictedAccuracyOptions options) {
+  return [robot, covariance = std::move(covariance), options = std::move(options)](
+             const InverseSolution& solution, WorkspaceMapPoint& point) {
+    const PredictedAccuracy a =
+        predicted_accuracy(robot, as_forward_solution(solution), covariance, options);
+    if (!covariance.names.empty()) {
+      point.position_3sigma = a.position_3sigma;
+      point.orientation_3sigma = a.orientation_3sigma;
+    }
+    point.worst_position = a.worst_position;
+    point.worst_orientation = a.worst_orientation;
+  };
 }
 
 WorkspaceMap workspace_map(const RobotParams<double>& robot, const WorkspaceMapOptions& options) {

@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "pcr/calib/predicted_accuracy.hpp"
 #include "pcr/kinematics.hpp"
 
 namespace pcr {
@@ -62,6 +63,13 @@ struct WorkspaceMap {
 std::array<double, 4> stroke_pose_box(const RobotParams<double>& robot, int levels = 7,
                                       const SolverOptions& options = SolverOptions(),
                                       const PlatformLoad<double>& load = PlatformLoad<double>());
+
+/// A WorkspaceMapOptions::accuracy that fills each point's predicted errors (predicted_accuracy at
+/// its equilibrium): 3 sigma when the covariance names parameters, the worst case when
+/// options.half_widths are given.
+std::function<void(const InverseSolution&, WorkspaceMapPoint&)> predicted_accuracy_of_points(
+    const RobotParams<double>& robot, ParameterCovariance covariance,
+    PredictedAccuracyOptions options);
 
 /// IK over the grid, warm-started along it in a serpentine order (each point from its neighbour in
 /// the row, else from the one in the row before; from home only when neither has a solution).

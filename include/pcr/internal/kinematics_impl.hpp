@@ -102,19 +102,20 @@ ShootingPoint<double> shooting_point(const RobotParams<double>& robot, const Sol
 }
 
 /// Checks the stability of a usable solution's equilibrium into its summary (see
-/// SolverOptions::check_stability).
+/// SolverOptions::check_stability) and returns the check's details (unset when unchecked).
 template <class Solution>
-void check_stability(const RobotParams<double>& robot, const SolverOptions& options,
-                     Solution& solution) {
+EquilibriumStability check_stability(const RobotParams<double>& robot, const SolverOptions& options,
+                                     Solution& solution) {
   SolverSummary& summary = solution.summary;
   summary.stability = Stability::kUnchecked;
   summary.stability_margin = summary.singularity = std::numeric_limits<double>::quiet_NaN();
-  if (!options.check_stability || !usable_as_warm_start(summary)) return;
-  const EquilibriumStability s =
-      equilibrium_stability(robot, solution.q, solution.pose, solution.wrenches, summary.rod_steps);
+  if (!options.check_stability || !usable_as_warm_start(summary)) return EquilibriumStability();
+  const EquilibriumStability s = equilibrium_stability(
+      robot, solution.q, solution.pose, solution.wrenches, stability_rod_steps(summary.rod_steps));
   summary.stability = s.stable ? Stability::kStable : Stability::kUnstable;
   summary.stability_margin = s.margin;
   summary.singularity = s.singularity;
+  return s;
 }
 
 /// The options of a solve whose solution is a step towards the requested one (cold starts' home).
@@ -144,22 +145,20 @@ Solution solve_from_warm_start(ShootingProblem::Kind kind, const RobotParams<dou
 /// IK has converged on an unstable equilibrium at the input u: looks for a stable one at the same
 /// pose, from seeds where one rod is bent further one way or the other (its proximal moment moved
 /// by 1 and 2 times 2 pi EI / l: a clamped-clamped rod's buckled shapes), the rod with a conjugate
-/// point first. Takes the stable solution whose joints lie nearest (one within the stroke before
-/// one outside), else reports kUnstable with the unstable solution. The summary counts every
-/// seed's iterations and evaluations.
+/// point (conjugate_limb, or -1) first. Takes the stable solution whose joints lie nearest (one
+/// within the stroke before one outside), else reports kUnstable with the unstable solution. The
+/// summary counts every seed's iterations and evaluations.
 inline void look_for_stable_inverse(const RobotParams<double>& robot, const ShootingVector& u,
                                     const SolverOptions& options, const PlatformLoad<double>& load,
-                                    InverseSolution& solution) {
+                                    int conjugate_limb, InverseSolution& solution) {
   const int n = robot.num_limbs;
-  const EquilibriumStability unstable = equilibrium_stability(
-      robot, solution.q, solution.pose, solution.wrenches, solution.summary.rod_steps);
 
   InverseSolution best;
   bool found = false, best_in_range = false;
   double best_distance = HUGE_VAL;
   SolverSummary totals = solution.summary;
   for (int k = 0; k < n; ++k) {
-    const int rod = unstable.conjugate_limb >= 0 ? (unstable.conjugate_limb + k) % n : k;
+    const int rod = conjugate_limb >= 0 ? (conjugate_limb + k) % n : k;
     const LimbParams<double>& limb = robot.limb(rod);
     const double bend = 2.0 * M_PI * limb.bending_stiffness() / limb.length;
     for (double amount : {1.0, -1.0, 2.0, -2.0}) {
@@ -353,9 +352,9 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
   InverseSolution solution = internal::solve_from_warm_start(
       internal::ShootingProblem::Kind::kInverse, robot, u0, u1, warm_start, options, load);
   internal::mark_out_of_range(robot, solution);
-  internal::check_stability(robot, options, solution);
+  const EquilibriumStability stability = internal::check_stability(robot, options, solution);
   if (solution.summary.stability == Stability::kUnstable && options.stable_inverse) {
-    internal::look_for_stable_inverse(robot, u1, options, load, solution);
+    internal::look_for_stable_inverse(robot, u1, options, load, stability.conjugate_limb, solution);
   }
   return solution;
 }
@@ -384,6 +383,16 @@ inline InverseSolution as_inverse_warm_start(const ForwardSolution& fk) {
   warm.wrenches = fk.wrenches;
   warm.summary = fk.summary;
   return warm;
+}
+
+inline ForwardSolution as_forward_solution(const InverseSolution& ik) {
+  ForwardSolution fk;
+  fk.q = ik.q;
+  fk.pose = ik.pose;
+  fk.wrenches = ik.wrenches;
+  fk.summary = ik.summary;
+  if (is_equilibrium(ik.summary)) fk.summary.status = SolveStatus::kConverged;
+  return fk;
 }
 
 inline bool usable_as_warm_start(const SolverSummary& summary) {
