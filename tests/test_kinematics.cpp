@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <new>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "allocation_counter.hpp"
 #include "pcr/kinematics.hpp"
@@ -386,6 +388,61 @@ TEST(Kinematics, SequenceSolveRetriesAFailedWarmStartCold) {
   EXPECT_TRUE(usable_as_warm_start(out.summary));
   EXPECT_EQ(out.summary.residual_evaluations,
             inverse_kinematics(short_stroke, cold.pose, ik_warm).summary.residual_evaluations);
+}
+
+// The order of a sequence's attempts (SequenceSolver, through solve_with_cold_fallback): the warm
+// solve; when it stops at a fold (kSingular or kMaxIterations) and SolverOptions::through_folds,
+// the pseudo-arclength trace through it; the cold solve when neither is usable; the work of every
+// attempt counted.
+TEST(Kinematics, SequenceTracesThroughAFoldBeforeTheColdRetry) {
+  ForwardSolution start;
+  start.summary.status = SolveStatus::kConverged;
+  std::vector<std::string> calls;
+  const auto attempt = [](SolveStatus status, int evaluations) {
+    ForwardSolution s;
+    s.summary.status = status;
+    s.summary.iterations = 1;
+    s.summary.residual_evaluations = evaluations;
+    return s;
+  };
+  const auto run = [&](SolveStatus warm, bool through_folds, SolveStatus traced) {
+    calls.clear();
+    return internal::solve_with_cold_fallback<ForwardSolution>(
+        &start,
+        [&](const ForwardSolution&) {
+          calls.push_back("warm");
+          return attempt(warm, 3);
+        },
+        through_folds,
+        [&](const ForwardSolution&) {
+          calls.push_back("fold");
+          ForwardSolution s = attempt(traced, 20);
+          s.summary.folds_passed = 2;
+          return s;
+        },
+        [&] {
+          calls.push_back("cold");
+          return attempt(SolveStatus::kConverged, 50);
+        });
+  };
+  using Calls = std::vector<std::string>;
+  ForwardSolution s = run(SolveStatus::kSingular, true, SolveStatus::kConverged);
+  EXPECT_EQ(calls, (Calls{"warm", "fold"}));
+  EXPECT_EQ(s.summary.folds_passed, 2);
+  EXPECT_EQ(s.summary.residual_evaluations, 23);
+  EXPECT_EQ(s.summary.iterations, 2);
+  s = run(SolveStatus::kMaxIterations, true, SolveStatus::kSingular);
+  EXPECT_EQ(calls, (Calls{"warm", "fold", "cold"}));
+  EXPECT_EQ(s.summary.residual_evaluations, 73);
+  EXPECT_EQ(s.summary.iterations, 3);
+  s = run(SolveStatus::kSingular, false, SolveStatus::kConverged);
+  EXPECT_EQ(calls, (Calls{"warm", "cold"}));
+  EXPECT_EQ(s.summary.residual_evaluations, 53);
+  s = run(SolveStatus::kNonFinite, true, SolveStatus::kConverged);  // not a fold
+  EXPECT_EQ(calls, (Calls{"warm", "cold"}));
+  s = run(SolveStatus::kConverged, true, SolveStatus::kConverged);
+  EXPECT_EQ(calls, (Calls{"warm"}));
+  EXPECT_EQ(s.summary.residual_evaluations, 3);
 }
 
 TEST(Kinematics, InvalidInputsAreReported) {
