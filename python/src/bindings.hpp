@@ -45,6 +45,35 @@ struct Solution {
   bool inverse = false;
 };
 
+/// copy.copy, copy.deepcopy and pickling for a value type whose state is its read-write properties
+/// (a value has no shared parts, so a copy is a deep copy). The pickled state is the dict of those
+/// properties, read from the class (nothing listed twice), set again on a default value.
+template <class T, class... Extra>
+void def_value_semantics(py::class_<T, Extra...>& cls) {
+  cls.def("__copy__", [](const T& value) { return value; });
+  cls.def(
+      "__deepcopy__", [](const T& value, const py::dict&) { return value; }, py::arg("memo"));
+  cls.def(py::pickle(
+      [](const py::object& self) {
+        const py::module_ builtins = py::module_::import("builtins");
+        const py::object type = py::type::of(self);
+        py::dict state;
+        for (const py::handle name : builtins.attr("dir")(type)) {
+          const py::object attribute = type.attr(name);
+          if (py::isinstance(attribute, builtins.attr("property")) &&
+              !attribute.attr("fset").is_none()) {
+            state[name] = self.attr(name);
+          }
+        }
+        return state;
+      },
+      [](const py::dict& state) {
+        py::object value = py::cast(T());
+        for (const auto item : state) py::setattr(value, item.first, item.second);
+        return value.template cast<T>();
+      }));
+}
+
 /// A Solution as the C++ FK takes it (a warm start, a solved configuration); the solver's chord
 /// matrix only when it was an FK solve (defined in wrap_kinematics.cpp).
 ForwardSolution as_forward(const Solution& s);

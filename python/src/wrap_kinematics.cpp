@@ -1,6 +1,8 @@
 // Robot.forward / Robot.inverse / Robot.home, pcr.SolverOptions, pcr.Solution, pcr.BatchResult.
+#include <algorithm>
 #include <limits>
 #include <memory>
+#include <tuple>
 #include <type_traits>
 
 #include "bindings.hpp"
@@ -25,6 +27,61 @@ struct BatchResult {
   py::object status = py::none();
   py::object shapes = py::none();
 };
+
+/// Every field of a BatchResult, in the order of its pickled state.
+auto batch_fields(BatchResult& b) {
+  return std::tie(b.q, b.pose, b.wrenches, b.residual, b.max_strain, b.stability_margin,
+                  b.singularity, b.converged, b.stable, b.status_code, b.iterations, b.rod_steps,
+                  b.status, b.shapes);
+}
+
+/// Every field of a SolverSummary, in the order of a pickled Solution's summary.
+auto summary_fields(SolverSummary& s) {
+  return std::tie(s.status, s.iterations, s.residual_evaluations, s.continuation_steps,
+                  s.initial_residual_norm, s.final_residual_norm, s.max_strain, s.rod_steps,
+                  s.position_error_estimate, s.angle_error_estimate, s.path_fraction, s.stability,
+                  s.stability_margin, s.singularity, s.folds_passed, s.first_fold);
+}
+
+/// A tuple of the fields (enumerations as their integers) and back: the pickled state of a
+/// struct whose fields `fields(value)` ties.
+template <class Tied>
+py::tuple fields_to_tuple(Tied fields) {
+  return std::apply(
+      [](auto&... f) {
+        const auto plain = [](const auto& v) {
+          if constexpr (std::is_enum_v<std::decay_t<decltype(v)>>) {
+            return static_cast<int>(v);
+          } else {
+            return v;
+          }
+        };
+        return py::make_tuple(plain(f)...);
+      },
+      fields);
+}
+template <class Tied>
+void fields_from_tuple(Tied fields, const py::tuple& state, const char* what) {
+  if (state.size() != std::tuple_size_v<Tied>) {
+    throw py::value_error(std::string(what) + ": a pickled state of " +
+                          std::to_string(std::tuple_size_v<Tied>) + " fields expected, got " +
+                          std::to_string(state.size()));
+  }
+  std::size_t i = 0;
+  std::apply(
+      [&](auto&... f) {
+        const auto assign = [&](auto& field) {
+          using T = std::decay_t<decltype(field)>;
+          if constexpr (std::is_enum_v<T>) {
+            field = static_cast<T>(state[i++].cast<int>());
+          } else {
+            field = state[i++].cast<T>();
+          }
+        };
+        (assign(f), ...);
+      },
+      fields);
+}
 
 /// The rods' shapes of a solution: one (steps + 1, 4) array per rod (s, x, y, theta).
 py::list rod_shapes(const RobotParams<double>& robot, const JointVector& q,
@@ -234,35 +291,46 @@ void wrap_kinematics(py::module_& m) {
       .value("unsupported", SolveStatus::kUnsupported)
       .value("invalid_input", SolveStatus::kInvalidInput);
 
-  py::class_<SolverOptions>(m, "SolverOptions", "Newton shooting settings (pcr/kinematics.hpp).")
-      .def(py::init<>())
-      .def_readwrite("rod_steps", &SolverOptions::rod_steps,
-                     "RK4 steps per rod; 0 chooses them from the solution's estimated error")
-      .def_readwrite("position_accuracy", &SolverOptions::position_accuracy,
-                     "target of the estimated error of solved lengths when rod_steps = 0 (m)")
-      .def_readwrite("angle_accuracy", &SolverOptions::angle_accuracy,
-                     "target of the estimated error of solved angles when rod_steps = 0 (rad)")
-      .def_readwrite("min_rod_steps", &SolverOptions::min_rod_steps)
-      .def_readwrite("max_rod_steps", &SolverOptions::max_rod_steps)
-      .def_readwrite("max_iterations", &SolverOptions::max_iterations,
-                     "Newton iterations per solve")
-      .def_readwrite("tolerance", &SolverOptions::tolerance,
-                     "max-norm of the scaled residual (lengths / l, forces / (EI / l^2))")
-      .def_readwrite("chord_output_share", &SolverOptions::chord_output_share,
-                     "share of the accuracy targets a chord run may leave on the outputs; 0 "
-                     "runs every solve to the tolerance")
-      .def_readwrite("max_line_search", &SolverOptions::max_line_search)
-      .def_readwrite("continuation", &SolverOptions::continuation)
-      .def_readwrite("max_continuation_steps", &SolverOptions::max_continuation_steps)
-      .def_readwrite("max_continuation_iterations", &SolverOptions::max_continuation_iterations,
-                     "Newton iterations per sub-solve of a continuation")
-      .def_readwrite("min_continuation_step", &SolverOptions::min_continuation_step)
-      .def_readwrite("check_stability", &SolverOptions::check_stability,
-                     "check the elastic stability of every converged solution (one more "
-                     "residual-plus-Jacobian evaluation)")
-      .def_readwrite("stable_inverse", &SolverOptions::stable_inverse,
-                     "when IK converges on an unstable equilibrium, look for a stable one at the "
-                     "same pose (status 'unstable' when none is found)");
+  auto solver_options =
+      py::class_<SolverOptions>(m, "SolverOptions",
+                                "Newton shooting settings (pcr/kinematics.hpp).")
+          .def(py::init<>())
+          .def_readwrite("rod_steps", &SolverOptions::rod_steps,
+                         "RK4 steps per rod; 0 chooses them from the solution's estimated error")
+          .def_readwrite("position_accuracy", &SolverOptions::position_accuracy,
+                         "target of the estimated error of solved lengths when rod_steps = 0 (m)")
+          .def_readwrite("angle_accuracy", &SolverOptions::angle_accuracy,
+                         "target of the estimated error of solved angles when rod_steps = 0 (rad)")
+          .def_readwrite("min_rod_steps", &SolverOptions::min_rod_steps)
+          .def_readwrite("max_rod_steps", &SolverOptions::max_rod_steps)
+          .def_readwrite("max_iterations", &SolverOptions::max_iterations,
+                         "Newton iterations per solve")
+          .def_readwrite("tolerance", &SolverOptions::tolerance,
+                         "max-norm of the scaled residual (lengths / l, forces / (EI / l^2))")
+          .def_readwrite("chord_output_share", &SolverOptions::chord_output_share,
+                         "share of the accuracy targets a chord run may leave on the outputs; 0 "
+                         "runs every solve to the tolerance")
+          .def_readwrite("max_line_search", &SolverOptions::max_line_search)
+          .def_readwrite("continuation", &SolverOptions::continuation)
+          .def_readwrite("max_continuation_steps", &SolverOptions::max_continuation_steps)
+          .def_readwrite("max_continuation_iterations", &SolverOptions::max_continuation_iterations,
+                         "Newton iterations per sub-solve of a continuation")
+          .def_readwrite("min_continuation_step", &SolverOptions::min_continuation_step)
+          .def_readwrite(
+              "check_stability", &SolverOptions::check_stability,
+              "check the elastic stability of every converged solution (at half its RK4 steps: "
+              "about one residual-plus-Jacobian evaluation)")
+          .def_readwrite(
+              "stable_inverse", &SolverOptions::stable_inverse,
+              "when IK converges on an unstable equilibrium, look for a stable one at the "
+              "same pose (status 'unstable' when none is found)")
+          .def_readwrite(
+              "through_folds", &SolverOptions::through_folds,
+              "a sequence whose warm solve stops at a fold follows the curve of solutions "
+              "through it by pseudo-arclength continuation before the cold retry")
+          .def_readwrite("max_arclength_steps", &SolverOptions::max_arclength_steps,
+                         "points a pseudo-arclength trace may solve");
+  def_value_semantics(solver_options);
 
   py::class_<Solution>(m, "Solution",
                        "One solved configuration. When the solve failed (converged is False; for "
@@ -324,10 +392,50 @@ void wrap_kinematics(py::module_& m) {
       .def_readonly("shapes", &Solution::shapes,
                     "None, or (with shapes=True) one (steps + 1, 4) array per rod: s, x, y (m), "
                     "theta (rad) along the rod, in W")
-      .def("__repr__", [](const Solution& s) {
-        return "<pcr.Solution " + std::string(to_string(s.summary.status)) + ", " +
-               std::to_string(s.summary.iterations) + " iterations>";
-      });
+      .def("__repr__",
+           [](const Solution& s) {
+             return "<pcr.Solution " + std::string(to_string(s.summary.status)) + ", " +
+                    std::to_string(s.summary.iterations) + " iterations>";
+           })
+      .def("__copy__", [](const Solution& s) { return s; })
+      .def(
+          "__deepcopy__",
+          [](const Solution& s, const py::dict& memo) {
+            Solution out = s;
+            out.shapes = py::module_::import("copy").attr("deepcopy")(s.shapes, memo);
+            return out;
+          },
+          py::arg("memo"))
+      // The solver's factorised Jacobian is not pickled: a warm start from an unpickled solution
+      // evaluates its own first.
+      .def(py::pickle(
+          [](const Solution& s) {
+            SolverSummary summary = s.summary;
+            RowMatrix wrenches(s.num_limbs, 3);
+            for (int i = 0; i < s.num_limbs; ++i)
+              wrenches.row(i) << s.wrenches[i].nx, s.wrenches[i].ny, s.wrenches[i].m;
+            return py::make_tuple(s.num_limbs, Eigen::VectorXd(s.q), s.pose, wrenches,
+                                  fields_to_tuple(summary_fields(summary)), s.shapes, s.inverse);
+          },
+          [](const py::tuple& state) {
+            if (state.size() != 7) throw py::value_error("Solution: not a pickled Solution");
+            Solution s;
+            s.num_limbs = state[0].cast<int>();
+            if (s.num_limbs < 1 || s.num_limbs > kMaxLimbs)
+              throw py::value_error("Solution: not a pickled Solution");
+            s.q = state[1].cast<Eigen::VectorXd>();
+            s.pose = state[2].cast<Pose2<double>>();
+            const RowMatrix wrenches = state[3].cast<RowMatrix>();
+            if (s.q.size() != s.num_limbs || wrenches.rows() != s.num_limbs || wrenches.cols() != 3)
+              throw py::value_error("Solution: not a pickled Solution");
+            for (int i = 0; i < s.num_limbs; ++i)
+              s.wrenches[i] = Wrench<double>{wrenches(i, 0), wrenches(i, 1), wrenches(i, 2)};
+            fields_from_tuple(summary_fields(s.summary), state[4].cast<py::tuple>(),
+                              "Solution.summary");
+            s.shapes = state[5];
+            s.inverse = state[6].cast<bool>();
+            return s;
+          }));
 
   py::class_<BatchResult>(m, "BatchResult",
                           "Results of a batch, one row per input row. Rows that failed have NaN "
@@ -350,7 +458,22 @@ void wrap_kinematics(py::module_& m) {
                     "(N,) reciprocal condition number of the scaled forward Jacobian")
       .def_readonly("shapes", &BatchResult::shapes,
                     "None, or a list (one per row) of None or per-rod (steps + 1, 4) arrays")
-      .def("__len__", [](const BatchResult& b) { return b.converged.size(); });
+      .def("__len__", [](const BatchResult& b) { return b.converged.size(); })
+      .def("__repr__",
+           [](const BatchResult& b) {
+             const auto rows = b.converged.size();
+             const bool* converged = b.converged.data();
+             const auto count = std::count(converged, converged + rows, true);
+             return "<pcr.BatchResult " + std::to_string(rows) + " rows, " + std::to_string(count) +
+                    " converged>";
+           })
+      // Pickling (and with it copy.copy and copy.deepcopy): the arrays, field by field.
+      .def(py::pickle([](BatchResult b) { return fields_to_tuple(batch_fields(b)); },
+                      [](const py::tuple& state) {
+                        BatchResult b;
+                        fields_from_tuple(batch_fields(b), state, "BatchResult");
+                        return b;
+                      }));
 
   auto robot = py::reinterpret_borrow<py::class_<RobotDescription>>(m.attr("Robot"));
   robot

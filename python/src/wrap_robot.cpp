@@ -189,129 +189,146 @@ void wrap_robot(py::module_& m) {
       .def("__copy__", [](const Pose2<double>& p) { return p; })
       .def(
           "__deepcopy__", [](const Pose2<double>& p, const py::dict&) { return p; },
-          py::arg("memo"));
-
-  py::class_<LimbParams<double>>(m, "Limb",
-                                 "One limb (rod + actuator), notation of Mauze et al. 2021 Fig. 3.")
-      .def(py::init<>())
-      .def_property(
-          "A", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.A; },
-          [](LimbParams<double>& l, const py::object& v) {
-            l.A = to_vector<2>(v, "Limb.A", "x, y in m");
-          },
-          py::return_value_policy::reference_internal, "proximal clamp [x, y] in W at q = 0 (m)")
-      .def_readwrite("alpha", &LimbParams<double>::alpha,
-                     "rod tangent angle at the proximal clamp, in W (rad)")
-      .def_readwrite("gamma", &LimbParams<double>::gamma,
-                     "actuator misalignment: the clamp moves along alpha + gamma (rad)")
-      .def_property(
-          "B", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.B; },
-          [](LimbParams<double>& l, const py::object& v) {
-            l.B = to_vector<2>(v, "Limb.B", "x, y in m");
-          },
-          py::return_value_policy::reference_internal, "distal clamp [x, y] in P (m)")
-      .def_readwrite("beta", &LimbParams<double>::beta,
-                     "rod tangent angle at the distal clamp, in P (rad)")
-      .def_readwrite("l", &LimbParams<double>::length, "stress-free rod length (m)")
-      .def_readwrite("d", &LimbParams<double>::diameter, "rod diameter (m)")
-      .def_readwrite("E", &LimbParams<double>::young_modulus, "Young's modulus of this rod (Pa)")
-      .def_property(
-          "q_range", [](const LimbParams<double>& l) { return std::make_pair(l.q_min, l.q_max); },
-          [](LimbParams<double>& l, const std::pair<double, double>& r) {
-            l.q_min = r.first;
-            l.q_max = r.second;
-          },
-          "actuator stroke (min, max) (m)")
-      .def_property_readonly("EI", &LimbParams<double>::bending_stiffness,
-                             "bending stiffness E pi d^4 / 64 (N m^2)")
-      .def("__copy__", [](const LimbParams<double>& l) { return l; })
-      .def(
-          "__deepcopy__", [](const LimbParams<double>& l, const py::dict&) { return l; },
           py::arg("memo"))
-      .def("__repr__", [](const LimbParams<double>& l) {
-        std::ostringstream s;
-        s.precision(9);
-        s << "Limb(A=[" << l.A.x() << ", " << l.A.y() << "], alpha=" << l.alpha
-          << ", gamma=" << l.gamma << ", B=[" << l.B.x() << ", " << l.B.y() << "], beta=" << l.beta
-          << ", l=" << l.length << ", d=" << l.diameter << ", E=" << l.young_modulus
-          << ", q_range=(" << l.q_min << ", " << l.q_max << "))";
-        return s.str();
-      });
-
-  py::class_<Extrinsics<double>>(
-      m, "Extrinsics", "Measurement extrinsics (Eq. 5): ^W T_P = camera * ^Se T_M * pattern.")
-      .def(py::init<>())
-      .def_readwrite("camera", &Extrinsics<double>::camera, "^W T_Se: the camera frame in W")
-      .def_readwrite("pattern", &Extrinsics<double>::pattern,
-                     "^M T_P: the platform in the pattern frame")
-      .def("platform_from_measurement", &Extrinsics<double>::platform_from_measurement,
-           py::arg("camera_T_pattern"), "^W T_P from a measured pattern pose ^Se T_M.")
-      .def("measurement_from_platform", &Extrinsics<double>::measurement_from_platform,
-           py::arg("world_T_platform"), "^Se T_M that the camera sees for a platform pose ^W T_P.")
-      .def("__copy__", [](const Extrinsics<double>& e) { return e; })
+      .def("__len__", [](const Pose2<double>&) { return 3; })
       .def(
-          "__deepcopy__", [](const Extrinsics<double>& e, const py::dict&) { return e; },
-          py::arg("memo"));
-
-  py::class_<LimbUncertainty>(m, "LimbUncertainty",
-                              "Half-widths of one limb's uncertainty intervals (SI units, rad).")
-      .def(py::init<>())
-      .def_property(
-          "A", [](LimbUncertainty& u) -> Eigen::Vector2d& { return u.A; },
-          [](LimbUncertainty& u, const py::object& v) {
-            u.A = to_vector<2>(v, "LimbUncertainty.A", "half-widths on x, y in m");
+          "__getitem__",
+          [](const Pose2<double>& p, int i) {
+            if (i < -3 || i >= 3) throw py::index_error("Pose index out of range (x, y, theta)");
+            const double values[3] = {p.x, p.y, p.theta};
+            return values[(i + 3) % 3];
           },
-          py::return_value_policy::reference_internal, "m, on [A_x, A_y]")
-      .def_readwrite("alpha", &LimbUncertainty::alpha, "rad")
-      .def_readwrite("gamma", &LimbUncertainty::gamma, "rad")
-      .def_property(
-          "B", [](LimbUncertainty& u) -> Eigen::Vector2d& { return u.B; },
-          [](LimbUncertainty& u, const py::object& v) {
-            u.B = to_vector<2>(v, "LimbUncertainty.B", "half-widths on x, y in m");
-          },
-          py::return_value_policy::reference_internal, "m, on [B_x, B_y]")
-      .def_readwrite("beta", &LimbUncertainty::beta, "rad")
-      .def_readwrite("l", &LimbUncertainty::length, "m")
-      .def_readwrite("d", &LimbUncertainty::diameter, "m")
-      .def_readwrite("E", &LimbUncertainty::young_modulus, "Pa")
-      .def("__copy__", [](const LimbUncertainty& u) { return u; })
+          py::arg("index"), "x, y, theta by index: x, y, theta = pose")
       .def(
-          "__deepcopy__", [](const LimbUncertainty& u, const py::dict&) { return u; },
-          py::arg("memo"));
+          "__array__",
+          [](const Pose2<double>& p, const py::object& dtype, const py::object&) {
+            py::array out = py::cast(Eigen::Vector3d(p.x, p.y, p.theta));
+            return dtype.is_none() ? out : py::array(out.attr("astype")(dtype));
+          },
+          py::arg("dtype") = py::none(), py::arg("copy") = py::none(),
+          "numpy.asarray(pose): [x, y, theta] (m, m, rad)");
 
-  py::class_<RobotUncertainty>(m, "Uncertainty",
-                               "Uncertainty half-widths: `global_` (top level), `limbs` (resolved "
-                               "per limb), camera and pattern ([x m, y m, theta rad]).")
-      .def(py::init<>())
-      .def_readwrite("global_", &RobotUncertainty::global, "the top-level half-widths")
-      .def_property(
-          "limbs",
-          [](py::object self) {
-            py::list limbs;
-            for (LimbUncertainty& u : self.cast<RobotUncertainty&>().limbs) {
-              limbs.append(py::cast(&u, py::return_value_policy::reference_internal, self));
-            }
-            return limbs;
-          },
-          [](RobotUncertainty& u, const std::vector<LimbUncertainty>& limbs) { u.limbs = limbs; },
-          "per-limb half-widths with the overrides applied (references, like Robot.limbs)")
-      .def_property(
-          "camera", [](RobotUncertainty& u) -> Eigen::Vector3d& { return u.camera; },
-          [](RobotUncertainty& u, const py::object& v) {
-            u.camera = to_vector<3>(v, "Uncertainty.camera", "half-widths on x m, y m, theta rad");
-          },
-          py::return_value_policy::reference_internal, "on extrinsics.camera (m, m, rad)")
-      .def_property(
-          "pattern", [](RobotUncertainty& u) -> Eigen::Vector3d& { return u.pattern; },
-          [](RobotUncertainty& u, const py::object& v) {
-            u.pattern =
-                to_vector<3>(v, "Uncertainty.pattern", "half-widths on x m, y m, theta rad");
-          },
-          py::return_value_policy::reference_internal, "on extrinsics.pattern (m, m, rad)")
-      .def("__copy__", [](const RobotUncertainty& u) { return u; })
-      .def(
-          "__deepcopy__", [](const RobotUncertainty& u, const py::dict&) { return u; },
-          py::arg("memo"));
+  auto limb = py::class_<LimbParams<double>>(
+                  m, "Limb", "One limb (rod + actuator), notation of Mauze et al. 2021 Fig. 3.")
+                  .def(py::init<>())
+                  .def_property(
+                      "A", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.A; },
+                      [](LimbParams<double>& l, const py::object& v) {
+                        l.A = to_vector<2>(v, "Limb.A", "x, y in m");
+                      },
+                      py::return_value_policy::reference_internal,
+                      "proximal clamp [x, y] in W at q = 0 (m)")
+                  .def_readwrite("alpha", &LimbParams<double>::alpha,
+                                 "rod tangent angle at the proximal clamp, in W (rad)")
+                  .def_readwrite("gamma", &LimbParams<double>::gamma,
+                                 "actuator misalignment: the clamp moves along alpha + gamma (rad)")
+                  .def_property(
+                      "B", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.B; },
+                      [](LimbParams<double>& l, const py::object& v) {
+                        l.B = to_vector<2>(v, "Limb.B", "x, y in m");
+                      },
+                      py::return_value_policy::reference_internal, "distal clamp [x, y] in P (m)")
+                  .def_readwrite("beta", &LimbParams<double>::beta,
+                                 "rod tangent angle at the distal clamp, in P (rad)")
+                  .def_readwrite("l", &LimbParams<double>::length, "stress-free rod length (m)")
+                  .def_readwrite("d", &LimbParams<double>::diameter, "rod diameter (m)")
+                  .def_readwrite("E", &LimbParams<double>::young_modulus,
+                                 "Young's modulus of this rod (Pa)")
+                  .def_property(
+                      "q_range",
+                      [](const LimbParams<double>& l) { return std::make_pair(l.q_min, l.q_max); },
+                      [](LimbParams<double>& l, const std::pair<double, double>& r) {
+                        l.q_min = r.first;
+                        l.q_max = r.second;
+                      },
+                      "actuator stroke (min, max) (m)")
+                  .def_property_readonly("EI", &LimbParams<double>::bending_stiffness,
+                                         "bending stiffness E pi d^4 / 64 (N m^2)")
+                  .def("__repr__", [](const LimbParams<double>& l) {
+                    std::ostringstream s;
+                    s.precision(9);
+                    s << "Limb(A=[" << l.A.x() << ", " << l.A.y() << "], alpha=" << l.alpha
+                      << ", gamma=" << l.gamma << ", B=[" << l.B.x() << ", " << l.B.y()
+                      << "], beta=" << l.beta << ", l=" << l.length << ", d=" << l.diameter
+                      << ", E=" << l.young_modulus << ", q_range=(" << l.q_min << ", " << l.q_max
+                      << "))";
+                    return s.str();
+                  });
+  def_value_semantics(limb);
+
+  auto extrinsics =
+      py::class_<Extrinsics<double>>(
+          m, "Extrinsics", "Measurement extrinsics (Eq. 5): ^W T_P = camera * ^Se T_M * pattern.")
+          .def(py::init<>())
+          .def_readwrite("camera", &Extrinsics<double>::camera, "^W T_Se: the camera frame in W")
+          .def_readwrite("pattern", &Extrinsics<double>::pattern,
+                         "^M T_P: the platform in the pattern frame")
+          .def("platform_from_measurement", &Extrinsics<double>::platform_from_measurement,
+               py::arg("camera_T_pattern"), "^W T_P from a measured pattern pose ^Se T_M.")
+          .def("measurement_from_platform", &Extrinsics<double>::measurement_from_platform,
+               py::arg("world_T_platform"),
+               "^Se T_M that the camera sees for a platform pose ^W T_P.");
+  def_value_semantics(extrinsics);
+
+  auto limb_uncertainty =
+      py::class_<LimbUncertainty>(
+          m, "LimbUncertainty", "Half-widths of one limb's uncertainty intervals (SI units, rad).")
+          .def(py::init<>())
+          .def_property(
+              "A", [](LimbUncertainty& u) -> Eigen::Vector2d& { return u.A; },
+              [](LimbUncertainty& u, const py::object& v) {
+                u.A = to_vector<2>(v, "LimbUncertainty.A", "half-widths on x, y in m");
+              },
+              py::return_value_policy::reference_internal, "m, on [A_x, A_y]")
+          .def_readwrite("alpha", &LimbUncertainty::alpha, "rad")
+          .def_readwrite("gamma", &LimbUncertainty::gamma, "rad")
+          .def_property(
+              "B", [](LimbUncertainty& u) -> Eigen::Vector2d& { return u.B; },
+              [](LimbUncertainty& u, const py::object& v) {
+                u.B = to_vector<2>(v, "LimbUncertainty.B", "half-widths on x, y in m");
+              },
+              py::return_value_policy::reference_internal, "m, on [B_x, B_y]")
+          .def_readwrite("beta", &LimbUncertainty::beta, "rad")
+          .def_readwrite("l", &LimbUncertainty::length, "m")
+          .def_readwrite("d", &LimbUncertainty::diameter, "m")
+          .def_readwrite("E", &LimbUncertainty::young_modulus, "Pa");
+  def_value_semantics(limb_uncertainty);
+
+  auto uncertainty =
+      py::class_<RobotUncertainty>(
+          m, "Uncertainty",
+          "Uncertainty half-widths: `global_` (top level), `limbs` (resolved "
+          "per limb), camera and pattern ([x m, y m, theta rad]).")
+          .def(py::init<>())
+          .def_readwrite("global_", &RobotUncertainty::global, "the top-level half-widths")
+          .def_property(
+              "limbs",
+              [](py::object self) {
+                py::list limbs;
+                for (LimbUncertainty& u : self.cast<RobotUncertainty&>().limbs) {
+                  limbs.append(py::cast(&u, py::return_value_policy::reference_internal, self));
+                }
+                return limbs;
+              },
+              [](RobotUncertainty& u, const std::vector<LimbUncertainty>& limbs) {
+                u.limbs = limbs;
+              },
+              "per-limb half-widths with the overrides applied (references, like Robot.limbs)")
+          .def_property(
+              "camera", [](RobotUncertainty& u) -> Eigen::Vector3d& { return u.camera; },
+              [](RobotUncertainty& u, const py::object& v) {
+                u.camera =
+                    to_vector<3>(v, "Uncertainty.camera", "half-widths on x m, y m, theta rad");
+              },
+              py::return_value_policy::reference_internal, "on extrinsics.camera (m, m, rad)")
+          .def_property(
+              "pattern", [](RobotUncertainty& u) -> Eigen::Vector3d& { return u.pattern; },
+              [](RobotUncertainty& u, const py::object& v) {
+                u.pattern =
+                    to_vector<3>(v, "Uncertainty.pattern", "half-widths on x m, y m, theta rad");
+              },
+              py::return_value_policy::reference_internal, "on extrinsics.pattern (m, m, rad)");
+  def_value_semantics(uncertainty);
 
   py::class_<RobotDescription>(m, "Robot",
                                "A planar parallel continuum robot: the pcr-robot JSON description "
