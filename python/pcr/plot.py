@@ -9,6 +9,13 @@ import numpy as np
 
 import pcr
 
+try:
+    import matplotlib  # noqa: F401
+except ModuleNotFoundError as _missing:
+    raise ModuleNotFoundError(
+        "pcr.plot needs matplotlib, which `pip install ./python` does not bring: "
+        "pip install './python[plot]' (or pip install matplotlib)", name="matplotlib") from _missing
+
 
 def _figure(ax, size=(6, 6)):
     import matplotlib.pyplot as plt

@@ -301,8 +301,10 @@ void wrap_kinematics(py::module_& m) {
                          "target of the estimated error of solved lengths when rod_steps = 0 (m)")
           .def_readwrite("angle_accuracy", &SolverOptions::angle_accuracy,
                          "target of the estimated error of solved angles when rod_steps = 0 (rad)")
-          .def_readwrite("min_rod_steps", &SolverOptions::min_rod_steps)
-          .def_readwrite("max_rod_steps", &SolverOptions::max_rod_steps)
+          .def_readwrite("min_rod_steps", &SolverOptions::min_rod_steps,
+                         "least RK4 steps per rod when rod_steps = 0")
+          .def_readwrite("max_rod_steps", &SolverOptions::max_rod_steps,
+                         "most RK4 steps per rod when rod_steps = 0")
           .def_readwrite("max_iterations", &SolverOptions::max_iterations,
                          "Newton iterations per solve")
           .def_readwrite("tolerance", &SolverOptions::tolerance,
@@ -310,12 +312,17 @@ void wrap_kinematics(py::module_& m) {
           .def_readwrite("chord_output_share", &SolverOptions::chord_output_share,
                          "share of the accuracy targets a chord run may leave on the outputs; 0 "
                          "runs every solve to the tolerance")
-          .def_readwrite("max_line_search", &SolverOptions::max_line_search)
-          .def_readwrite("continuation", &SolverOptions::continuation)
-          .def_readwrite("max_continuation_steps", &SolverOptions::max_continuation_steps)
+          .def_readwrite("max_line_search", &SolverOptions::max_line_search,
+                         "step halvings of Newton's backtracking line search")
+          .def_readwrite("continuation", &SolverOptions::continuation,
+                         "when a direct solve fails, step the input from the last solution in "
+                         "smaller increments")
+          .def_readwrite("max_continuation_steps", &SolverOptions::max_continuation_steps,
+                         "sub-solves a continuation may use in total")
           .def_readwrite("max_continuation_iterations", &SolverOptions::max_continuation_iterations,
                          "Newton iterations per sub-solve of a continuation")
-          .def_readwrite("min_continuation_step", &SolverOptions::min_continuation_step)
+          .def_readwrite("min_continuation_step", &SolverOptions::min_continuation_step,
+                         "smallest continuation increment, a fraction of the whole path")
           .def_readwrite(
               "check_stability", &SolverOptions::check_stability,
               "check the elastic stability of every converged solution (at half its RK4 steps: "
@@ -348,12 +355,16 @@ void wrap_kinematics(py::module_& m) {
             return w;
           },
           "(n, 3) proximal wrench of each rod: nx, ny (N), m (N m)")
-      .def_property_readonly("converged", [](const Solution& s) { return s.summary.converged(); })
+      .def_property_readonly(
+          "converged", [](const Solution& s) { return s.summary.converged(); },
+          "the solve reached its input (status 'converged')")
       .def_property_readonly(
           "status", [](const Solution& s) { return std::string(to_string(s.summary.status)); },
           "converged, singular, bifurcation, max_iterations, non_finite, out_of_range, "
           "unstable, unsupported, invalid_input")
-      .def_property_readonly("status_code", [](const Solution& s) { return s.summary.status; })
+      .def_property_readonly(
+          "status_code", [](const Solution& s) { return s.summary.status; },
+          "the status as a SolveStatus (s.status_code == pcr.SolveStatus.converged)")
       .def_property_readonly(
           "iterations", [](const Solution& s) { return s.summary.iterations; },
           "Newton iterations (warm attempt and cold retry included)")
@@ -387,8 +398,9 @@ void wrap_kinematics(py::module_& m) {
       .def_property_readonly(
           "angle_error_estimate", [](const Solution& s) { return s.summary.angle_error_estimate; },
           "estimated discretisation error of the solved angles (rad)")
-      .def_property_readonly("continuation_steps",
-                             [](const Solution& s) { return s.summary.continuation_steps; })
+      .def_property_readonly(
+          "continuation_steps", [](const Solution& s) { return s.summary.continuation_steps; },
+          "sub-solves of the continuation (0: a direct solve)")
       .def_readonly("shapes", &Solution::shapes,
                     "None, or (with shapes=True) one (steps + 1, 4) array per rod: s, x, y (m), "
                     "theta (rad) along the rod, in W")

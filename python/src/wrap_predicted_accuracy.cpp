@@ -180,11 +180,16 @@ void wrap_predicted_accuracy(py::module_& m) {
            py::arg("names"), py::arg("matrix"),
            "From names (parameter_names order) and a (p, p) array; ValueError naming the field "
            "and the value when they are not a valid covariance.")
-      .def_readonly("names", &ParameterCovariance::names)
-      .def_property_readonly("matrix",
-                             [](const ParameterCovariance& c) { return RowMatrix(c.matrix); })
-      .def_property_readonly("num_limbs", &ParameterCovariance::num_limbs)
-      .def_property_readonly("has_load", &ParameterCovariance::has_load)
+      .def_readonly("names", &ParameterCovariance::names,
+                    "the parameter of each row and column (pcr.parameter_names order)")
+      .def_property_readonly(
+          "matrix", [](const ParameterCovariance& c) { return RowMatrix(c.matrix); },
+          "(p, p) covariance in SI units squared (m^2, rad^2, Pa^2, N^2, ...)")
+      .def_property_readonly("num_limbs", &ParameterCovariance::num_limbs,
+                             "limbs of the robot whose parameters the rows are")
+      .def_property_readonly(
+          "has_load", &ParameterCovariance::has_load,
+          "whether the last three rows are the platform load (fx, fy in N, moment in N m)")
       .def("__repr__", [](const ParameterCovariance& c) {
         return "ParameterCovariance(" + std::to_string(c.names.size()) + " parameters, " +
                std::to_string(c.num_limbs()) + " limbs" + (c.has_load() ? ", load" : "") + ")";

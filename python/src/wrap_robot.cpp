@@ -360,7 +360,7 @@ void wrap_robot(py::module_& m) {
           py::arg("memo"))
       .def(py::pickle([](const RobotDescription& r) { return robot_to_json(r); },
                       [](const std::string& text) { return parse_robot(text, "<pickle>"); }))
-      .def_readwrite("name", &RobotDescription::name)
+      .def_readwrite("name", &RobotDescription::name, "the description's name (str)")
       .def_property(
           "E", [](const RobotDescription& r) { return r.young_modulus; },
           [](RobotDescription& r, double e) {
@@ -368,8 +368,9 @@ void wrap_robot(py::module_& m) {
             for (int i = 0; i < r.params.num_limbs; ++i) r.params.limb(i).young_modulus = e;
           },
           "the global Young's modulus (Pa); setting it sets every limb's E too")
-      .def_property_readonly("num_limbs",
-                             [](const RobotDescription& r) { return r.params.num_limbs; })
+      .def_property_readonly(
+          "num_limbs", [](const RobotDescription& r) { return r.params.num_limbs; },
+          "number of limbs (rods)")
       .def_property(
           "limbs", [](py::object self) { return limb_list(self.cast<RobotDescription&>(), self); },
           &set_limbs,

@@ -159,7 +159,8 @@ void wrap_vision(py::module_& m) {
   py::class_<MountLayout>(m, "MountLayout",
                           "Where each rod mount's tag is and how its clamp sits on it (the "
                           "pcr-mounts JSON format).")
-      .def_property_readonly("num_limbs", &MountLayout::num_limbs)
+      .def_property_readonly("num_limbs", &MountLayout::num_limbs,
+                             "limbs the layout has mounts for")
       .def_property_readonly(
           "mounts",
           [](const MountLayout& l) {
@@ -307,12 +308,16 @@ void wrap_vision(py::module_& m) {
           },
           "list of dicts: A, A_halfwidth (m), alpha, alpha_halfwidth (rad), B, B_halfwidth, beta, "
           "beta_halfwidth, gamma/gamma_halfwidth (None without a sweep), and the *_plane values")
-      .def_property_readonly("corner_rms_px",
-                             [](const RobotMeasurement& r) { return r.fit.corner_rms_px; })
-      .def_property_readonly("corner_sigma_px",
-                             [](const RobotMeasurement& r) { return r.fit.corner_sigma_px; })
-      .def_readonly("world_in_plane", &RobotMeasurement::world_in_plane)
-      .def_readonly("platform_in_plane", &RobotMeasurement::platform_in_plane)
+      .def_property_readonly(
+          "corner_rms_px", [](const RobotMeasurement& r) { return r.fit.corner_rms_px; },
+          "rms of the tag corners' reprojection residuals (px)")
+      .def_property_readonly(
+          "corner_sigma_px", [](const RobotMeasurement& r) { return r.fit.corner_sigma_px; },
+          "the corners' standard deviation the covariances assume (px)")
+      .def_readonly("world_in_plane", &RobotMeasurement::world_in_plane,
+                    "W in the plane frame (the registration), Pose (m, rad)")
+      .def_readonly("platform_in_plane", &RobotMeasurement::platform_in_plane,
+                    "P in the plane frame, Pose (m, rad)")
       .def_readonly("registration_rms_A", &RobotMeasurement::registration_rms_A, "m")
       .def_readonly("registration_rms_B", &RobotMeasurement::registration_rms_B, "m")
       .def_property_readonly(
@@ -403,7 +408,7 @@ void wrap_vision(py::module_& m) {
       "GIL.");
 
   py::class_<CalibrationResult>(m, "CameraCalibration", "cv::calibrateCamera over chessboards.")
-      .def_readonly("camera", &CalibrationResult::camera)
+      .def_readonly("camera", &CalibrationResult::camera, "the calibrated Camera")
       .def_readonly("rms_px", &CalibrationResult::rms_px, "reprojection error (px)")
       .def_readonly("used", &CalibrationResult::used, "images whose board was found")
       .def_readonly("rejected", &CalibrationResult::rejected, "images without a board");
