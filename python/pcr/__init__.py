@@ -28,9 +28,17 @@ from ._pcr import (  # noqa: F401
 
 if has_calibration:
     from ._pcr import (  # noqa: F401
+        CalibrationOptions,
+        CalibrationResult,
+        CalibrationTable,
+        GaugeDirection,
+        ParameterEstimate,
+        PoseErrorStats,
+        StageReport,
         VirtualRobot,
         admissible_configuration,
         calibrate,
+        calibration_table,
         default_stages,
         load_calibration_stages,
         parameter_names,
@@ -106,7 +114,8 @@ def _replace(self, **changes):
     return out
 
 
-for _cls in (Robot, Limb, Pose, Extrinsics, Uncertainty, LimbUncertainty, SolverOptions):
+for _cls in (Robot, Limb, Pose, Extrinsics, Uncertainty, LimbUncertainty, SolverOptions) + (
+        (CalibrationOptions,) if has_calibration else ()):
     _cls.replace = _replace
 
 

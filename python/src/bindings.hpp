@@ -14,6 +14,8 @@
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <tuple>
+#include <type_traits>
 #include <vector>
 
 #include "pcr/kinematics.hpp"
@@ -72,6 +74,58 @@ void def_value_semantics(py::class_<T, Extra...>& cls) {
         for (const auto item : state) py::setattr(value, item.first, item.second);
         return value.template cast<T>();
       }));
+}
+
+/// A tuple of the fields (enumerations as their integers) and back: the pickled state of a
+/// struct whose fields `fields(value)` ties.
+template <class Tied>
+py::tuple fields_to_tuple(Tied fields) {
+  return std::apply(
+      [](auto&... f) {
+        const auto plain = [](const auto& v) {
+          if constexpr (std::is_enum_v<std::decay_t<decltype(v)>>) {
+            return static_cast<int>(v);
+          } else {
+            return v;
+          }
+        };
+        return py::make_tuple(plain(f)...);
+      },
+      fields);
+}
+template <class Tied>
+void fields_from_tuple(Tied fields, const py::tuple& state, const char* what) {
+  if (state.size() != std::tuple_size_v<Tied>) {
+    throw py::value_error(std::string(what) + ": a pickled state of " +
+                          std::to_string(std::tuple_size_v<Tied>) + " fields expected, got " +
+                          std::to_string(state.size()));
+  }
+  std::size_t i = 0;
+  std::apply(
+      [&](auto&... f) {
+        const auto assign = [&](auto& field) {
+          using T = std::decay_t<decltype(field)>;
+          if constexpr (std::is_enum_v<T>) {
+            field = static_cast<T>(state[i++].cast<int>());
+          } else {
+            field = state[i++].cast<T>();
+          }
+        };
+        (assign(f), ...);
+      },
+      fields);
+}
+
+/// Pickling (and with it copy.copy and copy.deepcopy) of a value type without setters, field by
+/// field: `fields(value)` ties them in the order of the pickled state.
+template <class T, class... Extra, class Fields>
+void def_pickle_fields(py::class_<T, Extra...>& cls, Fields fields, const char* what) {
+  cls.def(py::pickle([fields](T value) { return fields_to_tuple(fields(value)); },
+                     [fields, what](const py::tuple& state) {
+                       T value;
+                       fields_from_tuple(fields(value), state, what);
+                       return value;
+                     }));
 }
 
 /// A Solution as the C++ FK takes it (a warm start, a solved configuration); the solver's chord

@@ -43,46 +43,6 @@ auto summary_fields(SolverSummary& s) {
                   s.stability_margin, s.singularity, s.folds_passed, s.first_fold);
 }
 
-/// A tuple of the fields (enumerations as their integers) and back: the pickled state of a
-/// struct whose fields `fields(value)` ties.
-template <class Tied>
-py::tuple fields_to_tuple(Tied fields) {
-  return std::apply(
-      [](auto&... f) {
-        const auto plain = [](const auto& v) {
-          if constexpr (std::is_enum_v<std::decay_t<decltype(v)>>) {
-            return static_cast<int>(v);
-          } else {
-            return v;
-          }
-        };
-        return py::make_tuple(plain(f)...);
-      },
-      fields);
-}
-template <class Tied>
-void fields_from_tuple(Tied fields, const py::tuple& state, const char* what) {
-  if (state.size() != std::tuple_size_v<Tied>) {
-    throw py::value_error(std::string(what) + ": a pickled state of " +
-                          std::to_string(std::tuple_size_v<Tied>) + " fields expected, got " +
-                          std::to_string(state.size()));
-  }
-  std::size_t i = 0;
-  std::apply(
-      [&](auto&... f) {
-        const auto assign = [&](auto& field) {
-          using T = std::decay_t<decltype(field)>;
-          if constexpr (std::is_enum_v<T>) {
-            field = static_cast<T>(state[i++].cast<int>());
-          } else {
-            field = state[i++].cast<T>();
-          }
-        };
-        (assign(f), ...);
-      },
-      fields);
-}
-
 /// The rods' shapes of a solution: one (steps + 1, 4) array per rod (s, x, y, theta).
 py::list rod_shapes(const RobotParams<double>& robot, const JointVector& q,
                     const std::array<Wrench<double>, kMaxLimbs>& wrenches, int rod_steps) {

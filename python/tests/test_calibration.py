@@ -132,11 +132,13 @@ def test_calibration_recovers_extrinsics(robot):
     q = pcr.sensitivity_configurations(nominal, 2e-3)[:10]
     measured = v_ext.measure(q)["measured"]
     lines = []
-    identified, report = pcr.calibrate(
+    identified, result = pcr.calibrate(
         nominal, q, measured, stages=[{"name": "ext", "free": ["extrinsics"]}],
         compute_covariance=False, fix_gauge=False, progress=lines.append)
-    assert report["stages"][0]["name"] == "ext" and report["stages"][0]["usable"]
-    assert report["stages"][0]["final_cost"] < report["stages"][0]["initial_cost"]
+    assert result.stages[0].name == "ext" and result.stages[0].usable
+    assert result.stages[0].final_cost < result.stages[0].initial_cost
+    assert result.covariance is None
+    assert result.identified.to_json() == identified.to_json()
     truth = v_ext.truth
     # with a fixed robot, the camera-pattern pair is only known up to its combined effect
     # on the measurement: compare predictions instead of the parameters themselves
@@ -165,12 +167,12 @@ def test_calibration_recovers_extrinsics(robot):
     q_mm[3, 0] += 1.0  # 1 m: a unit slip
     with pytest.raises(ValueError, match="configuration 4 .* outside|configuration 4"):
         pcr.calibrate(nominal, q_mm, measured, stages=[{"name": "ext", "free": ["extrinsics"]}])
-    _, report = pcr.calibrate(nominal, q_mm, measured, drop_unreachable=True,
+    _, result = pcr.calibrate(nominal, q_mm, measured, drop_unreachable=True,
                               stages=[{"name": "ext", "free": ["extrinsics"]}],
                               compute_covariance=False)
-    assert len(report["dropped"]) == 1 and report["dropped"][0].startswith("configuration 4 ")
-    assert any("outside the stroke" in w for w in report["warnings"])
-    assert report["outliers"] == [] and report["unidentifiable"] == []
+    assert len(result.dropped) == 1 and result.dropped[0].startswith("configuration 4 ")
+    assert any("outside the stroke" in w for w in result.warnings)
+    assert result.outliers == [] and result.unidentifiable == []
 
 
 def test_calibration_identifies_a_platform_load(robot):
@@ -184,10 +186,10 @@ def test_calibration_identifies_a_platform_load(robot):
     q, q_validation = sets["calibration"], sets["validation"]
     stages = [{"name": "extrinsics", "free": ["extrinsics"]},
               {"name": "lengths", "free": ["l", "camera", "pattern", "load"]}]
-    identified, report = pcr.calibrate(nominal, q, v.measure(q)["measured"], stages=stages)
-    assert report["load_identified"]
-    std = {p["name"]: p["std_dev"] for p in report["parameters"]}
-    fx, fy, mz = report["load"]
+    identified, result = pcr.calibrate(nominal, q, v.measure(q)["measured"], stages=stages)
+    assert result.load_identified
+    std = {p.name: p.std_dev for p in result.parameters}
+    fx, fy, mz = result.load
     assert fx == pytest.approx(1.5e-3, abs=4 * std["load_f_x"])
     assert fy == pytest.approx(-1e-3, abs=4 * std["load_f_y"])
     assert mz == pytest.approx(1e-5, abs=4 * std["load_m_z"])

@@ -38,16 +38,16 @@ def test_calibration_covariance_reads_back(robot, tmp_path):
     q = pcr.sensitivity_configurations(nominal, 2e-3)
     stages = [{"name": "extrinsics", "free": ["extrinsics"]},
               {"name": "lengths", "free": ["l", "extrinsics"]}]
-    _, report = pcr.calibrate(nominal, q, v.measure(q)["measured"], stages=stages)
-    cov = report["covariance"]
+    _, result = pcr.calibrate(nominal, q, v.measure(q)["measured"], stages=stages)
+    cov = result.covariance
     assert isinstance(cov, pcr.ParameterCovariance)
-    assert cov.names == [p["name"] for p in report["parameters"]]
+    assert cov.names == [p.name for p in result.parameters]
     assert cov.num_limbs == 3 and not cov.has_load
-    std = np.array([p["std_dev"] for p in report["parameters"]])
+    std = np.array([p.std_dev for p in result.parameters])
     assert np.sqrt(np.diag(cov.matrix)) == pytest.approx(std, rel=1e-12, abs=0.0)
 
     path = tmp_path / "report.json"
-    write_block(path, cov.names, cov.matrix)
+    path.write_text(result.to_json())  # the report pcr_calibrate writes
     read = pcr.read_parameter_covariance(path, 3)
     assert read.names == cov.names
     assert np.array_equal(read.matrix, cov.matrix, equal_nan=True)
