@@ -135,6 +135,24 @@ def _with_limb(self, index, **changes):
 Robot.with_limb = _with_limb
 
 
+def _batch(solve, rows_are):
+    def batch(self, rows, **solve_args):
+        rows = _np.asarray(rows, dtype=float)
+        if rows.ndim != 2:
+            raise ValueError(f"expected an (N, {rows_are}) array, one row per solve; got shape "
+                             f"{rows.shape}")
+        return solve(self, rows, **solve_args)
+
+    batch.__doc__ = (f"{solve.__name__}(rows) for an (N, {rows_are}) array, typed: always a "
+                     f"BatchResult (a 1-D array is refused rather than solved as one {rows_are}). "
+                     f"Keywords as {solve.__name__}.")
+    return batch
+
+
+Robot.forward_batch = _batch(Robot.forward, "n")
+Robot.inverse_batch = _batch(Robot.inverse, "3")
+
+
 def compose_poses(a, b):
     """Row-wise SE(2) product ^A T_B * ^B T_C of (N, 3) or (3,) arrays (x m, y m, theta rad)."""
     a = _np.asarray(a, dtype=float)

@@ -218,6 +218,13 @@ class Robot:
     def inverse(self, pose: ArrayLike, *, warm_start: Optional[Solution] = None,
                 shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
                 options: Optional[SolverOptions] = None) -> Union[Solution, BatchResult]: ...
+    # forward/inverse of an (N, k) array, typed (forward(ndarray) cannot tell 1-D from 2-D).
+    def forward_batch(self, q: ArrayLike, *, warm_start: Optional[Solution] = None,
+                      shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
+                      options: Optional[SolverOptions] = None) -> BatchResult: ...
+    def inverse_batch(self, pose: ArrayLike, *, warm_start: Optional[Solution] = None,
+                      shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
+                      options: Optional[SolverOptions] = None) -> BatchResult: ...
     def home(self, *, shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
              options: Optional[SolverOptions] = None) -> Solution: ...
     # When has_calibration. q: a Solution (no FK solve), n joint values, or (N, n) (every value

@@ -4,6 +4,9 @@ import ast
 import inspect
 import os
 
+import numpy as np
+import pytest
+
 import pcr
 
 STUBS = os.path.join(os.path.dirname(pcr.__file__), "_pcr.pyi")
@@ -57,8 +60,8 @@ def test_stubs_name_what_the_module_has():
     assert sorted(set(module) - set(stubs)) == [], "in the module, not in the stubs"
     if pcr.has_calibration and pcr.has_vision:  # the stubs describe the full build
         assert sorted(set(stubs) - set(module)) == [], "in the stubs, not in the module"
-    # Members: the pure-Python additions of pcr/__init__.py (replace, with_limb) are stubbed too.
-    added = {name for name in ("replace", "with_limb")}
+    # Members: the pure-Python additions of pcr/__init__.py are stubbed too.
+    added = {"replace", "with_limb", "forward_batch", "inverse_batch"}
     for name, members in module.items():
         if members is None:
             continue
@@ -104,3 +107,18 @@ def test_plots_without_matplotlib_say_how_to_get_it():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=dict(os.environ), check=True).stdout
     assert "pip install './python[plot]'" in out
+
+
+def test_batch_methods_always_give_a_batch(robot):
+    q = np.array([[0.001, 0.0, -0.001], [0.002, -0.001, 0.0]])
+    batch = robot.forward_batch(q)
+    assert isinstance(batch, pcr.BatchResult) and len(batch) == 2
+    assert np.array_equal(batch.pose, robot.forward(q).pose)
+    one = robot.forward_batch(q[:1])
+    assert isinstance(one, pcr.BatchResult) and len(one) == 1
+    back = robot.inverse_batch(batch.pose)
+    assert isinstance(back, pcr.BatchResult) and np.allclose(back.q, q, atol=1e-9)
+    with pytest.raises(ValueError, match=r"expected an \(N, n\) array.*shape \(3,\)"):
+        robot.forward_batch(q[0])
+    with pytest.raises(ValueError, match=r"expected an \(N, 3\) array"):
+        robot.inverse_batch([0.0, 0.0, 0.0])
