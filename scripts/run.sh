@@ -31,7 +31,9 @@ APT_PACKAGES=(
   python3 python3-dev python3-venv python3-pip
 )
 # Python packages of the project virtual environment (.venv); pybind11's minimum is checked below.
-PIP_PACKAGES=('pybind11>=2.12' numpy pytest scikit-build-core matplotlib)
+# dask, distributed, pandas and pyarrow are pcr.study's (the [study] extra).
+PIP_PACKAGES=('pybind11>=2.12' numpy pytest scikit-build-core matplotlib dask distributed pandas
+  pyarrow)
 
 JOBS=${PCR_JOBS:-$(nproc)}
 VENV=$ROOT/.venv

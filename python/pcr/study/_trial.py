@@ -1,0 +1,301 @@
+"""One trial of a study: a virtual robot drawn from its factors and seed, put through the whole
+method (sample, measure, calibrate, validate, evaluate the paths), reduced to one row.
+
+Needs only numpy and pcr, so that a worker process imports nothing else to run trials.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+import pcr
+
+
+@dataclass(frozen=True)
+class Factor:
+    """A factor of a trial: its type, its value when a study does not set it, its unit."""
+
+    kind: type
+    default: object
+    unit: str
+    doc: str
+
+
+# None as a default: the robot description's own value (tolerances) or pcr's default.
+FACTORS = {
+    "robot": Factor(str, "default", "",
+                    "the design: 'default' (the paper's robot) or a robot JSON file"),
+    "mount_tolerance": Factor(float, None, "m",
+                              "half-width of the mount positions A and B (machining), each "
+                              "coordinate; the truth is drawn inside it"),
+    "angle_tolerance": Factor(float, None, "rad", "half-width of alpha, beta, gamma"),
+    "length_tolerance": Factor(float, None, "m", "half-width of the rod lengths l"),
+    "diameter_tolerance": Factor(float, None, "m", "half-width of the wire diameter d (one wire)"),
+    "mount_measurement": Factor(float, 0.0, "m",
+                                "half-width of the mounts' measurement: the nominal model is the "
+                                "truth's A and B plus U(-h, h); 0: the nominal is the design"),
+    "noise_position": Factor(float, None, "m", "standard deviation of the camera's position"),
+    "noise_angle": Factor(float, None, "rad", "standard deviation of the camera's angle"),
+    "calibration_count": Factor(int, None, "", "calibration configurations"),
+    "validation_count": Factor(int, 56, "", "validation configurations"),
+    "design": Factor(str, "poisson-disc", "", "choice of the configurations: 'poisson-disc' or "
+                     "'d-optimal'"),
+    "misalignment": Factor(float, 0.0, "rad", "unmodelled: U(-h, h) added to beta and gamma"),
+    "diameter_spread": Factor(float, 0.0, "m", "unmodelled: U(-h, h) added to each rod's d"),
+    "load_force_x": Factor(float, 0.0, "N", "unmodelled: a constant force on the platform"),
+    "load_force_y": Factor(float, 0.0, "N", "unmodelled: a constant force on the platform"),
+    "load_moment": Factor(float, 0.0, "N m", "unmodelled: a constant moment on the platform"),
+    "repeat": Factor(int, 30, "", "ISO 9283 cycles per pose of the square and the circle"),
+}
+
+_TABLE3_SETS = ("nominal_model_calibration_set", "nominal_model_validation_set",
+                "identified_model_calibration_set", "identified_model_validation_set")
+_ISO_STATS = ("ap_p", "ap_theta_abs", "rp_l", "rp_theta")
+_PATHS = ("square", "circle")
+_MODELS = ("nominal", "identified")
+_TIMES = ("sampling", "measurement", "calibration", "validation", "accuracy")
+
+
+def check_factor(name, value, where):
+    """The value of factor `name` converted to its type; ValueError naming `where`, the factor and
+    the value when it is unknown or of the wrong type or sign."""
+    if name not in FACTORS:
+        raise ValueError(f"{where}: unknown factor {name!r} (known: {', '.join(FACTORS)})")
+    factor = FACTORS[name]
+    if value is None:
+        return None
+    if factor.kind is str:
+        if not isinstance(value, str):
+            raise ValueError(f"{where}: {name} = {value!r}: expected a string")
+        return value
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{where}: {name} = {value!r}: expected a number ({factor.unit or 'count'})")
+    if factor.kind is int and value != int(value):
+        raise ValueError(f"{where}: {name} = {value!r}: expected a whole number")
+    value = factor.kind(value)
+    if not math.isfinite(value) or (value < 0 and not name.startswith("load_")):
+        raise ValueError(f"{where}: {name} = {value!r}: expected a finite value >= 0")
+    if name in ("calibration_count", "validation_count", "repeat") and value < 1:
+        raise ValueError(f"{where}: {name} = {value!r}: expected at least 1")
+    return value
+
+
+def outcome_columns(parameter_names):
+    """The outcome columns of a row, named as in pcr's JSON report (SI units), in order."""
+    columns = []
+    for s in _TABLE3_SETS:
+        for quantity in ("e_p_m", "e_theta_rad"):
+            columns += [f"table3.{s}.{quantity}.{stat}" for stat in ("max", "mean")]
+        columns.append(f"table3.{s}.failed")
+    for path in _PATHS:
+        for model in _MODELS:
+            for stat in _ISO_STATS:
+                columns += [f"accuracy.{path}.{model}.{stat}.{s}" for s in ("max", "mean")]
+    for name in parameter_names:
+        columns += [f"parameters.{name}.error", f"parameters.{name}.std"]
+    columns += ["configurations.calibration", "configurations.validation",
+                "configurations.unreachable", "calibration.iterations"]
+    columns += [f"time.{t}_s" for t in _TIMES] + ["time_s"]
+    return columns
+
+
+def _robot(factors, robots):
+    name = factors["robot"]
+    if name in robots:
+        return pcr.Robot.from_json(robots[name], source=name)
+    return pcr.Robot.default() if name == "default" else pcr.Robot.load(name)
+
+
+def _with_tolerances(robot, factors):
+    """The design with the factors' tolerances as its uncertainty intervals."""
+    out = robot.copy()
+    u = out.uncertainty if out.uncertainty is not None else pcr.Uncertainty()
+    for limb in list(u.limbs) + [u.global_]:
+        if factors["mount_tolerance"] is not None:
+            limb.A = (factors["mount_tolerance"],) * 2
+            limb.B = (factors["mount_tolerance"],) * 2
+        if factors["angle_tolerance"] is not None:
+            limb.alpha = limb.beta = limb.gamma = factors["angle_tolerance"]
+        if factors["length_tolerance"] is not None:
+            limb.l = factors["length_tolerance"]
+    if factors["diameter_tolerance"] is not None:
+        u.global_.d = factors["diameter_tolerance"]
+        for limb in u.limbs:
+            limb.d = 0.0
+    out.uncertainty = u
+    return out
+
+
+def _exactly(robot):
+    """The same robot without uncertainty: a VirtualRobot of it has it as its truth."""
+    out = robot.copy()
+    out.uncertainty = None
+    return out
+
+
+def _measured_mounts(design, truth, half_width, rng):
+    """The nominal model when the mounts are measured: the truth's A and B plus U(-h, h), the
+    rest as designed; its uncertainty intervals hold the truth."""
+    out = design.copy()
+    u = out.uncertainty
+    for i, limb in enumerate(out.limbs):
+        limb.A = np.asarray(truth.limbs[i].A) + rng.uniform(-half_width, half_width, 2)
+        limb.B = np.asarray(truth.limbs[i].B) + rng.uniform(-half_width, half_width, 2)
+    for limb in list(u.limbs) + [u.global_]:
+        limb.A = limb.B = (half_width, half_width)
+    out.uncertainty = u
+    return out
+
+
+def _flat_parameters(robot):
+    """The robot's parameters in pcr.parameter_names order."""
+    values = []
+    for limb in robot.limbs:
+        values += [limb.E, limb.d, limb.l, *limb.A, limb.alpha, *limb.B, limb.beta, limb.gamma]
+    ext = robot.extrinsics
+    values += [ext.camera.x, ext.camera.y, ext.camera.theta]
+    values += [ext.pattern.x, ext.pattern.y, ext.pattern.theta]
+    return np.asarray(values)
+
+
+def _tour(q):
+    """The rows of q in the order of a greedy nearest-neighbour tour from the one nearest home:
+    the order an experiment visits them in. Every solve then starts next to the last one (in
+    the sampler's shuffled order, FK warm-started across the stroke box did 5 times the work)."""
+    left = list(range(len(q)))
+    order = [left.pop(int(np.argmin(np.einsum("ij,ij->i", q, q))))] if left else []
+    while left:
+        d = q[left] - q[order[-1]]
+        order.append(left.pop(int(np.argmin(np.einsum("ij,ij->i", d, d)))))
+    return q[order]
+
+
+def _put(row, prefix, tree):
+    """Flattens the nested dict `tree` into row[prefix.key.subkey] for the keys row has."""
+    for key, value in tree.items():
+        name = f"{prefix}.{key}"
+        if isinstance(value, dict):
+            _put(row, name, value)
+        elif name in row:
+            row[name] = value
+
+
+class _Stages:
+    """Times the stages of a trial into row["time.<stage>_s"]; `current` names the stage a
+    failure happened in."""
+
+    def __init__(self, row):
+        self.row, self.current, self.start = row, "design", time.perf_counter()
+
+    def enter(self, stage):
+        now = time.perf_counter()
+        if self.current in _TIMES:
+            self.row[f"time.{self.current}_s"] = now - self.start
+        self.current, self.start = stage, now
+
+
+def run_trial(factors, seed, robots=None):
+    """One trial: the outcome columns of ``outcome_columns`` for the factors (a dict over FACTORS;
+    missing ones take their defaults) and the seed, which alone draws everything random: the
+    truth, the measured mounts, the configurations, the camera noise and the unmodelled effects.
+
+    Never raises for a failing trial: ``failure`` names the stage and the reason ("calibration:
+    ...") and the outcomes it did not reach are NaN. robots: robot JSON texts by the name of
+    factor ``robot`` (the study sends them, so that workers need not read the files).
+    """
+    given = {k: check_factor(k, v, "run_trial") for k, v in factors.items()}
+    factors = {name: given.get(name, f.default) for name, f in FACTORS.items()}
+    start = time.perf_counter()
+    row = {"failure": None}
+    stages = _Stages(row)
+    try:
+        design = _robot(factors, robots or {})
+        row.update(dict.fromkeys(outcome_columns(pcr.parameter_names(design.num_limbs)),
+                                 math.nan))
+        failure = _run(factors, seed, design, row, stages)
+        if failure:
+            row["failure"] = failure
+    except Exception as e:  # every failure is a row, its reason naming the stage
+        row["failure"] = f"{stages.current}: {type(e).__name__}: {e}"
+    stages.enter(None)
+    row["time_s"] = time.perf_counter() - start
+    return row
+
+
+def _run(factors, seed, design, row, stages):
+    """The trial's stages, filling `row`; returns the reason of a failure found without an
+    exception (a calibration stage that did not converge), else None."""
+    truth_seed, mounts_seed, sampling_seed, camera_seed = (
+        int(s) for s in np.random.SeedSequence(seed).generate_state(4, dtype=np.uint64))
+
+    toleranced = _with_tolerances(design, factors)
+    truth = pcr.VirtualRobot(toleranced, seed=truth_seed).truth
+    if factors["mount_measurement"] > 0:
+        nominal = _measured_mounts(toleranced, truth, factors["mount_measurement"],
+                                   np.random.default_rng(mounts_seed))
+    else:
+        nominal = toleranced
+    force = (factors["load_force_x"], factors["load_force_y"])
+    camera = dict(seed=camera_seed, misalignments=factors["misalignment"] > 0,
+                  misalignment_half_width=factors["misalignment"],
+                  unequal_diameters=factors["diameter_spread"] > 0,
+                  diameter_half_width=factors["diameter_spread"],
+                  force=force if any(force) else None, moment=factors["load_moment"])
+    for name in ("noise_position", "noise_angle"):
+        if factors[name] is not None:
+            camera[name] = factors[name]
+    robot = pcr.VirtualRobot(_exactly(truth), **camera)
+
+    stages.enter("sampling")
+    counts = dict(validation_count=factors["validation_count"])
+    if factors["calibration_count"] is not None:
+        counts["count"] = factors["calibration_count"]
+    sets = pcr.sample_configurations(nominal, design=factors["design"], seed=sampling_seed,
+                                     **counts)
+
+    stages.enter("measurement")
+    measured = {}
+    unreachable = 0
+    for name in ("calibration", "validation"):
+        sets[name] = _tour(sets[name])
+        m = robot.measure(sets[name])
+        ok = np.asarray(m["ok"], dtype=bool)
+        if not ok.any():
+            statuses = sorted(set(np.asarray(m["status"]).tolist()))
+            raise RuntimeError(f"none of the {len(ok)} {name} configurations is reachable on "
+                               f"the true robot ({', '.join(map(str, statuses))})")
+        unreachable += int(np.count_nonzero(~ok))
+        measured[name] = (sets[name][ok], m["measured"][ok])
+        row[f"configurations.{name}"] = int(np.count_nonzero(ok))
+    row["configurations.unreachable"] = unreachable
+
+    stages.enter("calibration")
+    q, poses = measured["calibration"]
+    identified, result = pcr.calibrate(nominal, q, poses, drop_unreachable=True)
+    row["calibration.iterations"] = sum(s.iterations for s in result.stages)
+    truth_values = _flat_parameters(result.in_gauge(truth))  # compared in the same frames
+    for p, true_value in zip(result.parameters, truth_values):
+        row[f"parameters.{p.name}.error"] = p.value - true_value
+        row[f"parameters.{p.name}.std"] = p.std_dev
+
+    stages.enter("validation")
+    table = pcr.calibration_table(result, q, poses, *measured["validation"])
+    _put(row, "table3", result.to_dict(table)["table3"])
+
+    stages.enter("accuracy")
+    models = {"nominal": result.extrinsics_only, "identified": identified}
+    for path_name, path in (("square", pcr.square_path()), ("circle", pcr.circle_path())):
+        for model_name in _MODELS:
+            iso = pcr.evaluate_on_virtual_robot(models[model_name], robot, path,
+                                                repeat=factors["repeat"]).iso
+            _put(row, f"accuracy.{path_name}.{model_name}", iso.summary)
+
+    unusable = [s for s in result.stages if not s.usable]
+    if unusable:
+        return ("calibration: stage " + ", ".join(repr(s.name) for s in unusable) +
+                " did not converge: " + unusable[0].termination)
+    return None
