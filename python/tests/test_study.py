@@ -148,6 +148,14 @@ def test_failed_trials_are_rows_with_their_reason():
                                      "configurations is reachable"), row["failure"]
     assert math.isnan(row["table3.identified_model_validation_set.e_p_m.mean"])
     assert row["time.sampling_s"] > 0 and row["time_s"] > 0
+    # A calibration whose stages fail: in trial 5 of the tolerance study (mounts +-640 um) the
+    # stages after the first stop at a start where an FK fails (Ceres: FAILURE). The row keeps
+    # what was measured. (A case of the calibrator's: when it is fixed, take another.)
+    trial = study.Study.load("tolerance").trial_list()[5]
+    row = study.run_trial(trial.factors, trial.seed)
+    assert row["failure"].startswith("calibration: stage 'influential', 'all' did not "
+                                     "converge"), row["failure"]
+    assert row["table3.identified_model_validation_set.e_p_m.mean"] > 0
     row = study.run_trial(dict(FAST, robot="/nonexistent/robot.json"), seed=1)
     assert row["failure"].startswith("design: ") and "/nonexistent/robot.json" in row["failure"]
 
@@ -218,6 +226,23 @@ def test_failing_trials_do_not_stop_a_study(tmp_path):
     assert failed["failure"].str.startswith("measurement: RuntimeError: none of the").all()
     assert failed["table3.identified_model_validation_set.e_p_m.mean"].isna().all()
     assert table.loc[table["load_force_x"] == 0.0, "failure"].isna().all()
+
+
+def test_robot_files_are_named_relative_to_the_study_and_held_to_their_content(tmp_path,
+                                                                              monkeypatch):
+    design = pcr.Robot.default().with_limb(1, l=0.0302)
+    design.save(tmp_path / "mine.json")
+    (tmp_path / "mine.toml").write_text(
+        "[study]\ntrials = 1\n[factors]\nrobot = 'mine.json'\ncalibration_count = 40\n"
+        "validation_count = 12\nrepeat = 3\n")
+    monkeypatch.chdir(tmp_path.parent)  # not where the study is
+    s = study.Study.load(tmp_path / "mine.toml")
+    assert s.factors["robot"] == str(tmp_path / "mine.json")
+    table = study.run(s, tmp_path / "out", workers=1, progress=False)
+    assert table["failure"].isna().all() and table["robot"][0] == str(tmp_path / "mine.json")
+    design.with_limb(1, l=0.0303).save(tmp_path / "mine.json")
+    with pytest.raises(ValueError, match="robot files changed"):
+        study.run(s, tmp_path / "out", workers=1, progress=False)
 
 
 def test_results_of_another_study_are_not_mixed(small, tmp_path):

@@ -71,7 +71,19 @@ class Study:
             text = data.decode("utf-8")
         except UnicodeDecodeError as e:
             raise ValueError(f"{path}: not UTF-8 text ({e})") from None
-        return Study.from_toml(text, path)
+        study = Study.from_toml(text, path)
+        # Robot files are named relative to the study file.
+        here = os.path.dirname(os.path.abspath(path))
+
+        def located(robot):
+            return robot if robot == "default" else os.path.join(here, robot)
+
+        factors = dict(study.factors)
+        if "robot" in factors:
+            factors["robot"] = located(factors["robot"])
+        levels = {k: ([located(v) for v in values] if k == "robot" else values)
+                  for k, values in study.levels.items()}
+        return study.replace(factors=factors, levels=levels)
 
     @staticmethod
     def from_toml(text, source="<string>"):

@@ -129,7 +129,7 @@ def run(study, output, *, trials=None, workers=None, client=None, scheduler=None
     if not flush_seconds >= 0:
         raise ValueError(f"flush_seconds = {flush_seconds!r}: expected a number >= 0")
     robots = _robots(study)
-    store = ResultStore(output, study, _columns(robots))
+    store = ResultStore(output, study, _columns(robots), robots)
     done = store.done()
     todo = [t for t in study.trial_list() if t.index not in done]
     bar = Progress(study.trials * len(study.combinations()), len(done),

@@ -6,6 +6,7 @@ at any point leaves only whole files; resuming skips the trials they hold.
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import tempfile
@@ -43,6 +44,10 @@ def write_atomically(path, data):
         raise
 
 
+def _digests(robots):
+    return {name: hashlib.sha256(text.encode()).hexdigest() for name, text in robots.items()}
+
+
 def schema(outcomes):
     """The columns of a study's table: trial, replicate, seed, every factor, the outcomes (float64,
     SI) and failure (null when the trial succeeded)."""
@@ -56,7 +61,9 @@ def schema(outcomes):
 class ResultStore:
     """The directory of a study's results: created for a new study, reopened to resume one."""
 
-    def __init__(self, directory, study, outcomes):
+    def __init__(self, directory, study, outcomes, robots):
+        """robots: the robot JSON texts the study's trials use, by name: a study resumed with a
+        robot file that changed since is refused."""
         self.directory = os.fspath(directory)
         self.schema = schema(outcomes)
         manifest = os.path.join(self.directory, MANIFEST)
@@ -68,6 +75,9 @@ class ResultStore:
                                       f"({MANIFEST}); give a new or empty directory")
             with open(manifest) as f:
                 stored = json.load(f)
+            if stored.get("robots") != _digests(robots):
+                raise ValueError(f"{manifest}: the study's robot files changed since its results "
+                                 "were written; give a new directory to run it again")
             if stored.get("study") != study.identity() or stored.get("columns") != list(outcomes):
                 raise ValueError(
                     f"{manifest}: holds the results of another study (or another version of "
@@ -76,7 +86,8 @@ class ResultStore:
         else:
             os.makedirs(self.directory, exist_ok=True)
             text = json.dumps({"study": study.identity(), "columns": list(outcomes),
-                               "definition": study.to_dict()}, indent=2) + "\n"
+                               "robots": _digests(robots), "definition": study.to_dict()},
+                              indent=2) + "\n"
             write_atomically(manifest, text.encode())
 
     def parts(self):
