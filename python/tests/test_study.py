@@ -69,6 +69,8 @@ def test_builtin_studies_load_and_list_their_trials():
     ("[factors]\nnoise_position = -1e-9", "noise_position = -1e-09: expected a finite value >= 0"),
     ("[factors]\nrepeat = 0", "repeat = 0: expected at least 1"),
     ("[factors]\nrobot = 3", "robot = 3: expected a string"),
+    ("[levels]\ndesign = ['poisson-disc', 'd-optimal', 'random']",
+     "design = 'random': expected one of 'poisson-disc', 'd-optimal'"),
     ("[study]\ntrials = 0", "study.trials = 0"),
     ("[study]\nseeds = 3", "study.seeds: unknown field"),
     ("[trials]\nx = 1", "unknown table [trials]"),
@@ -280,6 +282,16 @@ def test_the_plots_render(small, tmp_path):
     assert median == pytest.approx(
         table.loc[table["mount_tolerance"] == 80e-6,
                   "table3.identified_model_validation_set.e_p_m.mean"].median())
+
+
+def test_a_study_without_finished_trials_is_not_plotted(tmp_path):
+    definition = study.Study.from_toml(SMALL, "small.toml")
+    study.run(definition, tmp_path / "out", trials=1, workers=1, progress=False)
+    for part in (tmp_path / "out").glob("part-*.parquet"):
+        part.unlink()
+    r = subprocess.run(_command("plot", str(tmp_path / "out")), capture_output=True, text=True)
+    assert r.returncode == 2 and "no finished trial to plot yet" in r.stderr
+    assert not (tmp_path / "out" / "_plots").exists()
 
 
 def test_sensitivity_ranks_the_factor_that_sets_the_outcome():

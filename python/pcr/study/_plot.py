@@ -92,6 +92,8 @@ def plot(directory, output=None, outcomes=None):
         raise ModuleNotFoundError("pcr-study plot needs matplotlib: pip install "
                                   "'./python[study]'", name="matplotlib") from e
     table = read_results(directory)
+    if table.empty:
+        raise ValueError(f"{directory}: no finished trial to plot yet")
     study = read_study(directory)
     outcomes = list(outcomes or DEFAULT_OUTCOMES)
     for o in outcomes:

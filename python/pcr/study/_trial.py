@@ -17,12 +17,14 @@ import pcr
 
 @dataclass(frozen=True)
 class Factor:
-    """A factor of a trial: its type, its value when a study does not set it, its unit."""
+    """A factor of a trial: its type, its value when a study does not set it, its unit, and for
+    a string its choices (empty: any)."""
 
     kind: type
     default: object
     unit: str
     doc: str
+    choices: tuple = ()
 
 
 # None as a default: the robot description's own value (tolerances) or pcr's default.
@@ -43,7 +45,7 @@ FACTORS = {
     "calibration_count": Factor(int, None, "", "calibration configurations"),
     "validation_count": Factor(int, 56, "", "validation configurations"),
     "design": Factor(str, "poisson-disc", "", "choice of the configurations: 'poisson-disc' or "
-                     "'d-optimal'"),
+                     "'d-optimal'", ("poisson-disc", "d-optimal")),
     "misalignment": Factor(float, 0.0, "rad", "unmodelled: U(-h, h) added to beta and gamma"),
     "diameter_spread": Factor(float, 0.0, "m", "unmodelled: U(-h, h) added to each rod's d"),
     "load_force_x": Factor(float, 0.0, "N", "unmodelled: a constant force on the platform"),
@@ -71,6 +73,9 @@ def check_factor(name, value, where):
     if factor.kind is str:
         if not isinstance(value, str):
             raise ValueError(f"{where}: {name} = {value!r}: expected a string")
+        if factor.choices and value not in factor.choices:
+            raise ValueError(f"{where}: {name} = {value!r}: expected one of "
+                             f"{', '.join(map(repr, factor.choices))}")
         return value
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ValueError(f"{where}: {name} = {value!r}: expected a number ({factor.unit or 'count'})")
