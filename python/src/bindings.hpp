@@ -47,6 +47,15 @@ struct Solution {
   bool inverse = false;
 };
 
+/// Whether `name` is a public read-write property of `type`: the state of a value type
+/// (def_value_semantics), and what pcr.calibrate's keywords may change.
+inline bool is_read_write_property(const py::handle& type, const std::string& name) {
+  if (name.empty() || name[0] == '_' || !py::hasattr(type, name.c_str())) return false;
+  const py::object attribute = type.attr(name.c_str());
+  return py::isinstance(attribute, py::module_::import("builtins").attr("property")) &&
+         !attribute.attr("fset").is_none();
+}
+
 /// copy.copy, copy.deepcopy and pickling for a value type whose state is its read-write properties
 /// (a value has no shared parts, so a copy is a deep copy). The pickled state is the dict of those
 /// properties, read from the class (nothing listed twice), set again on a default value.
@@ -61,11 +70,7 @@ void def_value_semantics(py::class_<T, Extra...>& cls) {
         const py::object type = py::type::of(self);
         py::dict state;
         for (const py::handle name : builtins.attr("dir")(type)) {
-          const py::object attribute = type.attr(name);
-          if (py::isinstance(attribute, builtins.attr("property")) &&
-              !attribute.attr("fset").is_none()) {
-            state[name] = self.attr(name);
-          }
+          if (is_read_write_property(type, name.cast<std::string>())) state[name] = self.attr(name);
         }
         return state;
       },

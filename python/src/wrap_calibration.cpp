@@ -251,14 +251,6 @@ CalibrationTable table_or_calibration_set(const Calibration& c, const Calibratio
   return calibration_table(c.result, c.calibration, {});
 }
 
-/// Whether `name` is a read-write property of `type` (what def_value_semantics pickles).
-bool settable_property(const py::handle& type, const std::string& name) {
-  if (name.empty() || name[0] == '_' || !py::hasattr(type, name.c_str())) return false;
-  const py::object attribute = type.attr(name.c_str());
-  return py::isinstance(attribute, py::module_::import("builtins").attr("property")) &&
-         !attribute.attr("fset").is_none();
-}
-
 py::dict measurement_dict(const VirtualMeasurement& v) {
   py::dict d;
   d["ok"] = v.ok;
@@ -1218,7 +1210,7 @@ void wrap_calibration(py::module_& m) {
         const py::object type = py::type::of(settings);
         for (const auto& item : changes) {
           const std::string name = py::str(item.first).cast<std::string>();
-          if (!settable_property(type, name)) {
+          if (!is_read_write_property(type, name)) {
             throw py::type_error("calibrate() got an unexpected keyword argument '" + name +
                                  "' (not a CalibrationOptions field)");
           }

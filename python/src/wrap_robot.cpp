@@ -6,6 +6,7 @@
 #include <system_error>
 
 #include "bindings.hpp"
+#include "pcr/parameters.hpp"
 
 namespace pcr::python {
 
@@ -351,6 +352,14 @@ void wrap_robot(py::module_& m) {
           py::arg("path"),
           "Validates and writes the description atomically (temp file + rename) to `path` (str or "
           "os.PathLike).")
+      .def_property_readonly(
+          "parameters",
+          [](const RobotDescription& r) {
+            Eigen::VectorXd values(num_parameters(r.params.num_limbs));
+            get_parameters(r.params, values.data());
+            return values;
+          },
+          "(10 n + 6,) the flat parameters in parameter_names order (SI units), a copy")
       .def("to_json", &robot_to_json, "The canonical JSON text (full precision).")
       .def(
           "copy", [](const RobotDescription& r) { return r; }, "A deep copy.")

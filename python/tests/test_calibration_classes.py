@@ -273,12 +273,7 @@ def test_in_gauge_moves_the_truth_to_the_identified_frames():
     identified = {p.name: p.value for p in result.parameters}
 
     def values(robot):
-        out = []
-        for limb in robot.limbs:
-            out += [limb.E, limb.d, limb.l, *limb.A, limb.alpha, *limb.B, limb.beta, limb.gamma]
-        e = robot.extrinsics
-        return dict(zip(names, out + [e.camera.x, e.camera.y, e.camera.theta, e.pattern.x,
-                                      e.pattern.y, e.pattern.theta]))
+        return dict(zip(names, robot.parameters))
 
     truth, moved_values = values(v.truth), values(moved)
     for name in ("A_x[0]", "A_y[0]", "alpha[0]", "B_x[0]", "B_y[0]", "beta[0]"):
@@ -293,3 +288,23 @@ def test_in_gauge_moves_the_truth_to_the_identified_frames():
     with pytest.raises(ValueError, match="expected 3 limbs"):
         result.in_gauge(pcr.Robot.from_json(nominal.to_json()).replace(
             limbs=list(nominal.limbs)[:2]))
+
+
+def test_robot_parameters_are_in_parameter_names_order():
+    robot = pcr.Robot.default().with_limb(2, l=0.0311, A=(0.01, -0.02), gamma=1e-3)
+    ext = robot.extrinsics
+    ext.pattern = pcr.Pose(1e-3, 2e-3, 0.03)
+    robot.extrinsics = ext
+    values = dict(zip(pcr.parameter_names(3), robot.parameters))
+    assert len(robot.parameters) == len(values) == 36
+    assert values["l[2]"] == 0.0311 and values["A_x[2]"] == 0.01 and values["A_y[2]"] == -0.02
+    assert values["gamma[2]"] == 1e-3 and values["E[1]"] == robot.limbs[1].E
+    assert values["d[0]"] == robot.limbs[0].d and values["beta[1]"] == robot.limbs[1].beta
+    assert (values["pattern_x"], values["pattern_y"], values["pattern_theta"]) == (1e-3, 2e-3, 0.03)
+    # The calibration's nominal values are the same vector.
+    default = pcr.Robot.default()
+    q = pcr.sample_configurations(default, count=12, seed=1)["calibration"]
+    measured = pcr.VirtualRobot(default, seed=1).measure(q)["measured"]
+    _, result = pcr.calibrate(default, q, measured,
+                              stages=[{"name": "ext", "free": ["extrinsics"]}])
+    assert np.array_equal([p.nominal for p in result.parameters][:36], default.parameters)

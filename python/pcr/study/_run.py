@@ -13,7 +13,7 @@ import pcr
 
 from ._definition import Study
 from ._store import ResultStore, read_results
-from ._trial import FACTORS, outcome_columns, run_trial
+from ._trial import FACTORS, factor_values, outcome_columns, run_trial
 
 
 def run_batch(trials, robots):
@@ -21,7 +21,7 @@ def run_batch(trials, robots):
     rows = []
     for index, replicate, seed, factors in trials:
         row = run_trial(factors, seed, robots)
-        row.update({name: factors.get(name, f.default) for name, f in FACTORS.items()})
+        row.update(factor_values(factors))
         row.update(trial=index, replicate=replicate, seed=seed)
         rows.append(row)
     return rows
@@ -173,6 +173,6 @@ def _execute(client, todo, robots, store, bar, batch_size, flush_seconds):
 
 def _failed_row(trial, reason):
     index, replicate, seed, factors = trial
-    row = {name: factors.get(name, f.default) for name, f in FACTORS.items()}
+    row = factor_values(factors)
     row.update(trial=index, replicate=replicate, seed=seed, failure=reason)
     return row

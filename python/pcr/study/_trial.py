@@ -89,6 +89,11 @@ def check_factor(name, value, where):
     return value
 
 
+def factor_values(factors):
+    """Every factor's value: those of `factors`, the defaults for the others."""
+    return {name: factors.get(name, f.default) for name, f in FACTORS.items()}
+
+
 def outcome_columns(parameter_names):
     """The outcome columns of a row, named as in pcr's JSON report (SI units), in order."""
     columns = []
@@ -156,17 +161,6 @@ def _measured_mounts(design, truth, half_width, rng):
     return out
 
 
-def _flat_parameters(robot):
-    """The robot's parameters in pcr.parameter_names order."""
-    values = []
-    for limb in robot.limbs:
-        values += [limb.E, limb.d, limb.l, *limb.A, limb.alpha, *limb.B, limb.beta, limb.gamma]
-    ext = robot.extrinsics
-    values += [ext.camera.x, ext.camera.y, ext.camera.theta]
-    values += [ext.pattern.x, ext.pattern.y, ext.pattern.theta]
-    return np.asarray(values)
-
-
 def _tour(q):
     """The rows of q in the order of a greedy nearest-neighbour tour from the one nearest home:
     the order an experiment visits them in. Every solve then starts next to the last one (in
@@ -212,8 +206,7 @@ def run_trial(factors, seed, robots=None):
     ...") and the outcomes it did not reach are NaN. robots: robot JSON texts by the name of
     factor ``robot`` (the study sends them, so that workers need not read the files).
     """
-    given = {k: check_factor(k, v, "run_trial") for k, v in factors.items()}
-    factors = {name: given.get(name, f.default) for name, f in FACTORS.items()}
+    factors = factor_values({k: check_factor(k, v, "run_trial") for k, v in factors.items()})
     start = time.perf_counter()
     row = {"failure": None}
     stages = _Stages(row)
@@ -282,7 +275,7 @@ def _run(factors, seed, design, row, stages):
     q, poses = measured["calibration"]
     identified, result = pcr.calibrate(nominal, q, poses, drop_unreachable=True)
     row["calibration.iterations"] = sum(s.iterations for s in result.stages)
-    truth_values = _flat_parameters(result.in_gauge(truth))  # compared in the same frames
+    truth_values = result.in_gauge(truth).parameters  # compared in the same frames
     for p, true_value in zip(result.parameters, truth_values):
         row[f"parameters.{p.name}.error"] = p.value - true_value
         row[f"parameters.{p.name}.std"] = p.std_dev
