@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "pcr/files.hpp"
 #include "pcr/robot_io.hpp"
@@ -129,6 +130,54 @@ TEST(Files, TransactionPutsAllOrNothingInPlace) {
   EXPECT_EQ(read(a), "new a\n");
   EXPECT_EQ(read(b), "new b\n");
   EXPECT_EQ(count_entries(scratch.path()), 2);
+}
+
+// Two outputs of one command never share a file, whatever its name: refused before anything is
+// written, naming both options.
+TEST(Files, TwoOutputsOnOneFileAreRefusedByOption) {
+  const pcr::test::ScratchDirectory scratch("files");
+  const std::string d = scratch.file("d.csv"), other = scratch.file("e.csv");
+  write(d, "old\n");
+  const std::string hard_link = scratch.file("alias.csv");
+  fs::create_hard_link(d, hard_link);
+  const std::string symbolic_link = scratch.file("link.csv");
+  fs::create_symlink(d, symbolic_link);
+  const std::string detour = scratch.path().string() + "/sub/../d.csv";
+  fs::create_directory(scratch.path() / "sub");
+  const std::string not_yet = scratch.file("new.csv");
+  const std::string not_yet_detour = scratch.path().string() + "/sub/../new.csv";
+  const std::pair<std::string, std::string> same[] = {
+      {d, d},    {d, hard_link}, {d, symbolic_link}, {detour, d}, {not_yet, not_yet_detour},
+      {"-", "-"}};
+  for (const auto& [first, second] : same) {
+    try {
+      pcr::check_distinct_outputs({{"--output", first}, {"--report", ""}, {"--truth", second}});
+      ADD_FAILURE() << first << " and " << second << " accepted";
+    } catch (const pcr::InputError& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("--truth " + second + ": "), std::string::npos) << message;
+      EXPECT_NE(message.find("--output " + first), std::string::npos) << message;
+    }
+  }
+  EXPECT_NO_THROW(pcr::check_distinct_outputs({{"--output", d}, {"--truth", other}}));
+  EXPECT_NO_THROW(pcr::check_distinct_outputs({{"--output", d}, {"--truth", "-"}}));
+  EXPECT_NO_THROW(pcr::check_distinct_outputs({{"--output", ""}, {"--truth", ""}}));
+  EXPECT_NO_THROW(
+      pcr::check_distinct_outputs({{"--output", "/dev/null"}, {"--truth", "/dev/null"}}));
+  // Inside a transaction, a second output over the same file is refused too, and the first one
+  // is not put in place.
+  try {
+    pcr::OutputTransaction outputs;
+    pcr::write_file_atomically(d, "first\n");
+    pcr::write_file_atomically(hard_link, "second\n");
+    outputs.commit();
+    ADD_FAILURE() << "two outputs on one file in a transaction";
+  } catch (const pcr::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("the same file as another output"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(read(d), "old\n");
+  EXPECT_EQ(count_entries(scratch.path()), 4);  // d, alias, link, sub: no temporary left
 }
 
 // Last: protect_inputs() holds for the rest of the process.

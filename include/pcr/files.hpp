@@ -11,12 +11,15 @@
 //   device and inode, not by name);
 // - the temporaries are removed on every exit: an exception, a dropped OutputFile, SIGINT, SIGTERM
 //   or SIGHUP.
-// Commands with several outputs open an OutputTransaction: their files are put in place together
-// when all were written, or none is.
+// Commands with several outputs check first that no two of them name the same file
+// (check_distinct_outputs), then open an OutputTransaction: their files are put in place together
+// when all were written, or none is; within one, a second OutputFile over the same file is refused.
 
+#include <cstddef>
 #include <fstream>
 #include <ios>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pcr {
@@ -34,6 +37,26 @@ std::ifstream open_input_file(const std::string& path,
 /// The checks and the record of open_input_file, for readers that open the file themselves
 /// (OpenCV's imread and FileStorage).
 void check_input_file(const std::string& path);
+
+/// The whole content of the input `path` (opened by open_input_file), read up to `max_bytes`: a
+/// larger input (a wrong file, or an endless one such as /dev/zero or a FIFO that never closes)
+/// is an InputError naming the file, `what` it should have been ("a robot description") and the
+/// limit, after at most max_bytes + 1 bytes were read.
+std::string read_input_file(const std::string& path, std::size_t max_bytes,
+                            const std::string& what);
+
+/// The size limit of each kind of input file (docs/formats.md): JSON descriptions (robot, mount
+/// layout, stages) hold a few kB.
+inline constexpr std::size_t kMaxJsonFileBytes = std::size_t{16} << 20;
+
+/// The outputs a command is about to write, as (option, path) pairs such as
+/// {{"--output", output}, {"--truth", truth}}, checked before anything is computed or written:
+/// throws InputError naming both options and paths when two are the same file, by the same name or
+/// by another (`./sub/../d.csv`, a symbolic or a hard link: compared by device and inode when both
+/// exist, else as std::filesystem::weakly_canonical paths), or are both stdout ("-"). An empty path
+/// (an output not asked for) is skipped; a character device (/dev/null) may take several. The rule
+/// of every command with several outputs.
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs);
 
 class OutputFile {
  public:
@@ -89,6 +112,7 @@ class OutputTransaction {
     int slot;
   };
   std::vector<Pending> pending_;
+  std::vector<std::string> claimed_;  ///< the targets of the OutputFiles opened inside it
   OutputTransaction* outer_;
   bool committed_ = false;
 };

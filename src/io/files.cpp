@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <mutex>
 #include <stdexcept>
@@ -24,6 +25,9 @@ namespace pcr {
 namespace {
 
 std::string error_text() { return std::strerror(errno); }
+
+/// The innermost OutputTransaction alive on this thread.
+thread_local OutputTransaction* current_transaction = nullptr;
 
 // ---- the inputs of this process ---------------------------------------------------------------
 struct FileIdentity {
@@ -60,6 +64,24 @@ void refuse_input_as_output(const std::string& path) {
     throw InputError(path + ": is also an input of this command (" + input->path +
                      "): refusing to write over it");
   }
+}
+
+/// Whether two output paths name the same file: "-" (stdout) only itself; by device and inode
+/// when both exist, else by their weakly canonical paths (symbolic links and `..` resolved). A
+/// character device (/dev/null) takes any number of outputs.
+bool same_output(const std::string& a, const std::string& b) {
+  if (a == "-" || b == "-") return a == b;
+  struct stat sa {};
+  struct stat sb {};
+  if (::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0) {
+    return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino && !S_ISCHR(sa.st_mode);
+  }
+  namespace fs = std::filesystem;
+  std::error_code ea, eb;
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a, ea), ea);
+  const fs::path cb = fs::weakly_canonical(fs::absolute(b, eb), eb);
+  if (ea || eb) return fs::path(a).lexically_normal() == fs::path(b).lexically_normal();
+  return ca == cb;
 }
 
 // ---- temporaries removed on a signal -----------------------------------------------------------
@@ -140,11 +162,43 @@ void check_input_file(const std::string& path) {
 
 void protect_inputs() { inputs_protected.store(true); }
 
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
+  for (std::size_t j = 0; j < outputs.size(); ++j) {
+    const auto& [option, path] = outputs[j];
+    if (path.empty()) continue;
+    for (std::size_t i = 0; i < j; ++i) {
+      const auto& [first_option, first_path] = outputs[i];
+      if (first_path.empty() || !same_output(first_path, path)) continue;
+      throw InputError(option + " " + path + ": " +
+                       (path == "-" ? std::string("stdout, as ") : "the same file as ") +
+                       first_option + " " + first_path +
+                       "; each output needs a file of its own (nothing was written)");
+    }
+  }
+}
+
 std::ifstream open_input_file(const std::string& path, std::ios::openmode mode) {
   check_input_file(path);
   std::ifstream in(path, mode | std::ios::in);
   if (!in) throw InputError(path + ": cannot open for reading: " + error_text());
   return in;
+}
+
+std::string read_input_file(const std::string& path, std::size_t max_bytes,
+                            const std::string& what) {
+  std::ifstream in = open_input_file(path);
+  std::string text;
+  char block[1 << 16];
+  while (in) {
+    in.read(block, sizeof block);
+    text.append(block, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > max_bytes) {
+      throw InputError(path + ": more than the " + std::to_string(max_bytes >> 20) + " MiB " +
+                       what + " can be; is this the right file?");
+    }
+  }
+  if (in.bad()) throw InputError(path + ": read error: " + error_text());
+  return text;
 }
 
 OutputFile::OutputFile(const std::string& path, Writer writer, const std::string& default_extension)
@@ -158,6 +212,16 @@ OutputFile::OutputFile(const std::string& path, Writer writer, const std::string
   const bool exists = ::stat(path.c_str(), &target) == 0;
   if (exists && S_ISDIR(target.st_mode)) throw InputError(path + ": is a directory, not a file");
   refuse_input_as_output(path);
+  // Inside a transaction, two outputs over one file would leave only the last one's content.
+  for (OutputTransaction* t = current_transaction; t != nullptr; t = t->outer_) {
+    for (const std::string& other : t->claimed_) {
+      if (same_output(other, path)) {
+        throw InputError(path + ": the same file as another output of this command (" + other +
+                         "); each output needs a file of its own");
+      }
+    }
+  }
+  if (current_transaction != nullptr) current_transaction->claimed_.push_back(path);
   // Through a symbolic link, the file it names is replaced and the link stays.
   destination_ = path;
   struct stat link {};
@@ -217,8 +281,6 @@ OutputFile::~OutputFile() {
 std::ostream& OutputFile::stream() { return to_stdout_ ? std::cout : file_; }
 
 namespace {
-
-thread_local OutputTransaction* current_transaction = nullptr;
 
 /// Puts a written temporary in place of `path` (which resolves to `destination`).
 void put_in_place(const std::string& path, const std::string& destination,
@@ -287,6 +349,8 @@ void OutputTransaction::commit() {
   if (outer_ != nullptr) {
     for (Pending& file : pending_) outer_->pending_.push_back(std::move(file));
     pending_.clear();
+    for (std::string& path : claimed_) outer_->claimed_.push_back(std::move(path));
+    claimed_.clear();
     committed_ = true;
     return;
   }

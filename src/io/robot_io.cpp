@@ -468,11 +468,7 @@ RobotDescription parse_robot(const std::string& json_text, const std::string& so
 }
 
 RobotDescription load_robot(const std::string& path) {
-  std::ifstream in = open_input_file(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(path + ": read error");
-  return parse_robot(text.str(), path);
+  return parse_robot(read_input_file(path, kMaxJsonFileBytes, "a robot description"), path);
 }
 
 std::string robot_to_json(const RobotDescription& robot) {
