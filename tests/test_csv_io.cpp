@@ -151,14 +151,34 @@ TEST(CsvIo, FormatDoubleKeepsThePrintfLayout) {
   EXPECT_EQ(pcr::format_double(longest, text) - text, 24);
 }
 
-TEST(CsvIo, NumbersReadAsStrtodReadsThem) {
-  // What from_chars alone would refuse: a leading '+', hexadecimal, an underflow.
-  const pcr::CsvTable t = parse("a,b,c,d\n+1.5,0x1p-3,1e-400,-.5e-3\n");
-  EXPECT_EQ(t.rows[0], (std::vector<double>{1.5, 0.125, 0.0, -0.5e-3}));
+TEST(CsvIo, NumbersReadAsStrtodReadsDecimals) {
+  // What from_chars alone would refuse: a leading '+', an underflow.
+  const pcr::CsvTable t = parse("a,b,c\n+1.5,1e-400,-.5e-3\n");
+  EXPECT_EQ(t.rows[0], (std::vector<double>{1.5, 0.0, -0.5e-3}));
   EXPECT_NE(error_of("a\n+-1\n").find("data.csv:2:1: column 1 (a): expected a number, got '+-1'"),
             std::string::npos);
   EXPECT_NE(error_of("a\nNaN(1)\n").find("data.csv:2:1: column 1 (a): non-finite value 'NaN(1)'"),
             std::string::npos);
+  // Decimal only (docs/formats.md): strtod's hexadecimal floats are refused by file, line,
+  // column and text, with a header or without.
+  for (const char* hex : {"0x1p-8", "-0X1.8P1", "+0x10"}) {
+    EXPECT_NE(error_of(std::string("a,b\n0.5,") + hex + "\n")
+                  .find(std::string("data.csv:2:2: column 2 (b): expected a decimal number, got "
+                                    "the hexadecimal '") +
+                        hex + "'"),
+              std::string::npos)
+        << hex;
+    EXPECT_NE(error_of(std::string("# no header\n") + hex + ",1\n")
+                  .find("data.csv:2:1: column 1: expected a decimal number"),
+              std::string::npos)
+        << error_of(std::string("# no header\n") + hex + ",1\n");
+  }
+  for (const char* text : {"inf", "-inf", "nan", "1e999", "Infinity"}) {
+    EXPECT_NE(error_of(std::string("a\n") + text + "\n")
+                  .find("data.csv:2:1: column 1 (a): non-finite value"),
+              std::string::npos)
+        << text;
+  }
 }
 
 TEST(CsvIo, ReadsInputLongerThanOneReadBlock) {

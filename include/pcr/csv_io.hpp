@@ -6,7 +6,8 @@
 // - blank lines and lines whose first non-blank character is '#' are skipped;
 // - the first remaining line is a header when none of its fields is a number;
 // - a column whose header name starts with '#' is a comment column: its values are not parsed;
-// - every other field must be a finite decimal number; fields are not quoted.
+// - every other field must be a finite decimal number (not "nan", "inf", "1e999" nor a
+//   hexadecimal float such as "0x1p-8"); fields are not quoted.
 // Any violation throws InputError naming the source, the line and the column (both 1-based).
 
 #include <algorithm>
@@ -102,7 +103,19 @@ struct CsvTable {
   std::vector<std::string> columns;  ///< names of the numeric columns (expected or read)
   CsvRows rows;                      ///< numeric columns only, in `columns` order
   std::vector<int> line_numbers;     ///< 1-based source line of each row
+  /// 1-based field of each of `columns` in the source's lines (a header may reorder them), for
+  /// messages naming a value's line and column; 0 for a column the source did not have.
+  std::vector<int> source_columns;
 };
+
+/// The size limits of a table (docs/formats.md): a larger input, or a line longer than a line of
+/// numbers can be (an endless input such as /dev/zero has no newline), is an InputError naming the
+/// source, read no further than the limit.
+inline constexpr std::size_t kMaxCsvBytes = std::size_t{1} << 30;
+inline constexpr std::size_t kMaxCsvLineBytes = std::size_t{1} << 20;
+
+/// The whole text of a table from `in`, within the limits above (InputError naming `source`).
+std::string read_table_text(std::istream& in, const std::string& source);
 
 /// Parses CSV text; `source` names it in error messages.
 CsvTable parse_csv(std::istream& in, const std::string& source,

@@ -1,5 +1,6 @@
 #include "pcr/calib/dataset.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <istream>
 #include <sstream>
@@ -21,13 +22,6 @@ int count_joint_columns(const std::vector<std::string>& columns) {
   int k = 0;
   while (k < static_cast<int>(columns.size()) && columns[k] == "q" + std::to_string(k + 1)) ++k;
   return k;
-}
-
-/// Reads the whole stream into a string stream, so it can be parsed twice (peek, then read).
-std::string slurp(std::istream& in) {
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 /// The joint count of a table read without expected columns: the header's q columns, or the
@@ -54,7 +48,8 @@ CsvTable read_table(std::istream& in, const std::string& source, int num_joints,
                     int* joints) {
   std::vector<std::string> expected;
   if (num_joints < 0) {
-    const std::string text = slurp(in);
+    // Read once (within the table limits), parsed twice: peek, then read.
+    const std::string text = read_table_text(in, source);
     std::istringstream first(text);
     const CsvTable peek = parse_csv(first, source);
     num_joints = infer_joints(peek, extra, source);
@@ -100,6 +95,21 @@ Dataset parse_dataset(std::istream& in, const std::string& source, int num_joint
   const int n = data.num_joints;
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
     const CsvRow row = table.rows[r];
+    // A pose no robot can give in any unit (a corrupted row) would be fitted like any other. The
+    // joints are the calibration's to check: a row out of reach is named or dropped there.
+    for (std::size_t c = static_cast<std::size_t>(n); c < row.size(); ++c) {
+      const bool angle = c == static_cast<std::size_t>(n) + 2;
+      const double limit = angle ? kMaxDatasetAngle : kMaxDatasetPosition;
+      if (std::abs(row[c]) <= limit) continue;
+      const int column = c < table.source_columns.size() ? table.source_columns[c] : 0;
+      throw InputError(source + ":" + std::to_string(table.line_numbers[r]) +
+                       (column > 0 ? ":" + std::to_string(column) : std::string()) + ": column " +
+                       std::to_string(column) + " (" + table.columns[c] +
+                       "): " + format_double(row[c]) + (angle ? " rad" : " m") + " is outside [" +
+                       format_double(-limit) + ", " + format_double(limit) +
+                       (angle ? "] rad, the range of a measured angle"
+                              : "] m, the range of a measured position"));
+    }
     JointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
     data.q.push_back(q);

@@ -51,12 +51,19 @@ std::optional<double> parse_number(std::string_view field) {
   const std::from_chars_result fast = std::from_chars(field.data(), end, value);
   if (fast.ec == std::errc() && fast.ptr == end) return value;
   // strtod also takes what from_chars refuses: a leading '+', hexadecimal, and values beyond the
-  // double range (as inf, or 0 and subnormals), so the accepted syntax is strtod's.
+  // double range (as inf, or 0 and subnormals). A hexadecimal field counts as a number here (a
+  // line of them is data, not a header); the reader then refuses it as not decimal.
   const std::string copy(field);
   char* copy_end = nullptr;
   value = std::strtod(copy.c_str(), &copy_end);
   if (copy_end != copy.c_str() + copy.size()) return std::nullopt;
   return value;
+}
+
+/// A number strtod reads that is not decimal: hexadecimal ("0x1p-8", "-0X1.8P1").
+bool is_hexadecimal(std::string_view field) {
+  if (!field.empty() && (field[0] == '+' || field[0] == '-')) field.remove_prefix(1);
+  return field.size() > 1 && field[0] == '0' && (field[1] == 'x' || field[1] == 'X');
 }
 
 [[noreturn]] void fail(const std::string& source, int line, int column, const std::string& what) {
@@ -69,27 +76,41 @@ std::optional<double> parse_number(std::string_view field) {
 
 std::string quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
 
-/// The whole stream, read in large blocks (std::cin reads a character at a time otherwise).
-std::string read_all(std::istream& in) {
+}  // namespace
+
+std::string read_table_text(std::istream& in, const std::string& source) {
   std::string text;
-  char block[1 << 16];
+  char block[1 << 16];         // large blocks: std::cin reads a character at a time otherwise
+  std::size_t line_start = 0;  // of the line being read
+  int lines = 1;
   do {
     in.read(block, sizeof block);
+    const std::size_t before = text.size();
     text.append(block, static_cast<std::size_t>(in.gcount()));
+    for (std::size_t newline = text.find('\n', before); newline != std::string::npos;
+         newline = text.find('\n', newline + 1)) {
+      line_start = newline + 1;
+      ++lines;
+    }
+    if (text.size() - line_start > kMaxCsvLineBytes) {
+      fail(source, lines, 0,
+           "a line longer than " + std::to_string(kMaxCsvLineBytes >> 20) +
+               " MiB, the limit of a CSV line: not a table (an endless input such as /dev/zero?)");
+    }
+    if (text.size() > kMaxCsvBytes) {
+      fail(source, lines, 0,
+           "more than " + std::to_string(kMaxCsvBytes >> 20) + " MiB, the limit of a CSV table");
+    }
   } while (in);
+  if (in.bad()) fail(source, lines, 0, "read error");
   return text;
 }
-
-}  // namespace
 
 CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOptions& options) {
   CsvTable table;
   table.source = source;
   table.columns = options.columns;
-  const std::string text = read_all(in);
-  if (in.bad()) {
-    fail(source, static_cast<int>(std::count(text.begin(), text.end(), '\n')), 0, "read error");
-  }
+  const std::string text = read_table_text(in, source);
   // Field index in the source line -> position in the numeric row (-1: comment column).
   std::vector<int> mapping;
   std::vector<std::string> header_names;
@@ -199,12 +220,22 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
       if (!value) {
         fail(source, line_number, column, field_error(j, "expected a number, got "));
       }
+      if (is_hexadecimal(fields[j])) {
+        fail(source, line_number, column,
+             field_error(j, "expected a decimal number, got the hexadecimal "));
+      }
       if (!std::isfinite(*value)) {
         fail(source, line_number, column, field_error(j, "non-finite value "));
       }
       row[static_cast<std::size_t>(mapping[j])] = *value;
     }
     table.line_numbers.push_back(line_number);
+  }
+  table.source_columns.assign(table.columns.size(), 0);
+  for (std::size_t j = 0; j < mapping.size(); ++j) {
+    if (mapping[j] >= 0 && static_cast<std::size_t>(mapping[j]) < table.source_columns.size()) {
+      table.source_columns[static_cast<std::size_t>(mapping[j])] = static_cast<int>(j) + 1;
+    }
   }
   return table;
 }

@@ -5,7 +5,8 @@
 // measured pattern pose in the camera frame ^Se T_M (m, m, rad). Configurations: header
 // `q1,...,qn`. Columns whose header starts with '#' are comments (ignored); lines starting with
 // '#' are skipped. A wrong column count, a non-numeric field or a NaN throws InputError naming
-// the file, the line and the column (pcr/csv_io.hpp rules). Files are written atomically.
+// the file, the line and the column (pcr/csv_io.hpp rules), and so does a pose outside its
+// range (kMaxDatasetPosition, kMaxDatasetAngle). Files are written atomically.
 
 #include <iosfwd>
 #include <string>
@@ -26,6 +27,13 @@ struct Dataset {
   std::size_t size() const { return q.size(); }
   void add(const JointVector& joints, const Pose2<double>& pose);
 };
+
+/// The ranges of a dataset's measured pose: |x|, |y| (m) and |theta| (rad). The largest values a
+/// unit slip can make of a pose within a pcr-robot file's ranges (10 m in millimetres, 4 pi rad in
+/// degrees), which the calibration names with their likely unit; beyond, no unit makes a pose of a
+/// robot of them (1e308 is a corrupted row).
+inline constexpr double kMaxDatasetPosition = 1e4;
+inline constexpr double kMaxDatasetAngle = 720.0;
 
 /// "q1", ..., "qn", "x", "y", "theta".
 std::vector<std::string> dataset_columns(int num_joints);
