@@ -251,6 +251,64 @@ TEST(VisionInputs, CameraFilesAsOpenCVWritesThemAreRead) {
   }
 }
 
+// OpenCV 5's FileStorage begins its YAML with `%YAML 1.2` (OpenCV 4's with `%YAML:1.0`), may
+// write booleans as true/false, and a YAML tool may end the document with `...`: the same camera
+// in each writer's shape reads the same. Written by hand: the OpenCV here is 4.6.
+TEST(VisionInputs, CameraFilesOfOpenCV4And5AreRead) {
+  const std::string body =
+      "calibration_time: \"Tue 24 Nov 2026 18:43:14 UTC\"\nimage_width: 1920\n"
+      "image_height: 1080\nfix_aspect_ratio: false\ncamera_matrix: !!opencv-matrix\n"
+      "   rows: 3\n   cols: 3\n   dt: d\n"
+      "   data: [ 2.8001e+03, 0., 9.603e+02, 0., 2.7995e+03,\n       5.407e+02, 0., 0., 1. ]\n"
+      "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
+      "   data: [ -1.5e-01, 1.0e-01, 0., 0., 0. ]\n";
+  const std::string heads[] = {"%YAML:1.0\n---\n",
+                               "%YAML 1.2\n---\n",
+                               "%YAML 1.1\n---\n",
+                               "%YAML 1.0\n---\n",
+                               "%YAML:1.2\n---\n",
+                               "---\n",
+                               ""};
+  for (const std::string& head : heads) {
+    for (const std::string& tail :
+         {std::string(), std::string("...\n"), std::string("...\n# end\n")}) {
+      const std::string path = tmp("writers.yaml");
+      std::ofstream(path, std::ios::binary) << head << body << tail;
+      try {
+        const CameraModel camera = load_camera(path);
+        EXPECT_EQ(camera.width, 1920);
+        EXPECT_DOUBLE_EQ(camera.K(0, 0), 2800.1);
+        EXPECT_DOUBLE_EQ(camera.K(1, 2), 540.7);
+        EXPECT_DOUBLE_EQ(camera.distortion[0], -0.15);
+      } catch (const InputError& e) {
+        ADD_FAILURE() << e.what() << "\nin:\n" << head << body << tail;
+      }
+    }
+  }
+  // What is not the shape of either writer stays refused, naming the line.
+  const std::pair<std::string, std::string> refused[] = {
+      {"%YAML 2.0\n---\n" + body, "bad.yaml:1: '%YAML 2.0': only line 1 may be a YAML directive"},
+      {"%YAML 1.3\n---\n" + body, "bad.yaml:1: '%YAML 1.3'"},
+      {"%YAML  1.2\n---\n" + body, "bad.yaml:1: '%YAML  1.2'"},
+      {"---\n%YAML 1.2\n" + body, "bad.yaml:2: '%YAML 1.2'"},
+      {"%YAML 1.2\n%TAG ! tag:opencv.org,2026:\n---\n" + body, "bad.yaml:2: '%TAG"},
+      {"%YAML 1.2\n---\n...\n" + body, "bad.yaml:3: '...'"},
+      {"%YAML 1.2\n---\n" + body + "...\nimage_width: 1\n", "bad.yaml:19: 'image_width: 1' after"},
+      {"%YAML 1.2\n---\n" + body + "...\n---\n", "bad.yaml:19: '---' after"},
+  };
+  for (const auto& [text, message] : refused) {
+    const std::string path = tmp("bad.yaml");
+    std::ofstream(path, std::ios::binary) << text;
+    try {
+      load_camera(path);
+      ADD_FAILURE() << "accepted:\n" << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos)
+          << e.what() << "\nexpected: " << message;
+    }
+  }
+}
+
 // Text OpenCV's writer would never give is refused, naming the line, before OpenCV reads it.
 TEST(VisionInputs, CameraFilesOutOfShapeAreRefusedByLine) {
   const std::string head = "%YAML:1.0\n---\nimage_width: 100\nimage_height: 100\n";
@@ -267,8 +325,8 @@ TEST(VisionInputs, CameraFilesOutOfShapeAreRefusedByLine) {
   ASSERT_NO_THROW(load_text(head + matrix + distortion));
   const std::pair<std::string, std::string> cases[] = {
       {head + "\tcols: 3\n", "bad.yaml:5: a control character"},
-      {head + "---\n" + matrix, "bad.yaml:5: only line 1"},
-      {"%YAML:1.0\n---%YAML:1.0\n--`-\n", "bad.yaml:2: only line 1"},
+      {head + "---\n" + matrix, "bad.yaml:5: '---': only line 1"},
+      {"%YAML:1.0\n---%YAML:1.0\n--`-\n", "bad.yaml:2: '---%YAML:1.0': only line 1"},
       {head + "camera_matrix: !!opencv-matrix\n   rows: 3\n   data: [ 1.,\n",
        "bad.yaml:8: the 'data'"},
       {head + "camera_matrix: !!opencv-matrix\n   rows: 3\n   step: 3\n",
@@ -327,6 +385,45 @@ TEST(VisionInputs, MountLayoutErrors) {
   } catch (const InputError& e) {
     EXPECT_LT(std::string(e.what()).size(), 200u) << std::string(e.what()).substr(0, 200);
     EXPECT_NE(std::string(e.what()).find("7777..."), std::string::npos) << e.what();
+  }
+  // A field that is not in the format is named with the closest known one.
+  std::string misspelt = with("1");
+  misspelt.replace(misspelt.rfind("\"clamp_offset\""), 14, "\"clamp_ofset\"");
+  std::string angel = with("1");
+  angel.replace(angel.rfind("\"rod_angle\""), 11, "\"rod_angel\"");
+  const std::pair<std::string, std::string> unknown[] = {
+      {misspelt,
+       "m.json: mounts[1] (B1).clamp_ofset: unknown field; did you mean \"clamp_offset\"?"},
+      {angel,
+       "m.json: mounts[1] (B1).rod_angel: unknown field; did you mean \"rod_angle\"? "
+       "(known here: name, role, limb, id, family"},
+      {"{\"tagsize\": 0.01, " + with("1").substr(1),
+       "m.json: tagsize: unknown field; did you mean \"tag_size\"?"},
+  };
+  for (const auto& [text, message] : unknown) {
+    try {
+      parse_mounts(text, "m.json");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(VisionInputs, BoardSizeIsColsXRowsAndNothingElse) {
+  EXPECT_EQ(parse_board_size("9x6", "--board"), std::make_pair(9, 6));
+  EXPECT_EQ(parse_board_size("2x100", "--board"), std::make_pair(2, 100));
+  for (const char* bad : {"9x6x", "9x6 ", " 9x6", "9x", "x6", "9X6", "+9x6", "9x-6", "1x6", "9x101",
+                          "9x6.5", "0009x6", "9", ""}) {
+    try {
+      parse_board_size(bad, "--board");
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--board: expected COLSxROWS"), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("got '" + std::string(bad) + "'"), std::string::npos)
+          << e.what();
+    }
   }
 }
 

@@ -82,15 +82,21 @@ namespace {
 
 // OpenCV 4.6's YAML reader crashes, throws std::length_error, allocates without bound or loops
 // forever on malformed text (`---%YAML:1.0` then `--`-` hangs it; tests/fuzz/fuzz_camera found
-// these): it only ever sees a file in the shape its own writer gives a camera. That shape, line by
-// line: an optional `%YAML:1.0` on line 1 and a lone `---` on line 1 or 2; comments; top-level
-// `key: scalar` (a number, a word or a quoted string) or `key: !!opencv-matrix` followed by its
-// indented `rows`, `cols`, `dt` and `data: [ numbers ]`, the list possibly spread over lines.
+// these): it only ever sees a file in the shape OpenCV's writers give a camera. That shape, line by
+// line: an optional YAML directive on line 1 (`%YAML:1.0` from OpenCV 4, `%YAML 1.2` from OpenCV
+// 5; any of 1.0, 1.1, 1.2, with a colon or a space) and a lone `---` on line 1 or 2; comments;
+// top-level `key: scalar` (a number, a word or a quoted string) or `key: !!opencv-matrix` followed
+// by its indented `rows`, `cols`, `dt` and `data: [ numbers ]`, the list possibly spread over
+// lines; optionally a lone `...` ending the document, with nothing but comments after it.
 class CameraText {
  public:
   explicit CameraText(const std::string& path) : path_(path) {}
 
-  void check(const std::string& text) {
+  /// Throws InputError naming the first line out of shape. Returns the text as OpenCV 4.6's reader
+  /// takes it, with the same lines: line 1 the directive it knows (`%YAML:1.0`; prepended to a
+  /// file without one, which 4.6 would not recognise as YAML), the document end marker blanked.
+  std::string check(const std::string& text) {
+    text_begin_ = text.data();
     std::size_t start = 0;
     for (line_ = 1; start < text.size(); ++line_) {
       std::size_t end = text.find('\n', start);
@@ -100,6 +106,10 @@ class CameraText {
     }
     if (in_list_) fail("the 'data' list is not closed with ']'");
     end_matrix();
+    std::string out = text;
+    if (end_marker_ != std::string::npos) out.replace(end_marker_, 3, "   ");
+    if (has_directive_) return out.replace(0, out.find('\n'), "%YAML:1.0");
+    return "%YAML:1.0\n" + out;
   }
 
  private:
@@ -206,11 +216,22 @@ class CameraText {
       return;
     }
     if (text.empty() || text[0] == '#') return;
+    if (ended_) fail("'" + excerpt(std::string(text)) + "' after the end of the document ('...')");
     if (text[0] == '%' || text.substr(0, 3) == "---" || text.substr(0, 3) == "...") {
-      const bool directive = line_ == 1 && (raw == "%YAML:1.0" || raw == "%YAML 1.0");
+      const bool directive = line_ == 1 && is_directive(raw);
       const bool start = raw == "---" && line_ <= 2 && !seen_content_;
-      if (!directive && !start)
-        fail("only line 1 may be '%YAML:1.0' and only line 1 or 2 a lone '---'");
+      if (raw == "..." && seen_content_) {
+        ended_ = true;
+        end_marker_ = static_cast<std::size_t>(raw.data() - text_begin_);
+        return;
+      }
+      if (!directive && !start) {
+        fail("'" + excerpt(std::string(text)) +
+             "': only line 1 may be a YAML directive ('%YAML:1.0' as OpenCV 4 writes it, "
+             "'%YAML 1.2' as OpenCV 5 does), only line 1 or 2 a lone '---' and only the last "
+             "line a lone '...'");
+      }
+      has_directive_ = has_directive_ || directive;
       return;
     }
     seen_content_ = true;
@@ -256,9 +277,20 @@ class CameraText {
     }
   }
 
+  /// `%YAML:1.N` (OpenCV 4) or `%YAML 1.N` (OpenCV 5), N = 0, 1, 2: the YAML versions whose
+  /// syntax OpenCV's reader shares (it refuses other majors).
+  static bool is_directive(View line) {
+    return line.size() == 9 && line.substr(0, 5) == "%YAML" && (line[5] == ':' || line[5] == ' ') &&
+           line.substr(6, 2) == "1." && line[8] >= '0' && line[8] <= '2';
+  }
+
   const std::string& path_;
+  const char* text_begin_ = nullptr;
   int line_ = 0;
   bool seen_content_ = false;
+  bool has_directive_ = false;
+  bool ended_ = false;                          ///< after a `...` line
+  std::size_t end_marker_ = std::string::npos;  ///< offset of the `...` line
   bool in_list_ = false, list_empty_ = false;
   bool in_matrix_ = false;
   unsigned matrix_fields_ = 0;  // bit k: kFields[k] seen
@@ -267,18 +299,9 @@ class CameraText {
 
 CameraModel read_camera(const std::string& path) {
   // OpenCV's calibration output with every view's points is a few MB at most.
-  constexpr std::uintmax_t kMaxBytes = 64u << 20;
-  if (std::filesystem::file_size(path) > kMaxBytes)
-    throw InputError(path + ": larger than the 64 MB a camera file can be");
-  std::string text;
-  {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream all;
-    all << in.rdbuf();
-    if (!in.is_open()) throw InputError(path + ": cannot read the camera file");
-    text = all.str();
-  }
-  CameraText(path).check(text);
+  constexpr std::size_t kMaxBytes = std::size_t{64} << 20;
+  const std::string text =
+      CameraText(path).check(read_input_file(path, kMaxBytes, "a camera file"));
   cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
   if (!fs.isOpened()) throw InputError(path + ": cannot parse the camera file");
   CameraModel camera;
@@ -398,6 +421,26 @@ void check_image_size(const CameraModel& camera, int width, int height,
                      " describes image_width x image_height = " + std::to_string(camera.width) +
                      " x " + std::to_string(camera.height));
   }
+}
+
+std::pair<int, int> parse_board_size(const std::string& text, const std::string& option) {
+  const auto count = [](std::string_view digits, int* value) {
+    if (digits.empty() || digits.size() > 3) return false;
+    *value = 0;
+    for (const char c : digits) {
+      if (c < '0' || c > '9') return false;
+      *value = 10 * *value + (c - '0');
+    }
+    return *value >= 2 && *value <= 100;
+  };
+  const std::size_t x = text.find('x');
+  int cols = 0, rows = 0;
+  if (x == std::string::npos || !count(std::string_view(text).substr(0, x), &cols) ||
+      !count(std::string_view(text).substr(x + 1), &rows)) {
+    throw InputError(option + ": expected COLSxROWS (inner corners, 2 to 100 each), got '" +
+                     excerpt(text) + "'");
+  }
+  return {cols, rows};
 }
 
 CalibrationResult calibrate_camera(const std::vector<std::string>& image_paths,

@@ -1,11 +1,13 @@
 #include "pcr/vision/mounts.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include "pcr/files.hpp"
 #include "pcr/robot_io.hpp"
@@ -29,10 +31,52 @@ int MountLayout::find(int limb, MountRole role) const {
 
 namespace {
 
+const char* const kRootFields[] = {"format", "version", "comment", "family", "tag_size", "mounts"};
+const char* const kMountFields[] = {"name",         "role",
+                                    "limb",         "id",
+                                    "family",       "tag_size",
+                                    "clamp_offset", "clamp_offset_uncertainty",
+                                    "rod_angle",    "rod_angle_uncertainty",
+                                    "comment"};
+
+/// Levenshtein distance: insertions, deletions and substitutions turning `a` into `b`.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
 struct Reader {
   const std::string& source;
   [[noreturn]] void fail(const std::string& field, const std::string& what) const {
     throw InputError(source + ": " + field + ": " + what);
+  }
+  /// Every key of the object `j` must be one of `known`: a misspelt field would otherwise be
+  /// ignored (or, for an optional one, replaced by its default) without a word.
+  template <std::size_t N>
+  void check_fields(const json& j, const std::string& path, const char* const (&known)[N]) const {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      const std::string& key = it.key();
+      if (std::find_if(known, known + N, [&](const char* k) { return key == k; }) != known + N)
+        continue;
+      const char* closest = known[0];
+      for (const char* k : known)
+        if (edit_distance(key, k) < edit_distance(key, closest)) closest = k;
+      std::string names;
+      for (const char* k : known) names += (names.empty() ? "" : ", ") + std::string(k);
+      fail((path.empty() ? "" : path + ".") + excerpt(key), "unknown field; did you mean \"" +
+                                                                std::string(closest) +
+                                                                "\"? (known here: " + names + ")");
+    }
   }
   double number(const json& j, const std::string& key, const std::string& path) const {
     if (!j.contains(key)) fail(path + "." + key, "missing");
@@ -73,6 +117,7 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
   }
   const Reader r{source};
   if (!root.is_object()) r.fail("(root)", "expected an object");
+  r.check_fields(root, "", kRootFields);
   if (root.contains("format") && root["format"] != "pcr-mounts") {
     r.fail("format", "expected \"pcr-mounts\", got " + excerpt(root["format"].dump()));
   }
@@ -90,6 +135,7 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
     Mount m;
     m.name = r.text(j, "name", path, path);
     const std::string where = path + " (" + m.name + ")";
+    r.check_fields(j, where, kMountFields);
     const std::string role = r.text(j, "role", where, std::string());
     if (role == "proximal") {
       m.role = MountRole::kProximal;
@@ -147,10 +193,7 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
 }
 
 MountLayout load_mounts(const std::string& path) {
-  std::ifstream in = open_input_file(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_mounts(ss.str(), path);
+  return parse_mounts(read_input_file(path, kMaxJsonFileBytes, "a mount layout"), path);
 }
 
 }  // namespace pcr::vision

@@ -44,10 +44,8 @@ using FamilyPtr = std::unique_ptr<apriltag_family_t, void (*)(apriltag_family_t*
 
 FamilyPtr make_family(const std::string& name) {
   const FamilyEntry* entry = find_family(name);
-  if (!entry) {
-    throw InputError("unknown tag family '" + name +
-                     "' (known: tag36h11, tag25h9, tag16h5, tagStandard41h12)");
-  }
+  if (!entry)
+    throw InputError("unknown tag family '" + name + "' (known: " + known_families() + ")");
   return FamilyPtr(entry->create(), entry->destroy);
 }
 
@@ -184,6 +182,12 @@ bool refine_quad(const GrayImage& im, const CameraModel* camera, double cells,
 }  // namespace
 
 bool is_known_family(const std::string& family) { return find_family(family) != nullptr; }
+
+std::string known_families() {
+  std::string names;
+  for (const FamilyEntry& f : kFamilies) names += (names.empty() ? "" : ", ") + std::string(f.name);
+  return names;
+}
 
 std::vector<bool> tag_bitmap(const std::string& family, int id, int* total_width,
                              int* width_at_border) {

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pcr::vision {
@@ -54,6 +55,11 @@ struct ChessboardSpec {
   int rows{6};
   double square_m{0.005};
 };
+
+/// `option`'s text "COLSxROWS" as cols and rows of ChessboardSpec: digits, 'x', digits and nothing
+/// else, 2 to 100 each ("9x6"); InputError naming the option and the text otherwise ("9x6x",
+/// "9x", " 9x6", "+9x6").
+std::pair<int, int> parse_board_size(const std::string& text, const std::string& option);
 
 struct CalibrationResult {
   CameraModel camera;

@@ -18,6 +18,8 @@ namespace pcr::vision {
 
 /// The supported families: tag36h11 (default), tag25h9, tag16h5, tagStandard41h12.
 bool is_known_family(const std::string& family);
+/// Their names, comma-separated, for messages: "tag36h11, tag25h9, tag16h5, tagStandard41h12".
+std::string known_families();
 /// Bitmap of one code, total_width x total_width cells, row 0 at the top; true = white.
 /// Throws InputError for an unknown family or an id out of range.
 std::vector<bool> tag_bitmap(const std::string& family, int id, int* total_width,
