@@ -13,9 +13,11 @@
 #include <vector>
 
 #include "pcr/calib/calibration_report.hpp"
+#include "pcr/calib/calibrator.hpp"
 #include "pcr/calib/dataset.hpp"
 #include "pcr/commands.hpp"
 #include "pcr/csv_io.hpp"
+#include "pcr/parameters.hpp"
 #include "pcr/robot_io.hpp"
 
 namespace {
@@ -28,6 +30,58 @@ bool same_file(const std::string& a, const std::string& b) {
     return std::filesystem::equivalent(a, b, ec);
   }
   return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
+}
+
+/// Whether the stage kind `kind` frees the flat parameter `index` (the kinds of
+/// pcr::CalibrationStage: a parameter's own name, its prefix before '_' such as "A" or "camera",
+/// "extrinsics" for camera and pattern, "all" for every one).
+bool kind_frees(const std::string& kind, int index, int num_limbs) {
+  const std::string name = pcr::parameter_kind_name(pcr::parameter_id(index, num_limbs).kind);
+  const bool extrinsic = index >= pcr::kLimbParameters * num_limbs;
+  return kind == "all" || kind == name || name.rfind(kind + "_", 0) == 0 ||
+         (kind == "extrinsics" && extrinsic);
+}
+
+/// The free parameters of `stage`: those its kinds name with a non-zero half-width (the others
+/// are held at their value), plus the platform load's for "load".
+int free_parameters(const pcr::CalibrationStage& stage, const std::vector<double>& half_widths,
+                    int num_limbs) {
+  int count = 0;
+  for (int k = 0; k < pcr::num_parameters(num_limbs); ++k) {
+    bool freed = false;
+    for (const std::string& kind : stage.free) freed = freed || kind_frees(kind, k, num_limbs);
+    count += freed && half_widths[static_cast<std::size_t>(k)] > 0 ? 1 : 0;
+  }
+  for (const std::string& kind : stage.free) count += kind == "load" ? pcr::kLoadParameters : 0;
+  return count;
+}
+
+/// A stage with more free parameters than measured values (3 per row) has no unique solution: the
+/// least-squares problem is underdetermined whatever the data.
+void check_enough_measurements(const std::vector<pcr::CalibrationStage>& stages,
+                               const pcr::RobotDescription& nominal, std::size_t rows,
+                               const std::string& source) {
+  const int n = nominal.params.num_limbs;
+  if (!nominal.uncertainty) return;  // pcr::calibrate names the missing section
+  const std::vector<double> half_widths = pcr::parameter_half_widths(*nominal.uncertainty, n);
+  // The stage with the most free parameters (the last, "all", for the default stages) decides.
+  const pcr::CalibrationStage* largest = nullptr;
+  int free = 0;
+  for (const pcr::CalibrationStage& stage : stages) {
+    const int count = free_parameters(stage, half_widths, n);
+    if (largest == nullptr || count > free) {
+      largest = &stage;
+      free = count;
+    }
+  }
+  const std::size_t measured = 3 * rows;
+  if (largest == nullptr || measured >= static_cast<std::size_t>(free)) return;
+  throw pcr::InputError(
+      source + ": " + std::to_string(rows) +
+      (rows == 1 ? " configuration gives " : " configurations give ") + std::to_string(measured) +
+      " measured values (x, y, theta each), fewer than the " + std::to_string(free) +
+      " free parameters of stage '" + largest->name + "': at least " +
+      std::to_string((free + 2) / 3) + " configurations are needed");
 }
 
 }  // namespace
@@ -55,7 +109,13 @@ int main(int argc, char** argv) {
                  "(0: plain least squares)")
       ->check(pcr::cli::within(0.0, 1e6))
       ->capture_default_str();
-  app.add_option("--output", output_path, "identified pcr-robot description")->required();
+  app.add_option("--output", output_path, "identified pcr-robot description")
+      ->required()
+      ->check(CLI::Validator(
+          [](std::string& value) {
+            return value.empty() ? std::string("the option is empty: give a file name") : "";
+          },
+          "", "NONEMPTY"));
   app.add_option("--report", report_path, "report JSON");
   app.add_option("--residuals", residuals_path,
                  "per-configuration residuals CSV (row,line,q1..qn,e_p,e_theta,residual_norm,"
@@ -72,6 +132,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
+    pcr::check_distinct_outputs(
+        {{"--output", output_path}, {"--report", report_path}, {"--residuals", residuals_path}});
     for (const std::string& input : {robot_path, data_path, validation_path, stages_path}) {
       if (input.empty()) continue;
       if (same_file(input, output_path) ||
@@ -84,13 +146,21 @@ int main(int argc, char** argv) {
     const int n = nominal.params.num_limbs;
     const std::vector<pcr::CalibrationSample> calibration =
         pcr::calibration_samples(pcr::read_dataset(data_path, n), data_path);
+    if (calibration.empty()) {
+      throw pcr::InputError(data_path + ": no calibration configuration (no data rows)");
+    }
     std::vector<pcr::CalibrationSample> validation;
-    if (!validation_path.empty())
+    if (!validation_path.empty()) {
       validation = pcr::calibration_samples(pcr::read_dataset(validation_path, n), validation_path);
+      if (validation.empty()) {
+        throw pcr::InputError(validation_path + ": no validation configuration (no data rows)");
+      }
+    }
 
     pcr::CalibrationOptions options;
     if (!stages_path.empty()) options.stages = pcr::load_calibration_stages(stages_path);
     if (identify_load) options.stages.back().free.push_back("load");
+    check_enough_measurements(options.stages, nominal, calibration.size(), data_path);
     options.orientation_weight = weight;
     options.drop_unreachable = drop_unreachable;
     options.robust_scale = robust_scale;

@@ -5,7 +5,8 @@
 //
 // case.txt: `# comment`, `run: ARGS` (after `pcr`; may redirect stdout), `exit: N`,
 // `message: TEXT` (in stderr), `keep: FILE` (any number), `nest: FILE DEPTH` (writes FILE as
-// DEPTH nested JSON arrays: too big to keep in the repository).
+// DEPTH nested JSON arrays: too big to keep in the repository), `tool: NAME` (run another tool
+// built next to `pcr`, e.g. pcr_calibrate, instead of `pcr`).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -33,7 +34,7 @@ std::string slurp(const fs::path& path) {
 }
 
 struct Case {
-  std::string run, message;
+  std::string run, message, tool;
   int exit = -1;
   std::vector<std::string> keep;
   std::vector<std::pair<std::string, int>> nest;
@@ -52,6 +53,7 @@ Case read_case(const fs::path& file) {
     if (key == "run") c.run = value;
     if (key == "exit") c.exit = std::stoi(value);
     if (key == "message") c.message = value;
+    if (key == "tool") c.tool = value;
     if (key == "keep") c.keep.push_back(value);
     if (key == "nest") {
       std::istringstream words(value);
@@ -79,6 +81,9 @@ TEST_P(BadInput, RefusedByNameWithoutHarm) {
   const fs::path source = kCorpus / GetParam();
   const Case c = read_case(source / "case.txt");
   ASSERT_FALSE(c.run.empty()) << "no run: line";
+  const fs::path tool =
+      c.tool.empty() ? fs::path(PCR_CLI_PATH) : fs::path(PCR_CLI_PATH).parent_path() / c.tool;
+  if (!fs::exists(tool)) GTEST_SKIP() << tool << " is not built";
   const pcr::test::ScratchDirectory scratch("bad_inputs");
   const fs::path dir = scratch.path() / "work";
   fs::create_directories(dir / "sub");
@@ -93,7 +98,7 @@ TEST_P(BadInput, RefusedByNameWithoutHarm) {
   }
   const fs::path err = scratch.path() / "stderr.txt";
   const bool redirects_stdout = c.run.find('>') != std::string::npos;
-  const std::string command = "cd '" + dir.string() + "' && '" + PCR_CLI_PATH + "' " + c.run +
+  const std::string command = "cd '" + dir.string() + "' && '" + tool.string() + "' " + c.run +
                               (redirects_stdout ? "" : " > /dev/null") + " 2> '" + err.string() +
                               "' < /dev/null";
   const int raw = std::system(command.c_str());

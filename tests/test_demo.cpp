@@ -78,6 +78,40 @@ TEST(Demo, RefusesSomeoneElsesDirectory) {
   EXPECT_FALSE(fs::exists(out / "report.json"));
 }
 
+// Without the measurement (--no-vision) nothing had made images/ when the maps were written there:
+// the run failed at its very end, without a report. The stages are numbered from one list.
+TEST(Demo, NoVisionRunIntoAFreshDirectoryWritesItsReport) {
+  const pcr::test::ScratchDirectory scratch("demo");
+  const fs::path out = scratch.path() / "fresh";
+  const std::string command = std::string(PCR_CLI_PATH) + " demo --no-vision --output '" +
+                              out.string() +
+                              "' --calibration 20 --validation 4 --repeat 3 --poses 4 > /dev/null "
+                              "2> '" +
+                              scratch.file("progress.txt") + "'";
+  const int status = std::system(command.c_str());
+  std::ifstream in(scratch.file("progress.txt"));
+  std::stringstream progress;
+  progress << in.rdbuf();
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << progress.str();
+  EXPECT_TRUE(fs::exists(out / "report.md"));
+  EXPECT_TRUE(fs::exists(out / "report.json"));
+  const nlohmann::json report = read_json(out / "report.json");
+  for (const auto& image : report["workspace"]["images"]) {
+    EXPECT_TRUE(fs::exists(out / image.get<std::string>())) << image;
+  }
+  // Stages [1/N] to [N/N], none beyond.
+  const std::string text = progress.str();
+  const std::size_t last = text.rfind("\n[");
+  ASSERT_NE(last, std::string::npos) << text;
+  const std::size_t slash = text.find('/', last), close = text.find(']', last);
+  const std::string stage = text.substr(last + 2, slash - last - 2);
+  const std::string count = text.substr(slash + 1, close - slash - 1);
+  EXPECT_EQ(stage, count) << text;
+  for (int k = 1; k <= std::stoi(count); ++k) {
+    EXPECT_NE(text.find("[" + std::to_string(k) + "/" + count + "] "), std::string::npos) << k;
+  }
+}
+
 TEST(Demo, RejectsAnUnknownEffect) {
   const pcr::test::ScratchDirectory scratch("demo");
   EXPECT_NE(run_demo(scratch, "--effects gravity --output " + scratch.file("x")), 0);

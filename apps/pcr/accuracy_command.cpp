@@ -55,8 +55,10 @@ std::vector<pcr::Pose2<double>> make_path(const AccuracyArguments& args, std::st
 }
 
 void run_accuracy(const AccuracyArguments& args) {
-  pcr::OutputTransaction outputs;  // the poses and the table: all or none
   using namespace pcr;
+  check_distinct_outputs({{"--poses", args.poses},
+                          {"--output", args.output.empty() ? std::string("-") : args.output}});
+  OutputTransaction outputs;  // the poses and the table: all or none
   if (args.format != "text" && args.format != "json" && args.format != "csv") {
     throw InputError("--format: expected text, json or csv, got '" + args.format + "'");
   }

@@ -2,6 +2,7 @@
 #ifdef PCR_HAS_VISION
 #include <cstdio>
 #include <iostream>
+#include <tuple>
 
 #include "commands.hpp"
 #include "pcr/vision/camera.hpp"
@@ -26,11 +27,7 @@ void register_camera_command(CLI::App& app) {
   cmd->add_option("--output", args->output, "camera YAML to write")->required();
   cmd->callback([args]() {
     pcr::vision::ChessboardSpec spec;
-    if (std::sscanf(args->board.c_str(), "%dx%d", &spec.cols, &spec.rows) != 2 || spec.cols < 2 ||
-        spec.rows < 2 || spec.cols > 100 || spec.rows > 100) {
-      throw pcr::InputError("--board: expected COLSxROWS (inner corners, 2 to 100 each), got '" +
-                            args->board + "'");
-    }
+    std::tie(spec.cols, spec.rows) = pcr::vision::parse_board_size(args->board, "--board");
     spec.square_m = args->square;
     const auto result = pcr::vision::calibrate_camera(args->images, spec);
     pcr::vision::save_camera(result.camera, args->output, result.rms_px);

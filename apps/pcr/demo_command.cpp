@@ -11,7 +11,9 @@
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "commands.hpp"
@@ -58,14 +60,19 @@ pcr::UnmodelledEffects parse_effects(const std::vector<std::string>& names) {
   return effects;
 }
 
-/// Stage-by-stage progress on stderr, with the time each stage took.
+/// Stage-by-stage progress on stderr, with the time each stage took. The stages are named once,
+/// in order, when it is made: their count is the list's.
 class Progress {
  public:
-  Progress(int stages, bool quiet) : stages_(stages), quiet_(quiet) {}
-  void begin(const std::string& name) {
-    ++stage_;
+  Progress(std::vector<std::string> stages, bool quiet)
+      : stages_(std::move(stages)), quiet_(quiet) {}
+  /// Starts the next stage of the list.
+  void begin() {
+    if (stage_ >= stages_.size()) throw std::logic_error("demo: more stages than listed");
     start_ = std::chrono::steady_clock::now();
-    say("[" + std::to_string(stage_) + "/" + std::to_string(stages_) + "] " + name);
+    say("[" + std::to_string(stage_ + 1) + "/" + std::to_string(stages_.size()) + "] " +
+        stages_[stage_]);
+    ++stage_;
   }
   void end() {
     char buf[64];
@@ -80,7 +87,8 @@ class Progress {
   }
 
  private:
-  int stages_, stage_ = 0;
+  std::vector<std::string> stages_;
+  std::size_t stage_ = 0;
   bool quiet_;
   std::chrono::steady_clock::time_point start_;
 };
@@ -88,6 +96,8 @@ class Progress {
 /// The output directory: created, or reused only when a previous demo made it (never someone
 /// else's files).
 fs::path prepare_output(const std::string& dir) {
+  if (dir.empty())
+    throw pcr::InputError("--output: the option is empty: give the report directory");
   const fs::path out(dir);
   const fs::path marker = out / ".pcr-demo";
   if (fs::exists(out)) {
@@ -358,6 +368,8 @@ std::string workspace_section(const pcr::RobotDescription& identified,
       }
     }
     if (!(hi > lo)) return;
+    // The measurement, when it ran, made the directory; without it (--no-vision) it is made here.
+    fs::create_directories(out / "images");
     const std::string file = std::string("images/map-") + name + ".png";
     pcr::vision::write_heat_map_png(values, map.nx, map.ny, lo, hi, (out / file).string());
     images.push_back(file);
@@ -411,7 +423,13 @@ void run_demo(const DemoArgs& args) {
   // Every file goes in place at the end, when all were written: a failed or interrupted demo
   // leaves the files of the previous run as they were.
   pcr::OutputTransaction outputs;
-  Progress progress(5, args.quiet);
+  Progress progress(
+      {"measurement: render the mounts, detect the tags, measure the nominal robot",
+       "sensitivity analysis (Table 2)", "Poisson-disc sampling and simulated measurements",
+       "three-stage calibration (Table 3)",
+       "square and circle trajectories, ISO 9283 accuracy (Table 4)",
+       "workspace maps of the identified robot (reachability, stability, singularity)"},
+      args.quiet);
   json report;
   report["seed"] = args.seed;
   report["unmodelled_effects"] = args.effects;
@@ -432,7 +450,7 @@ void run_demo(const DemoArgs& args) {
   pcr::save_robot(robot.truth(), (out / "truth.json").string());
 
   // 1. Nominal description.
-  progress.begin("measurement: render the mounts, detect the tags, measure the nominal robot");
+  progress.begin();
   pcr::RobotDescription nominal = design;
   bool measured = false;
 #ifdef PCR_HAS_VISION
@@ -454,7 +472,7 @@ void run_demo(const DemoArgs& args) {
   progress.end();
 
   // 2. Sensitivity.
-  progress.begin("sensitivity analysis (Table 2)");
+  progress.begin();
   const pcr::SensitivityReport sensitivity = pcr::sensitivity_analysis(nominal);
   pcr::write_file_atomically((out / "sensitivity.csv").string(), pcr::sensitivity_csv(sensitivity));
   report["sensitivity"] = json::parse(pcr::sensitivity_json(sensitivity));
@@ -463,7 +481,7 @@ void run_demo(const DemoArgs& args) {
   progress.end();
 
   // 3. Configurations and simulated measurements.
-  progress.begin("Poisson-disc sampling and simulated measurements");
+  progress.begin();
   pcr::SamplingOptions sampling;
   sampling.count = args.calibration_count + args.validation_count;
   sampling.seed = args.seed;
@@ -491,7 +509,7 @@ void run_demo(const DemoArgs& args) {
   progress.end();
 
   // 4. Calibration.
-  progress.begin("three-stage calibration (Table 3)");
+  progress.begin();
   const std::vector<pcr::CalibrationSample> calibration =
       pcr::calibration_samples(calibration_data);
   const std::vector<pcr::CalibrationSample> validation = pcr::calibration_samples(validation_data);
@@ -533,13 +551,13 @@ void run_demo(const DemoArgs& args) {
   progress.end();
 
   // 5. Trajectories and accuracy.
-  progress.begin("square and circle trajectories, ISO 9283 accuracy (Table 4)");
+  progress.begin();
   md += "## 4. Trajectory accuracy, ISO 9283 (Table 4)\n\n" +
         accuracy_section(calibrated, robot, args, out, report, progress);
   progress.end();
 
   // 6. Workspace maps.
-  progress.begin("workspace maps of the identified robot (reachability, stability, singularity)");
+  progress.begin();
   md += "\n## 5. Where the identified robot can work\n\n" +
         workspace_section(identified, calibrated, out, report, progress);
   progress.end();

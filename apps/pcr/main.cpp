@@ -29,6 +29,39 @@ void exec_full_tool(char** argv) {
 }
 #endif
 
+/// Every subcommand's --output: an empty name (`--output ""`, an unset shell variable) is neither
+/// stdout (that is "-") nor the current directory; refused by CLI11, naming the option.
+void refuse_empty_outputs(CLI::App& app) {
+  for (CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
+    CLI::Option* output = command->get_option_no_throw("--output");
+    if (output == nullptr) continue;
+    const std::string what = command->get_name() == "demo"
+                                 ? "give the report directory"
+                                 : "give a file name, or - for stdout where the command allows it";
+    output->check(CLI::Validator(
+        [what](std::string& value) {
+          return value.empty() ? "the option is empty: " + what : std::string();
+        },
+        "", "NONEMPTY"));
+  }
+}
+
+/// A first argument that is no option nor subcommand: named, with the subcommands (CLI11 would
+/// only say that a subcommand is required).
+void refuse_unknown_subcommand(CLI::App& app, int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return;
+  const std::string name = argv[1];
+  std::string names;
+  bool known = false;
+  for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
+    known = known || command->check_name(name);
+    names += (names.empty() ? "" : ", ") + command->get_name();
+  }
+  if (!known) {
+    throw CLI::ValidationError("unknown subcommand '" + name + "'; the subcommands are " + names);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -61,7 +94,9 @@ int main(int argc, char** argv) {
                                             .empty();
   if (!own_command) exec_full_tool(argv);
 #endif
+  refuse_empty_outputs(app);
   try {
+    refuse_unknown_subcommand(app, argc, argv);
     app.parse(argc, argv);  // the chosen subcommand runs inside parse()
   } catch (const CLI::ParseError& e) {
     return app.exit(e);

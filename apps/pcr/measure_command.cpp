@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "pcr/vision/measure.hpp"
+#include "pcr/vision/tags.hpp"
 
 void register_measure_command(CLI::App& app) {
   struct Args {
@@ -38,6 +39,11 @@ void register_measure_command(CLI::App& app) {
   cmd->callback([args]() {
     using namespace pcr;
     using namespace pcr::vision;
+    if (!is_known_family(args->options.detector.family)) {
+      throw InputError("--family: unknown tag family '" + args->options.detector.family +
+                       "'; the accepted families are " + known_families());
+    }
+    check_distinct_outputs({{"--output", args->output}, {"--annotated", args->annotated}});
     const RobotDescription design = load_robot_or_default(args->design);
     const MountLayout layout = load_mounts(args->mounts);
     const CameraModel camera = load_camera(args->camera);

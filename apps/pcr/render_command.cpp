@@ -1,29 +1,38 @@
 // pcr render: a synthetic image of the robot's rod-mount tags (tests, end-to-end demo).
 #ifdef PCR_HAS_VISION
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "commands.hpp"
 #include "pcr/vision/render.hpp"
 
 namespace {
 
-std::vector<double> parse_list(const std::string& text, std::size_t n, const std::string& option) {
+/// `option`'s text: as many comma-separated finite numbers as `names`, which name them in errors.
+std::vector<double> parse_list(const std::string& text, const std::vector<std::string>& names,
+                               const std::string& option) {
   std::vector<double> out;
   std::stringstream ss(text);
   std::string item;
   while (std::getline(ss, item, ',')) {
     char* end = nullptr;
-    out.push_back(std::strtod(item.c_str(), &end));
+    const double value = std::strtod(item.c_str(), &end);
     if (item.empty() || *end != '\0')
       throw pcr::InputError(option + ": '" + text + "' is not a list of numbers");
+    if (out.size() < names.size() && !std::isfinite(value)) {
+      throw pcr::InputError(option + ": " + names[out.size()] + " = " + item +
+                            " is not a finite number");
+    }
+    out.push_back(value);
   }
-  if (n && out.size() != n)
-    throw pcr::InputError(option + ": expected " + std::to_string(n) + " numbers, got '" + text +
-                          "'");
+  if (out.size() != names.size() || (!text.empty() && text.back() == ','))
+    throw pcr::InputError(option + ": expected " + std::to_string(names.size()) + " numbers (" +
+                          CLI::detail::join(names, ",") + "), got '" + text + "'");
   return out;
 }
 
@@ -94,6 +103,8 @@ void register_render_command(CLI::App& app) {
     using namespace pcr::vision;
     if (args->mounts.empty() && args->chessboard.empty())
       throw InputError("pcr render: give --mounts or --chessboard");
+    check_distinct_outputs(
+        {{"--output", args->output}, {"--camera-out", args->camera_out}, {"--truth", args->truth}});
     const RobotDescription robot = load_robot_or_default(args->robot);
     Scene scene;
     if (args->camera.empty()) {
@@ -103,10 +114,18 @@ void register_render_command(CLI::App& app) {
       scene.camera = load_camera(args->camera);
     }
     scene.plane = PlanePose::looking_down(args->height, args->tilt_x, args->tilt_y);
-    const std::vector<double> q = args->q.empty()
-                                      ? std::vector<double>{}
-                                      : parse_list(args->q, robot.params.num_limbs, "--q");
-    const std::vector<double> pl = parse_list(args->platform, 3, "--platform");
+    const int n = robot.params.num_limbs;
+    const std::vector<double> q =
+        args->q.empty() ? std::vector<double>{} : parse_list(args->q, cli::joint_names(n), "--q");
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      const LimbParams<double>& limb = robot.params.limb(static_cast<int>(i));
+      if (q[i] < limb.q_min || q[i] > limb.q_max) {
+        throw InputError("--q: q" + std::to_string(i + 1) + " = " + format_double(q[i]) +
+                         " m is beyond the stroke of limbs[" + std::to_string(i) + "], q_range [" +
+                         format_double(limb.q_min) + ", " + format_double(limb.q_max) + "] m");
+      }
+    }
+    const std::vector<double> pl = parse_list(args->platform, {"x", "y", "theta"}, "--platform");
     const Pose2<double> platform{pl[0], pl[1], pl[2]};
     if (!args->mounts.empty()) {
       scene.tags = mount_tags(load_mounts(args->mounts), robot.params, platform, q,
@@ -118,14 +137,12 @@ void register_render_command(CLI::App& app) {
     }
     if (!args->chessboard.empty()) {
       RenderChessboard board;
-      if (std::sscanf(args->chessboard.c_str(), "%dx%d", &board.cols, &board.rows) != 2 ||
-          board.cols < 2 || board.rows < 2 || board.cols > 100 || board.rows > 100)
-        throw InputError("--chessboard: expected COLSxROWS (inner corners, 2 to 100 each), got '" +
-                         args->chessboard + "'");
+      std::tie(board.cols, board.rows) = parse_board_size(args->chessboard, "--chessboard");
       if (!(args->square > 0))
         throw InputError("--square: must be > 0, got " + std::to_string(args->square));
       board.square_m = args->square;
-      const std::vector<double> c = parse_list(args->board_pose, 3, "--board-pose");
+      const std::vector<double> c =
+          parse_list(args->board_pose, {"x", "y", "theta"}, "--board-pose");
       scene.chessboard =
           RenderChessboard::centred(board.cols, board.rows, board.square_m, {c[0], c[1], c[2]});
     }

@@ -26,6 +26,8 @@ struct SampleArguments {
 
 void run_sample(const SampleArguments& args) {
   using namespace pcr;
+  check_distinct_outputs(
+      {{"--output", args.output}, {"--validation-output", args.validation_output}});
   const RobotDescription robot = load_robot_or_default(args.robot);
   const int n = robot.params.num_limbs;
   SamplingOptions options;

@@ -16,6 +16,7 @@ struct SensitivityArguments {
 
 void run_sensitivity(const SensitivityArguments& args) {
   using namespace pcr;
+  check_distinct_outputs({{"--csv", args.csv}, {"--json", args.json}});
   const RobotDescription robot = load_robot_or_default(args.robot);
   SensitivityOptions options;
   options.step = args.step;

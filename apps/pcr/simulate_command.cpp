@@ -23,6 +23,7 @@ struct SimulateArguments {
 
 void run_simulate(const SimulateArguments& args) {
   using namespace pcr;
+  check_distinct_outputs({{"--output", args.output}, {"--truth", args.truth}});
   const RobotDescription nominal = load_robot_or_default(args.robot);
   VirtualRobotOptions options;
   options.seed = args.seed;
