@@ -71,7 +71,7 @@ def main():
         path = os.path.join(scratch, "path.csv")
         write_path(path, args.rows)
         output = os.path.join(scratch, "fk.csv")
-        cli_us = best_seconds([pcr, "fk", "--input", path, "--output", output],
+        cli_us = best_seconds([pcr, "fk", "--path", "--input", path, "--output", output],
                               args.repeat) / args.rows * 1e6
         poses = os.path.join(scratch, "poses.csv")
         with open(output) as fk, open(poses, "w") as f:
@@ -80,7 +80,7 @@ def main():
             for row in rows:
                 f.write(f"{row['x']},{row['y']},{row['theta']}\n")
         ik_output = os.path.join(scratch, "ik.csv")
-        ik_us = best_seconds([pcr, "ik", "--input", poses, "--output", ik_output],
+        ik_us = best_seconds([pcr, "ik", "--path", "--input", poses, "--output", ik_output],
                              args.repeat) / args.rows * 1e6
         measured = subprocess.run([library, path, str(args.repeat), poses], capture_output=True,
                                   text=True, check=True).stdout

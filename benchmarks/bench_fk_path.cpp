@@ -54,7 +54,7 @@ int main(int argc, char** argv) try {
   }
 
   const double sequence_us = best_us_per_item(repeat, path.size(), [&] {
-    ForwardSequence sequence(robot);
+    ForwardSequence sequence(robot, SolverOptions(), PlatformLoad<double>(), SequenceMode::kPath);
     int failures = 0;
     for (const JointVector& q : path) failures += !sequence.solve(q).summary.converged();
     return failures;
@@ -81,7 +81,7 @@ int main(int argc, char** argv) try {
     std::vector<Pose2<double>> poses;
     for (const CsvRow row : poses_table.rows) poses.push_back({row[0], row[1], row[2]});
     ik_sequence_us = best_us_per_item(repeat, poses.size(), [&] {
-      InverseSequence sequence(robot);
+      InverseSequence sequence(robot, SolverOptions(), PlatformLoad<double>(), SequenceMode::kPath);
       int failures = 0;
       for (const Pose2<double>& pose : poses) failures += !sequence.solve(pose).summary.converged();
       return failures;

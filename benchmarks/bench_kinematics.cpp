@@ -219,7 +219,8 @@ BENCHMARK(BM_InverseWarm)->Arg(0)->Arg(1);
 // to 1 mrad).
 void BM_ForwardSequence(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
-  ForwardSequence sequence(robot, with_stability(state));
+  ForwardSequence sequence(robot, with_stability(state), PlatformLoad<double>(),
+                           SequenceMode::kPath);
   SolveTimer timer;
   long k = 0;
   for (auto _ : state) {
@@ -234,7 +235,8 @@ BENCHMARK(BM_ForwardSequence)->Arg(0)->Arg(1);
 
 void BM_InverseSequence(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();
-  InverseSequence sequence(robot, with_stability(state));
+  InverseSequence sequence(robot, with_stability(state), PlatformLoad<double>(),
+                           SequenceMode::kPath);
   SolveTimer timer;
   long k = 0;
   for (auto _ : state) {
@@ -247,6 +249,39 @@ void BM_InverseSequence(benchmark::State& state) {
   timer.report(state);
 }
 BENCHMARK(BM_InverseSequence)->Arg(0)->Arg(1);
+
+// A set of 99 configurations in random order across the central +-4 mm of the stroke box (a
+// sampler's calibration set): as independent rows (arg 0: from the home solution the sequence
+// keeps), as a path through them in that order (arg 1: each continued from the last, on its
+// branch), and cold one by one (arg 2: forward_kinematics(robot, q)). Time per row.
+void BM_ScatteredRows(benchmark::State& state) {
+  const RobotParams<double> robot = femto_3pf();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.004, 0.004);
+  std::vector<JointVector> rows;
+  for (int k = 0; k < 99; ++k) {
+    JointVector q(3);
+    q << u(rng), u(rng), u(rng);
+    rows.push_back(q);
+  }
+  const int how = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    if (how == 2) {
+      for (const JointVector& q : rows) {
+        const ForwardSolution fk = forward_kinematics(robot, q);
+        benchmark::DoNotOptimize(fk.pose.x);
+      }
+      continue;
+    }
+    ForwardSequence sequence(robot, SolverOptions(), PlatformLoad<double>(),
+                             how == 0 ? SequenceMode::kIndependent : SequenceMode::kPath);
+    for (const JointVector& q : rows) benchmark::DoNotOptimize(sequence.solve(q).pose.x);
+  }
+  state.counters["us_per_row"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * rows.size() * 1e-6,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_ScatteredRows)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 void BM_ForwardCold(benchmark::State& state) {
   const RobotParams<double> robot = femto_3pf();

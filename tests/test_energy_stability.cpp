@@ -125,7 +125,7 @@ TEST(EnergyStability, PastAFoldTheLongerStrokeRobotIsUnstable) {
   }
   SolverOptions options;
   options.stable_inverse = false;  // stay on the branch that loses its stability
-  InverseSequence sequence(robot, options);
+  InverseSequence sequence(robot, options, PlatformLoad<double>(), SequenceMode::kPath);
   const double direction = 75 * M_PI / 180;
   double previous = std::numeric_limits<double>::infinity();
   for (int k = 0; k <= 250; ++k) {

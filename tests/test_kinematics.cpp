@@ -325,7 +325,7 @@ TEST(Kinematics, PreStressedRedundantRobotsFindTheirBowedHome) {
     const SolveStatus warm = forward_kinematics(robot, q, home).summary.status;
     EXPECT_TRUE(warm == SolveStatus::kConverged || warm == SolveStatus::kBifurcation)
         << "robot " << r << ": " << to_string(warm);
-    ForwardSequence sequence(robot);
+    ForwardSequence sequence(robot, SolverOptions(), PlatformLoad<double>(), SequenceMode::kPath);
     sequence.set_warm_start(home);
     const ForwardSolution& moved = sequence.solve(q);
     EXPECT_TRUE(moved.summary.converged())

@@ -332,7 +332,7 @@ TEST(Stability, FlagAgreesWithTheEnergyOnBothSidesOfAFold) {
   const RobotParams<double> robot = longer_stroke_robot();
   SolverOptions options;
   options.stable_inverse = false;
-  InverseSequence sequence(robot, options);
+  InverseSequence sequence(robot, options, PlatformLoad<double>(), SequenceMode::kPath);
   const double direction = 75 * M_PI / 180;
   double margin_before = HUGE_VAL;
   for (int k = 0; k <= 250; ++k) {
@@ -360,10 +360,10 @@ TEST(Stability, FlagAgreesWithTheEnergyOnBothSidesOfAFold) {
 // which the energy confirms; cold IK finds it too.
 TEST(Stability, InverseKinematicsReturnsAStableEquilibrium) {
   const RobotParams<double> robot = longer_stroke_robot();
-  InverseSequence sequence(robot);
+  InverseSequence sequence(robot, SolverOptions(), PlatformLoad<double>(), SequenceMode::kPath);
   SolverOptions unchecked;
   unchecked.stable_inverse = false;
-  InverseSequence branch(robot, unchecked);
+  InverseSequence branch(robot, unchecked, PlatformLoad<double>(), SequenceMode::kPath);
   const double direction = 75 * M_PI / 180;
   for (int k = 0; k <= 250; ++k) {
     const double t = k * 1e-4;
@@ -395,7 +395,7 @@ TEST(Stability, FlagAgreesWithTheEnergyThroughAFoldTracedByArclength) {
   const RobotParams<double> robot = longer_stroke_robot();
   SolverOptions options;
   options.stable_inverse = false;
-  InverseSequence sequence(robot, options);
+  InverseSequence sequence(robot, options, PlatformLoad<double>(), SequenceMode::kPath);
   const double direction = 75 * M_PI / 180;
   InverseSolution near_fold;
   for (int k = 0; k <= 2276; ++k) {  // 10 um steps to 22.76 mm

@@ -155,8 +155,30 @@ struct SolveArguments {
   }
 };
 
-/// The row loop of `pcr fk` and `pcr ik`: `solve_row(row, out)` solves each input row
-/// (warm-starting from the rows before it), adds its output fields to `out` and returns its status;
+/// What the rows of `pcr fk` and `pcr ik` are (pcr::SequenceMode).
+struct RowsArguments {
+  bool path = false;
+  bool through_folds = false;
+
+  void add_to(CLI::App& command) {
+    CLI::Option* path_flag = command.add_flag(
+        "--path", path,
+        "the rows are a path the robot follows in this order: each row continued from the one "
+        "before (fast along a smooth path). Default: each row on its own, in any order, on the "
+        "branch connected to home (as a solve from home gives it)");
+    command
+        .add_flag("--through-folds", through_folds,
+                  "with --path: where the branch ends at a fold, follow it through (the robot "
+                  "snaps through), not from home")
+        ->needs(path_flag);
+  }
+
+  SequenceMode mode() const { return path ? SequenceMode::kPath : SequenceMode::kIndependent; }
+  void apply(SolverOptions& options) const { options.through_folds = through_folds; }
+};
+
+/// The row loop of `pcr fk` and `pcr ik`: `solve_row(row, out)` solves each input row (as its
+/// RowsArguments say), adds its output fields to `out` and returns its status;
 /// the output is written atomically, each failed row is named on stderr by its input line, and the
 /// exit status is 1 if any failed.
 template <class SolveRow>

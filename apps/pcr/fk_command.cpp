@@ -1,4 +1,5 @@
-// pcr fk: joint values -> platform pose, one CSV row per input row, warm-started row to row.
+// pcr fk: joint values -> platform pose, one CSV row per input row: each on its own, or a path
+// (--path).
 #include <iostream>
 #include <memory>
 
@@ -9,13 +10,15 @@ namespace {
 struct FkArguments {
   std::string robot, input, output;
   pcr::cli::SolveArguments solve;
+  pcr::cli::RowsArguments rows;
 };
 
 void run_fk(const FkArguments& args) {
   using namespace pcr;
   const RobotDescription robot = load_robot_or_default(args.robot);
   const int n = robot.params.num_limbs;
-  const SolverOptions options = args.solve.options();
+  SolverOptions options = args.solve.options();
+  args.rows.apply(options);
   const PlatformLoad<double> load = args.solve.load();
   CsvReadOptions csv;
   csv.columns = cli::joint_names(n);
@@ -28,7 +31,7 @@ void run_fk(const FkArguments& args) {
   for (const char* c : {"x", "y", "theta"}) header.emplace_back(c);
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
-  ForwardSequence sequence(robot.params, options, load);
+  ForwardSequence sequence(robot.params, options, load, args.rows.mode());
   const auto solve_row = [&](const CsvRow row, CsvWriter& out) {
     JointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
@@ -66,5 +69,6 @@ void register_fk_command(CLI::App& app) {
   fk->add_option("--input", args->input, "CSV of joint values (default: stdin)");
   fk->add_option("--output", args->output, "output CSV (default: stdout)");
   args->solve.add_to(*fk);
+  args->rows.add_to(*fk);
   fk->callback([args] { run_fk(*args); });
 }

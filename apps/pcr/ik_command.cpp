@@ -1,4 +1,5 @@
-// pcr ik: platform poses -> joint values, one CSV row per input row, warm-started row to row.
+// pcr ik: platform poses -> joint values, one CSV row per input row: each on its own, or a path
+// (--path).
 #include <iostream>
 #include <memory>
 
@@ -9,6 +10,7 @@ namespace {
 struct IkArguments {
   std::string robot, input, output;
   pcr::cli::SolveArguments solve;
+  pcr::cli::RowsArguments rows;
   bool allow_unstable = false;
 };
 
@@ -16,7 +18,8 @@ void run_ik(const IkArguments& args) {
   using namespace pcr;
   const RobotDescription robot = cli::load_robot_for_inverse(args.robot, "pcr ik");
   const int n = robot.params.num_limbs;
-  const SolverOptions options = args.solve.options();
+  SolverOptions options = args.solve.options();
+  args.rows.apply(options);
   const PlatformLoad<double> load = args.solve.load();
   CsvReadOptions csv;
   csv.columns = {"x", "y", "theta"};
@@ -28,7 +31,7 @@ void run_ik(const IkArguments& args) {
   for (const std::string& q : cli::joint_names(n)) header.push_back(q);
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
-  InverseSequence sequence(robot.params, options, load);
+  InverseSequence sequence(robot.params, options, load, args.rows.mode());
   const auto solve_row = [&](const CsvRow row, CsvWriter& out) {
     const Pose2<double> pose{row[0], row[1], row[2]};
     const InverseSolution& solution = sequence.solve(pose);
@@ -65,5 +68,6 @@ void register_ik_command(CLI::App& app) {
   ik->add_flag("--allow-unstable", args->allow_unstable,
                "accept rows where only an unstable equilibrium was found (exit status 0)");
   args->solve.add_to(*ik);
+  args->rows.add_to(*ik);
   ik->callback([args] { run_ik(*args); });
 }

@@ -61,13 +61,21 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot,
                                      const SolverOptions& options = SolverOptions(),
                                      const PlatformLoad<double>& load = PlatformLoad<double>());
 
-/// Forward kinematics from a cold start: the home solution, then a (continued) path to q. When
+/// Forward kinematics from a cold start: the home solution, then forward_kinematics_from_home.
+inline ForwardSolution forward_kinematics(
+    const RobotParams<double>& robot, const JointVector& q,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>());
+
+/// Forward kinematics from the home solution (home_solution's, with or without its stability
+/// checked), on the branch connected to it: a (continued) path from home to q. When
 /// home is a bifurcation (straight rods of a robot with n >= 4 limbs), or with n >= 4 the path
 /// from home fails, q is solved directly from a bowed variant of the robot instead: the branch
 /// whose rods bow to their left, else the one where they bow to their right (then the same with
-/// twice and with half the bow).
-inline ForwardSolution forward_kinematics(
-    const RobotParams<double>& robot, const JointVector& q,
+/// twice and with half the bow). A home that did not converge is returned as it is. The summary
+/// does not count the home solve's iterations.
+inline ForwardSolution forward_kinematics_from_home(
+    const RobotParams<double>& robot, const JointVector& q, const ForwardSolution& home,
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
 
@@ -78,9 +86,17 @@ inline InverseSolution inverse_kinematics(
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
 
-/// Inverse kinematics from a cold start: from the home solution along a straight pose path.
+/// Inverse kinematics from a cold start: the home solution, then inverse_kinematics_from_home.
 inline InverseSolution inverse_kinematics(
     const RobotParams<double>& robot, const Pose2<double>& pose,
+    const SolverOptions& options = SolverOptions(),
+    const PlatformLoad<double>& load = PlatformLoad<double>());
+
+/// Inverse kinematics from the home solution along the straight pose path from home's pose, on
+/// the branch connected to home. A home that did not converge is returned as a failed solution.
+/// The summary does not count the home solve's iterations.
+inline InverseSolution inverse_kinematics_from_home(
+    const RobotParams<double>& robot, const Pose2<double>& pose, const ForwardSolution& home,
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
 
@@ -141,13 +157,29 @@ InverseSolution inverse_kinematics_through_folds(
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>(), Visitor&& visit = Visitor());
 
+/// What the inputs of a sequence are, and so which equilibrium each one gets (a robot may hold
+/// several at the same joints or pose).
+enum class SequenceMode {
+  /// Inputs each on its own, in any order (a set of configurations or poses, a file's rows):
+  /// each on the branch connected to home, exactly the cold solve's (forward_kinematics(robot,
+  /// q) or inverse_kinematics(robot, pose)), from the home solution the sequence computes once.
+  kIndependent,
+  /// A path the robot follows in this order (a trajectory, a control loop, an experiment in the
+  /// order it was run): each input continued from the last usable solution along the straight
+  /// input path, on its branch (the step control of solve_path_at_fixed_steps); where the branch
+  /// ends at a fold, followed through it with SolverOptions::through_folds (the robot snaps
+  /// through), else solved cold from home.
+  kPath,
+};
+
 /// Solves a sequence of FK (ForwardSequence) or IK (InverseSequence) inputs: the rows of a file,
-/// a batch, a trajectory, a measurement campaign. One policy, everywhere in pcr: each input is
-/// warm-started from the last usable solution of the sequence (usable_as_warm_start), and a warm
-/// solve that fails is retried cold, from home (one that stops at a fold is first followed through
-/// it, with SolverOptions::through_folds). A failed input leaves the warm start as it was, so
-/// the input after it starts from the last usable solution again. No heap: the solutions live in
-/// the solver, which keeps the last usable one and the latest one.
+/// a batch, a trajectory, a measurement campaign. One policy, everywhere in pcr, chosen by what
+/// the inputs are (SequenceMode). In a path, each input is warm-started from the last usable
+/// solution (usable_as_warm_start), and a warm solve that fails is retried cold, from home (one
+/// that stops at a fold is first followed through it, with SolverOptions::through_folds). A failed
+/// input leaves the warm start as it was, so the input after it starts from the last usable
+/// solution again. No heap: the solutions live in the solver, which keeps the home solution, the
+/// last usable one and the latest one.
 template <class Solution>
 class SequenceSolver {
  public:
@@ -157,13 +189,15 @@ class SequenceSolver {
 
   explicit SequenceSolver(const RobotParams<double>& robot,
                           const SolverOptions& options = SolverOptions(),
-                          const PlatformLoad<double>& load = PlatformLoad<double>())
-      : robot_(robot), options_(options), load_(load) {}
+                          const PlatformLoad<double>& load = PlatformLoad<double>(),
+                          SequenceMode mode = SequenceMode::kIndependent)
+      : robot_(robot), options_(options), load_(load), mode_(mode) {}
 
   /// Solves the next input; the reference stays valid until the next call.
   const Solution& solve(const Input& input);
 
-  /// Starts the next input from `warm` (a usable solution), as if it had been the last one.
+  /// Starts the next input of a path from `warm` (a usable solution), as if it had been the last
+  /// one.
   void set_warm_start(const Solution& warm) {
     slots_[last_] = warm;
     has_last_ = true;
@@ -176,11 +210,15 @@ class SequenceSolver {
   const RobotParams<double>& robot() const { return robot_; }
   const SolverOptions& options() const { return options_; }
   const PlatformLoad<double>& load() const { return load_; }
+  SequenceMode mode() const { return mode_; }
 
  private:
   RobotParams<double> robot_;
   SolverOptions options_;
   PlatformLoad<double> load_;
+  SequenceMode mode_;
+  ForwardSolution home_;  ///< kIndependent: the home solution, once solved (has_home_)
+  bool has_home_ = false;
   Solution slots_[2];  ///< the last usable solution and the latest one
   int last_ = 0;
   bool has_last_ = false;

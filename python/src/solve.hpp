@@ -1,7 +1,7 @@
 #pragma once
-// The batch loops behind Robot.forward / Robot.inverse, kept out of the wrappers: rows warm-
-// started along the batch, with a cold retry (forward/inverse_kinematics_or_cold, as `pcr fk` and
-// `pcr ik` do). Plain C++, called with the GIL released.
+// The batch loops behind Robot.forward / Robot.inverse, kept out of the wrappers: rows solved as a
+// pcr::SequenceSolver in the mode asked for (each on its own, or a path), as `pcr fk` and `pcr ik`
+// do. Plain C++, called with the GIL released.
 
 #include <limits>
 
@@ -49,13 +49,19 @@ void store_row(const Solution& s, bool usable, int n, std::ptrdiff_t r, const Ba
   out.singularity[r] = s.summary.singularity;
 }
 
-/// FK of every row of q (N x n, row-major), warm-started from the previous usable row.
-/// `solutions` (optional, size N) receives the full solutions (for the shapes).
+/// Robot.forward's and Robot.inverse's `path` keyword as a sequence mode.
+inline SequenceMode sequence_mode(bool path) {
+  return path ? SequenceMode::kPath : SequenceMode::kIndependent;
+}
+
+/// FK of every row of q (N x n, row-major), as a sequence in `mode`. `solutions` (optional, size
+/// N) receives the full solutions (for the shapes).
 inline void forward_batch(const RobotParams<double>& robot, const double* q, std::ptrdiff_t rows,
                           const SolverOptions& options, const PlatformLoad<double>& load,
-                          const BatchBuffers& out, ForwardSolution* solutions = nullptr) {
+                          SequenceMode mode, const BatchBuffers& out,
+                          ForwardSolution* solutions = nullptr) {
   const int n = robot.num_limbs;
-  ForwardSequence sequence(robot, options, load);
+  ForwardSequence sequence(robot, options, load, mode);
   JointVector joints(n);
   for (std::ptrdiff_t r = 0; r < rows; ++r) {
     for (int i = 0; i < n; ++i) joints(i) = q[r * n + i];
@@ -67,13 +73,13 @@ inline void forward_batch(const RobotParams<double>& robot, const double* q, std
   }
 }
 
-/// IK of every row of poses (N x 3, row-major), warm-started from the previous usable row.
+/// IK of every row of poses (N x 3, row-major), as a sequence in `mode`.
 inline void inverse_batch(const RobotParams<double>& robot, const double* poses,
                           std::ptrdiff_t rows, const SolverOptions& options,
-                          const PlatformLoad<double>& load, const BatchBuffers& out,
-                          InverseSolution* solutions = nullptr) {
+                          const PlatformLoad<double>& load, SequenceMode mode,
+                          const BatchBuffers& out, InverseSolution* solutions = nullptr) {
   const int n = robot.num_limbs;
-  InverseSequence sequence(robot, options, load);
+  InverseSequence sequence(robot, options, load, mode);
   for (std::ptrdiff_t r = 0; r < rows; ++r) {
     const Pose2<double> pose{poses[r * 3], poses[r * 3 + 1], poses[r * 3 + 2]};
     const InverseSolution& s = sequence.solve(pose);

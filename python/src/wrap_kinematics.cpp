@@ -135,7 +135,7 @@ BatchResult allocate_batch(py::ssize_t rows, int n, BatchBuffers& buffers) {
 
 py::object forward(const RobotDescription& robot, const py::object& q_in,
                    const std::optional<Solution>& warm_start, bool shapes, const py::object& force,
-                   double moment, const std::optional<SolverOptions>& options_in) {
+                   double moment, const std::optional<SolverOptions>& options_in, bool path) {
   const RobotParams<double>& params = robot.params;
   const int n = params.num_limbs;
   const auto q = input_array(q_in, n, "q", "m");
@@ -160,7 +160,7 @@ py::object forward(const RobotDescription& robot, const py::object& q_in,
   std::vector<ForwardSolution> solutions(shapes ? static_cast<std::size_t>(rows) : 0);
   {
     py::gil_scoped_release release;
-    forward_batch(params, q.data(), rows, options, load, buffers,
+    forward_batch(params, q.data(), rows, options, load, sequence_mode(path), buffers,
                   shapes ? solutions.data() : nullptr);
   }
   batch.status = status_names(batch.status_code);
@@ -178,7 +178,7 @@ py::object forward(const RobotDescription& robot, const py::object& q_in,
 
 py::object inverse(const RobotDescription& robot, const py::object& pose_in,
                    const std::optional<Solution>& warm_start, bool shapes, const py::object& force,
-                   double moment, const std::optional<SolverOptions>& options_in) {
+                   double moment, const std::optional<SolverOptions>& options_in, bool path) {
   const RobotParams<double>& params = robot.params;
   const int n = params.num_limbs;
   if (n > 3) {
@@ -211,7 +211,7 @@ py::object inverse(const RobotDescription& robot, const py::object& pose_in,
   std::vector<InverseSolution> solutions(shapes ? static_cast<std::size_t>(rows) : 0);
   {
     py::gil_scoped_release release;
-    inverse_batch(params, poses.data(), rows, options, load, buffers,
+    inverse_batch(params, poses.data(), rows, options, load, sequence_mode(path), buffers,
                   shapes ? solutions.data() : nullptr);
   }
   batch.status = status_names(batch.status_code);
@@ -451,16 +451,19 @@ void wrap_kinematics(py::module_& m) {
   robot
       .def("forward", &forward, py::arg("q"), py::kw_only(), py::arg("warm_start") = py::none(),
            py::arg("shapes") = false, py::arg("force") = no_force(), py::arg("moment") = 0.0,
-           py::arg("options") = py::none(),
+           py::arg("options") = py::none(), py::arg("path") = false,
            "Forward kinematics. q: n joint values (m) -> Solution; or an (N, n) array -> "
-           "BatchResult, each row warm-started from the previous converged one (a failed warm "
-           "start is retried cold from home, as `pcr fk` does). force (fx, fy) in N and moment "
-           "in N m act on the platform at P's origin, in W. Releases the GIL.")
+           "BatchResult, as `pcr fk` solves rows: each on its own, in any order, on the branch "
+           "connected to home; with path=True, a path the robot follows in this order, each row "
+           "continued from the previous converged one (a failed one retried from home; through "
+           "folds with options.through_folds). force (fx, fy) in N and moment in N m act on the "
+           "platform at P's origin, in W. Releases the GIL.")
       .def("inverse", &inverse, py::arg("pose"), py::kw_only(), py::arg("warm_start") = py::none(),
            py::arg("shapes") = false, py::arg("force") = no_force(), py::arg("moment") = 0.0,
-           py::arg("options") = py::none(),
+           py::arg("options") = py::none(), py::arg("path") = false,
            "Inverse kinematics. pose: a Pose or (x m, y m, theta rad) -> Solution; or an (N, 3) "
-           "array -> BatchResult, warm-started along the rows like `pcr ik`. Joints outside "
+           "array -> BatchResult, rows as in forward (path: each continued from the previous), "
+           "like `pcr ik`. Joints outside "
            "q_range give status out_of_range (converged False, q kept). With 2 limbs theta is "
            "solved for. Releases the GIL.")
       .def(

@@ -69,7 +69,7 @@ def test_inverse_agrees_with_cli(cli, robot):
 def test_batched_equals_looped(robot):
     rng = np.random.default_rng(3)
     q = np.cumsum(rng.uniform(-1e-3, 1e-3, size=(12, 3)), axis=0)
-    batch = robot.forward(q)
+    batch = robot.forward(q, path=True)  # a path: each row warm-started from the one before
     previous = None
     for k in range(len(q)):
         s = robot.forward(q[k], warm_start=previous)
@@ -79,7 +79,7 @@ def test_batched_equals_looped(robot):
         assert batch.pose[k] == pytest.approx(s.pose.to_array(), abs=0)
         assert batch.wrenches[k] == pytest.approx(s.wrenches, abs=0)
     poses = batch.pose
-    ik = robot.inverse(poses)
+    ik = robot.inverse(poses, path=True)
     previous = None
     for k in range(len(q)):
         s = robot.inverse(poses[k], warm_start=previous)

@@ -118,7 +118,8 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
     }
   }
   if (fx.external_load) load_ = fx.load;
-  sequence_ = ForwardSequence(truth_.params, options_.solver, load_);
+  // A robot moves from configuration to configuration: each measurement continues from the last.
+  sequence_ = ForwardSequence(truth_.params, options_.solver, load_, SequenceMode::kPath);
 }
 
 VirtualMeasurement VirtualRobot::measure(const JointVector& q) {

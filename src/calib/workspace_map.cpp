@@ -179,6 +179,10 @@ RotationRange rotation_range(const RobotParams<double>& robot, double x, double 
     return usable_as_warm_start(s.summary) && within_stroke(robot, s.q) &&
            s.summary.stability == Stability::kStable;
   };
+  // The range of the branch reached at theta: the search for a stable equilibrium at a pose where
+  // the branch turns unstable would carry on along another one.
+  SolverOptions on_branch = options;
+  on_branch.stable_inverse = false;
   RotationRange range;
   const InverseSolution start =
       inverse_kinematics(robot, Pose2<double>{x, y, theta}, options, load);
@@ -189,7 +193,8 @@ RotationRange rotation_range(const RobotParams<double>& robot, double x, double 
     double good_theta = theta, bad_theta = NAN;
     while (std::abs(good_theta - theta) < M_PI) {
       const double next = good_theta + direction * step;
-      InverseSolution s = inverse_kinematics(robot, Pose2<double>{x, y, next}, good, options, load);
+      InverseSolution s =
+          inverse_kinematics(robot, Pose2<double>{x, y, next}, good, on_branch, load);
       if (!holds(s)) {
         bad_theta = next;
         break;
@@ -199,7 +204,8 @@ RotationRange rotation_range(const RobotParams<double>& robot, double x, double 
     }
     while (std::isfinite(bad_theta) && std::abs(bad_theta - good_theta) > tolerance) {
       const double mid = 0.5 * (good_theta + bad_theta);
-      InverseSolution s = inverse_kinematics(robot, Pose2<double>{x, y, mid}, good, options, load);
+      InverseSolution s =
+          inverse_kinematics(robot, Pose2<double>{x, y, mid}, good, on_branch, load);
       if (holds(s)) {
         good = std::move(s);
         good_theta = mid;

@@ -76,9 +76,10 @@ class VirtualRobot {
   const PlatformLoad<double>& load() const { return load_; }
   const VirtualRobotOptions& options() const { return options_; }
 
-  /// Moves to q and measures: FK of the truth as a sequence (pcr::ForwardSequence: warm-started
-  /// from the last successful call, a cold retry from home); the noise stream advances only on
-  /// success.
+  /// Moves to q and measures: FK of the truth along the path from the last configuration, as the
+  /// robot moves (a pcr::ForwardSequence in SequenceMode::kPath: on the branch of the last
+  /// successful call, a cold retry from home where it ends; through folds with
+  /// solver.through_folds); the noise stream advances only on success.
   VirtualMeasurement measure(const JointVector& q);
 
   /// measure(q), throwing std::runtime_error (naming q and the solver status) on failure.

@@ -307,14 +307,39 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot, const Sol
   return home;
 }
 
+namespace internal {
+
+/// A cold solve: the home solution (no IK factorisation, and a stability the solution checks for
+/// itself), then from_home(home); the summary counts the home solve's iterations too.
+template <class FromHome>
+auto solve_cold(const RobotParams<double>& robot, const SolverOptions& options,
+                const PlatformLoad<double>& load, FromHome&& from_home) {
+  const ForwardSolution home = home_solution(robot, unchecked(options), load);
+  auto solution = from_home(home);
+  if (home.summary.converged()) {
+    solution.summary.iterations += home.summary.iterations;
+    solution.summary.residual_evaluations += home.summary.residual_evaluations;
+  }
+  return solution;
+}
+
+}  // namespace internal
+
 inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
                                           const SolverOptions& options,
                                           const PlatformLoad<double>& load) {
-  ForwardSolution home = home_solution(robot, internal::unchecked(options), load);
+  return internal::solve_cold(robot, options, load, [&](const ForwardSolution& home) {
+    return forward_kinematics_from_home(robot, q, home, options, load);
+  });
+}
+
+inline ForwardSolution forward_kinematics_from_home(const RobotParams<double>& robot,
+                                                    const JointVector& q,
+                                                    const ForwardSolution& home,
+                                                    const SolverOptions& options,
+                                                    const PlatformLoad<double>& load) {
   if (!home.summary.converged()) return home;  // q = 0 then, path_fraction 0: nothing solved
   ForwardSolution solution = forward_kinematics(robot, q, home, options, load);
-  solution.summary.iterations += home.summary.iterations;
-  solution.summary.residual_evaluations += home.summary.residual_evaluations;
   // With n >= 4 limbs, straight rods at home carry a self-stress: a path from a home where some
   // rods are straight starts on, or next to, a bifurcation.
   const SolveStatus path_status = solution.summary.status;
@@ -362,18 +387,22 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
 inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
                                           const Pose2<double>& pose, const SolverOptions& options,
                                           const PlatformLoad<double>& load) {
-  // No IK factorisation, and a stability the IK solution checks for itself.
-  const ForwardSolution home = home_solution(robot, internal::unchecked(options), load);
+  return internal::solve_cold(robot, options, load, [&](const ForwardSolution& home) {
+    return inverse_kinematics_from_home(robot, pose, home, options, load);
+  });
+}
+
+inline InverseSolution inverse_kinematics_from_home(const RobotParams<double>& robot,
+                                                    const Pose2<double>& pose,
+                                                    const ForwardSolution& home,
+                                                    const SolverOptions& options,
+                                                    const PlatformLoad<double>& load) {
   if (!home.summary.converged()) {
     InverseSolution failed = as_inverse_warm_start(home);
     failed.summary.path_fraction = 0.0;
     return failed;
   }
-  InverseSolution solution =
-      inverse_kinematics(robot, pose, as_inverse_warm_start(home), options, load);
-  solution.summary.iterations += home.summary.iterations;
-  solution.summary.residual_evaluations += home.summary.residual_evaluations;
-  return solution;
+  return inverse_kinematics(robot, pose, as_inverse_warm_start(home), options, load);
 }
 
 inline InverseSolution as_inverse_warm_start(const ForwardSolution& fk) {
@@ -471,17 +500,31 @@ inline InverseSolution inverse_kinematics_or_cold(const RobotParams<double>& rob
 template <class Solution>
 const Solution& SequenceSolver<Solution>::solve(const Input& input) {
   const int latest = has_last_ ? 1 - last_ : last_;
-  const Solution* warm = has_last_ ? &slots_[last_] : nullptr;
-  if constexpr (std::is_same_v<Solution, ForwardSolution>) {
-    slots_[latest] = forward_kinematics_or_cold(robot_, input, warm, options_, load_);
+  Solution& solution = slots_[latest];
+  if (mode_ == SequenceMode::kIndependent) {
+    // The cold solve's own steps, with its home solved once.
+    if (!has_home_) {
+      home_ = home_solution(robot_, internal::unchecked(options_), load_);
+      has_home_ = true;
+    }
+    if constexpr (std::is_same_v<Solution, ForwardSolution>) {
+      solution = forward_kinematics_from_home(robot_, input, home_, options_, load_);
+    } else {
+      solution = inverse_kinematics_from_home(robot_, input, home_, options_, load_);
+    }
   } else {
-    slots_[latest] = inverse_kinematics_or_cold(robot_, input, warm, options_, load_);
+    const Solution* warm = has_last_ ? &slots_[last_] : nullptr;
+    if constexpr (std::is_same_v<Solution, ForwardSolution>) {
+      solution = forward_kinematics_or_cold(robot_, input, warm, options_, load_);
+    } else {
+      solution = inverse_kinematics_or_cold(robot_, input, warm, options_, load_);
+    }
   }
-  if (usable_as_warm_start(slots_[latest].summary)) {
+  if (usable_as_warm_start(solution.summary)) {
     last_ = latest;
     has_last_ = true;
   }
-  return slots_[latest];
+  return solution;
 }
 
 template <class Visitor>

@@ -15,8 +15,9 @@
 
 namespace pcr::internal {
 
-/// Solves at the end of the input path from a solution z0 at its start: directly, then by
-/// continuation with a secant predictor and step halving. When the continuation stalls, the
+/// Paths from a solution at the input u0 to the input u1 (solve_path_at_fixed_steps): the whole
+/// step first, then continuation with step halving, every step predicted along the tangent and
+/// kept only when its corrector stays on the predicted branch. When the continuation stalls, the
 /// Jacobian's conditioning along the solved part of the path tells a singularity ahead (no
 /// solution on this branch: rcond^2, linear in t near a fold, extrapolates to zero before the
 /// end of the path) from a plain failure to converge.
@@ -78,27 +79,77 @@ inline bool stalled_at_bifurcation(const ShootingProblem& problem, const Shootin
   return g_norm > 0.0 && std::abs(svd.matrixU().col(m - 1).dot(g)) <= 0.01 * g_norm;
 }
 
+/// The largest corrector a path step may take, as a share of its tangent predictor's own step.
+/// Along a branch of curvature k the tangent predictor of a step h misses it by about k h^2 / 2:
+/// a share of 1/4 lets the tangent turn by up to half a radian over a step (the step length
+/// control of predictor-corrector continuation, Allgower and Georg, Introduction to Numerical
+/// Continuation Methods, 6.1). A corrector that goes further may have converged on another branch
+/// (another equilibrium at the same input), so the step is shortened instead.
+inline constexpr double kMaxCorrectorShare = 0.25;
+
+/// Scaled distance below which a corrector is rounding, whatever the step (3e-10 m on a 30 mm
+/// rod): two branches are never that close but at a fold, where the path stops.
+inline constexpr double kCorrectorFloor = 1e-8;
+
+/// Whether a corrector from the tangent predictor z_predicted of a step from z_start stayed on the
+/// branch it predicted: it moved z by at most kMaxCorrectorShare of the predictor's step.
+inline bool stayed_on_branch(const ShootingVector& z_start, const ShootingVector& z_predicted,
+                             const ShootingVector& z) {
+  return (z - z_predicted).norm() <=
+         kMaxCorrectorShare * (z_predicted - z_start).norm() + kCorrectorFloor;
+}
+
+/// The tangent predictor of a step du of the input from the solution z: z - J^-1 (dr/du) du, with
+/// the chord matrix as J^-1. False (z unchanged) at a singular Jacobian (a bifurcation point,
+/// where the tangent is not unique) or when it is not finite.
+inline bool predict_along_tangent(const ShootingProblem& problem, const ChordMatrix& chord,
+                                  const ShootingVector& du, ShootingVector& z) {
+  if (chord.rows() != problem.size() || !(chord.rcond() > kBifurcationRcond)) return false;
+  const ShootingVector z_predicted = z - chord.solve(problem.input_derivative(z, du));
+  if (!z_predicted.allFinite()) return false;
+  z = z_predicted;
+  return true;
+}
+
+/// Solves at the end of the input path from a solution z0 at its start, on z0's branch: each step
+/// (first the whole path, then continuation steps halved on failure) is predicted along the
+/// tangent and corrected by Newton, and is accepted only when the corrector stayed near the
+/// predictor (stayed_on_branch), so that a warm start never lands on another equilibrium at the
+/// same input however far the input moves. A path with no input change (the same input on another
+/// robot, or from a seed) has no branch to follow and is corrected directly.
 inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const ShootingVector& u0,
                                              const ShootingVector& u1, ShootingVector& z,
                                              const SolverOptions& options, SolverSummary& summary,
                                              ChordMatrix* carried) {
   const ShootingVector z0 = z;
-  // Tangent predictor from the carried chord matrix (a warm start's): z moves by
-  // -J^-1 (dr/du) du, which leaves an error of second order in du for the chord steps. Not from
-  // a singular Jacobian (a bifurcation point: the tangent is not unique there).
-  bool predicted = false;
-  if (carried && carried->rows() == problem.size() && carried->rcond() > kBifurcationRcond) {
-    const ShootingVector z_predicted = z0 - carried->solve(problem.input_derivative(z0, u1 - u0));
-    predicted = z_predicted.allFinite();
-    if (predicted) z = z_predicted;
+  const ShootingVector du = u1 - u0;
+  const bool moves = (du.array() != 0.0).any();
+  ChordMatrix own;
+  ChordMatrix& chord = carried ? *carried : own;
+  if (moves && chord.rows() != problem.size()) {
+    // No Jacobian came with the start (IK from a forward solution): the tangent needs one.
+    ShootingVector r;
+    JacobianMatrix J;
+    problem.set_input(u0);
+    problem.evaluate(z0, r, &J);
+    ++summary.residual_evaluations;
+    if (J.allFinite()) chord.compute(J);
   }
+  // The chord matrix at the start, for a step that is rejected (Newton may have refreshed it far
+  // from the branch).
+  const ChordMatrix chord_at_start = moves ? chord : ChordMatrix();
+  const bool predicted = moves && predict_along_tangent(problem, chord, du, z);
+  const ShootingVector z_direct = z;
   problem.set_input(u1);
-  NewtonResult direct = newton_solve(problem, z, options, summary, carried);
+  NewtonResult direct = newton_solve(problem, z, options, summary, &chord);
   summary.initial_residual_norm = direct.initial_norm;
   summary.final_residual_norm = direct.final_norm;
   summary.max_strain = direct.max_strain;
   summary.path_fraction = 1.0;
-  if (direct.status == SolveStatus::kConverged) return direct.status;
+  const bool direct_on_branch = !predicted || stayed_on_branch(z0, z_direct, z);
+  if (direct.status == SolveStatus::kConverged && direct_on_branch) return direct.status;
+  if (direct.status == SolveStatus::kConverged) direct.status = SolveStatus::kMaxIterations;
+  if (moves) chord = chord_at_start;
   // What a failure returns is the last solved point: the start.
   z = z0;
   problem.set_input(u0);
@@ -113,7 +164,18 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   double t = 0.0, t_prev = 0.0, dt = 0.5;
   // (t, rcond) at the last two solved points of the path.
   problem.set_input(u0);
-  double rc_last = jacobian_rcond(problem, z0, summary), rc_prev = rc_last;
+  // The Jacobian at each solved point of the path gives both its conditioning (for the
+  // singularity test) and the next step's exact tangent.
+  const auto factorise_at = [&](const ShootingVector& at) {
+    ShootingVector r;
+    JacobianMatrix J;
+    problem.evaluate(at, r, &J);
+    ++summary.residual_evaluations;
+    if (!J.allFinite()) return 0.0;
+    chord.compute(J);
+    return std::isfinite(chord.rcond()) ? chord.rcond() : 0.0;
+  };
+  double rc_last = factorise_at(z0), rc_prev = rc_last;
   if (rc_last <= kBifurcationRcond || self_stressed(problem, z0)) {
     // A solution with a singular Jacobian that Newton could not leave: the straight rods of a
     // robot with n >= 4 limbs (a self-stress), where the branches of bowed rods meet.
@@ -129,28 +191,33 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   };
   // The status of a path that stalls at a singular Jacobian, from its last solved point z_last.
   const auto singular_status = [&]() {
-    return stalled_at_bifurcation(problem, z_last, u1 - u0, summary) ? SolveStatus::kBifurcation
-                                                                     : SolveStatus::kSingular;
+    return stalled_at_bifurcation(problem, z_last, du, summary) ? SolveStatus::kBifurcation
+                                                                : SolveStatus::kSingular;
   };
   // The status of a stalled path: `otherwise` unless it stalled at a singularity.
   const auto stall_status = [&](SolveStatus otherwise) {
     return singular_ahead() || rc_last <= kStallSingularRcond ? singular_status() : otherwise;
   };
+  ChordMatrix chord_at_last = chord;
   while (t < 1.0) {
     if (summary.continuation_steps >= options.max_continuation_steps) {
       z = z_last;  // the last solved point of the path
-      problem.set_input(u0 + t * (u1 - u0));
+      problem.set_input(u0 + t * du);
       summary.path_fraction = t;
       return stall_status(SolveStatus::kMaxIterations);
     }
     ++summary.continuation_steps;
     const double t_next = std::min(1.0, t + dt);
-    problem.set_input(u0 + t_next * (u1 - u0));
-    // Secant predictor from the last two solutions on the path.
+    // Tangent predictor from the last solution (else the secant of the last two).
     z = z_last;
-    if (t > t_prev) z += (z_last - z_prev) * ((t_next - t) / (t - t_prev));
-    NewtonResult sub = newton_solve(problem, z, sub_options, summary, carried);
-    if (sub.status == SolveStatus::kConverged) {
+    const bool step_predicted =
+        moves && predict_along_tangent(problem, chord, (t_next - t) * du, z);
+    if (!step_predicted && t > t_prev) z += (z_last - z_prev) * ((t_next - t) / (t - t_prev));
+    const ShootingVector z_predicted = z;
+    problem.set_input(u0 + t_next * du);
+    NewtonResult sub = newton_solve(problem, z, sub_options, summary, &chord);
+    if (sub.status == SolveStatus::kConverged &&
+        (!step_predicted || stayed_on_branch(z_last, z_predicted, z))) {
       z_prev = z_last;
       t_prev = t;
       z_last = z;
@@ -161,15 +228,19 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
       if (t < 1.0) {
         rc_prev = rc_last;
         t_rc_prev = t_rc_last;
-        rc_last = jacobian_rcond(problem, z_last, summary);
+        rc_last = factorise_at(z_last);
         t_rc_last = t;
       }
+      chord_at_last = chord;
       continue;
     }
+    // A corrector that left the branch is a step too long, as one that did not converge.
+    if (sub.status == SolveStatus::kConverged) sub.status = SolveStatus::kMaxIterations;
+    chord = chord_at_last;
     dt *= 0.5;
     if (dt < options.min_continuation_step) {
       z = z_last;
-      problem.set_input(u0 + t * (u1 - u0));
+      problem.set_input(u0 + t * du);
       summary.path_fraction = t;
       summary.final_residual_norm = sub.final_norm;
       return sub.status == SolveStatus::kSingular ? singular_status() : stall_status(sub.status);
