@@ -323,6 +323,109 @@ TEST(Calibrator, RejectsBadInput) {
   EXPECT_THROW(calibrate(nominal, data), InputError);
 }
 
+// A configuration past a fold of the design that the robot itself reaches (its fold lies further
+// out along the same ray of joints): the calibration sets it aside instead of refusing the
+// dataset, and brings it back into a second run of the last stage once the identified geometry
+// reaches it.
+TEST(Calibrator, RowsPastTheDesignsFoldAreSetAsideThenBroughtBack) {
+  const RobotDescription nominal = default_robot();
+  VirtualRobotOptions vo;
+  vo.seed = 11;
+  VirtualRobot robot(nominal, vo);
+  const RobotParams<double>& truth = robot.truth().params;
+  // Along rays of joints from home: the last radius (m) at which FK reaches an equilibrium.
+  const auto fold_radius = [](const RobotParams<double>& r, const JointVector& direction) {
+    double inside = 0.0, outside = 0.0105;
+    if (forward_kinematics(r, outside * direction).summary.converged()) return outside;
+    for (int k = 0; k < 30; ++k) {
+      const double mid = 0.5 * (inside + outside);
+      (forward_kinematics(r, mid * direction).summary.converged() ? inside : outside) = mid;
+    }
+    return inside;
+  };
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> gauss;
+  JointVector past(3);
+  bool found = false;
+  for (int attempt = 0; attempt < 200 && !found; ++attempt) {
+    JointVector direction(3);
+    direction << gauss(rng), gauss(rng), gauss(rng);
+    direction /= direction.lpNorm<Eigen::Infinity>();
+    const double design = fold_radius(nominal.params, direction);
+    const double real = fold_radius(truth, direction);
+    if (design < 0.0105 && real > design + 40e-6) {
+      past = (0.5 * (design + real)) * direction;
+      found = true;
+    }
+  }
+  ASSERT_TRUE(found) << "no ray where the truth's fold lies past the design's";
+  ASSERT_FALSE(forward_kinematics(nominal.params, past).summary.converged());
+
+  std::vector<CalibrationSample> data = {{past, robot.measure_or_throw(past)}};
+  SamplingOptions so;
+  so.count = 40;
+  so.seed = 11;
+  for (const JointVector& q : poisson_disc_sample(nominal.params, so).configurations) {
+    data.push_back({q, robot.measure_or_throw(q)});
+  }
+  CalibrationOptions options;
+  options.compute_covariance = false;
+  const CalibrationResult result = calibrate(nominal, data, options);
+  bool warned = false;
+  for (const std::string& w : result.warnings) {
+    warned = warned || (w.find("set aside") != std::string::npos &&
+                        w.find("configuration 1 ") != std::string::npos);
+  }
+  EXPECT_TRUE(warned);
+  ASSERT_TRUE(forward_kinematics(result.identified, past).summary.converged());
+  EXPECT_NE(result.stages.back().name.find("with 1 rows brought back"), std::string::npos)
+      << result.stages.back().name;
+  EXPECT_TRUE(result.dropped.empty());
+  EXPECT_LT(pose_errors(result.identified, data, SolverOptions()).mean_p, 0.1e-6);
+}
+
+// A configuration measured on another equilibrium at the same joints than the one the model
+// predicts (the robot came to it along another path) is named as a branch mismatch, with that
+// equilibrium's pose, and left out of the statistics rather than averaged into them.
+TEST(ConfigurationErrors, AMeasurementOnAnotherEquilibriumIsABranchMismatch) {
+  const RobotParams<double> robot = default_robot().params;
+  std::vector<CalibrationSample> data;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 10e-9);
+  for (int k = 0; k < 16; ++k) {
+    JointVector q(3);
+    for (int i = 0; i < 3; ++i) q(i) = 3e-3 * std::cos(0.4 * k + 2.1 * i);
+    const ForwardSolution fk = forward_kinematics(robot, q);
+    ASSERT_TRUE(fk.summary.converged());
+    Pose2<double> measured = robot.extrinsics.measurement_from_platform(fk.pose);
+    measured.x += noise(rng);
+    measured.y += noise(rng);
+    data.push_back({q, measured});
+  }
+  // Another equilibrium at row 5's joints: its rod 1 bent one turn further, solved there.
+  const std::size_t row = 5;
+  ForwardSolution seed = forward_kinematics(robot, data[row].q);
+  seed.jacobian = internal::ChordMatrix();
+  const LimbParams<double>& limb = robot.limb(1);
+  seed.wrenches[1].m += 2.0 * M_PI * limb.bending_stiffness() / limb.length;
+  const ForwardSolution other = forward_kinematics(robot, data[row].q, seed);
+  ASSERT_TRUE(other.summary.converged());
+  const ForwardSolution home_branch = forward_kinematics(robot, data[row].q);
+  ASSERT_GT(std::hypot(other.pose.x - home_branch.pose.x, other.pose.y - home_branch.pose.y), 1e-5);
+  data[row].measured = robot.extrinsics.measurement_from_platform(other.pose);
+
+  const ConfigurationErrors errors = configuration_errors(robot, data);
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    EXPECT_EQ(errors.branch_mismatch[j], j == row) << "row " << j;
+  }
+  EXPECT_NEAR(errors.other_pose[row].x, other.pose.x, 1e-9);
+  EXPECT_NEAR(errors.other_pose[row].y, other.pose.y, 1e-9);
+  const PoseErrorStats stats = error_statistics(errors);
+  EXPECT_EQ(stats.branch_mismatches, 1);
+  EXPECT_EQ(stats.count, 15);
+  EXPECT_LT(stats.max_p, 0.1e-6);
+}
+
 // The paper's case: 99 calibration + 56 validation configurations. The identification itself
 // takes ~0.5 s in Release (18 Levenberg-Marquardt iterations, see bench_calibration); sampling,
 // covariance and the error statistics bring it to ~10 s of CPU, too much under the sanitizers,

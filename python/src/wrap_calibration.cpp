@@ -117,6 +117,7 @@ py::dict stats_dict(const PoseErrorStats& s) {
   d["min_theta"] = s.min_theta;
   d["count"] = s.count;
   d["failed"] = s.failed;
+  d["branch_mismatches"] = s.branch_mismatches;
   return d;
 }
 
@@ -830,7 +831,7 @@ void wrap_calibration(py::module_& m) {
           .def_readonly("fk_solves", &StageReport::fk_solves,
                         "double FK solves (all configurations)")
           .def_readonly("fk_warm_start_failures", &StageReport::fk_warm_start_failures,
-                        "FK warm starts that failed (a cold start followed)")
+                        "FK warm solves that failed (continued in the parameters)")
           .def_readonly("fk_newton_iterations", &StageReport::fk_newton_iterations,
                         "FK Newton iterations, all solves")
           .def("__repr__", [](const StageReport& s) {
@@ -930,6 +931,9 @@ void wrap_calibration(py::module_& m) {
           .def_readonly("count", &PoseErrorStats::count, "configurations evaluated")
           .def_readonly("failed", &PoseErrorStats::failed,
                         "configurations whose FK did not converge (not in the statistics)")
+          .def_readonly("branch_mismatches", &PoseErrorStats::branch_mismatches,
+                        "configurations measured next to another equilibrium of the model at the "
+                        "same joints (not in the statistics)")
           .def("__repr__", [](const PoseErrorStats& s) {
             std::ostringstream out;
             out << "<pcr.PoseErrorStats e_p max " << s.max_p * 1e6 << " um, mean " << s.mean_p * 1e6
@@ -941,7 +945,7 @@ void wrap_calibration(py::module_& m) {
       pose_error_stats,
       [](PoseErrorStats& s) {
         return std::tie(s.max_p, s.mean_p, s.min_p, s.max_theta, s.mean_theta, s.min_theta, s.count,
-                        s.failed);
+                        s.failed, s.branch_mismatches);
       },
       "PoseErrorStats");
 

@@ -46,16 +46,21 @@ ordered_json stats_json(const PoseErrorStats& s) {
       {"e_p_m", {{"max", s.max_p}, {"mean", s.mean_p}, {"min", s.min_p}}},
       {"e_theta_rad", {{"max", s.max_theta}, {"mean", s.mean_theta}, {"min", s.min_theta}}},
       {"configurations", s.count},
-      {"failed", s.failed}};
+      {"failed", s.failed},
+      {"branch_mismatches", s.branch_mismatches}};
 }
 
 std::string stats_line(const char* label, const PoseErrorStats& s) {
-  char buf[256];
+  std::string left_out;
+  if (s.failed) left_out += ", " + std::to_string(s.failed) + " FK failures";
+  if (s.branch_mismatches) {
+    left_out += ", " + std::to_string(s.branch_mismatches) + " on another equilibrium";
+  }
+  char buf[320];
   std::snprintf(buf, sizeof buf,
                 "%-34s %9.4f %9.4f %9.4f | %9.5f %9.5f %9.5f  (%d configurations%s)\n", label,
                 s.max_p * 1e6, s.mean_p * 1e6, s.min_p * 1e6, s.max_theta * 1e3, s.mean_theta * 1e3,
-                s.min_theta * 1e3, s.count,
-                s.failed ? (", " + std::to_string(s.failed) + " FK failures").c_str() : "");
+                s.min_theta * 1e3, s.count, left_out.c_str());
   return buf;
 }
 
@@ -109,6 +114,15 @@ CalibrationTable calibration_table(const CalibrationResult& result,
                     validation_mean * 1e6, validation_mean / calibration_mean,
                     calibration_mean * 1e6);
       table.warnings.push_back(text);
+    }
+    const int mismatched = std::max(table.nominal_validation.branch_mismatches,
+                                    table.identified_validation.branch_mismatches);
+    if (mismatched > 0) {
+      table.warnings.push_back(
+          std::to_string(mismatched) + " of " + std::to_string(validation.size()) +
+          " validation configurations were measured next to another equilibrium of the model at "
+          "the same joints than the one it predicts there (a branch mismatch: the robot came to "
+          "them along another path; left out of Table 3, see the per-configuration errors)");
     }
     const int failed =
         std::max(table.nominal_validation.failed, table.identified_validation.failed);
@@ -209,7 +223,7 @@ std::string calibration_report_text(const CalibrationResult& result,
     out << buf;
   }
   if (!result.dropped.empty()) {
-    out << "\nrows left out (no FK solution on the nominal geometry):\n";
+    out << "\nrows left out (no FK solution on the geometry that tried them):\n";
     for (const std::string& row : result.dropped) out << "  " << row << "\n";
   }
   if (!result.unidentifiable.empty()) {

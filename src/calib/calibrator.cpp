@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -243,23 +244,28 @@ void warn_of_copies(const std::vector<CalibrationSample>& rows, CalibrationResul
   }
 }
 
-/// The rows the nominal geometry reaches. Ceres cannot start from a failed evaluation, and a row
-/// that no robot near the nominal one reaches is a typo, a wrong unit or another robot's: an
-/// InputError, or with drop_unreachable left out and listed in result->dropped. Joints outside
-/// their stroke are warned of.
+/// The rows the nominal geometry reaches. Ceres cannot start from a failed evaluation. A row whose
+/// joints lie within their stroke and that the nominal geometry does not reach may lie past a fold
+/// of the design that the robot itself does not have: it is set aside (`set_aside`), to be brought
+/// back when the identified geometry reaches it. One with joints outside the stroke is a typo, a
+/// wrong unit or another robot's: an InputError, or with drop_unreachable left out and listed in
+/// result->dropped; joints outside their stroke are warned of.
 std::vector<CalibrationSample> reachable_rows(const RobotParams<double>& nominal,
                                               const std::vector<CalibrationSample>& data,
                                               const CalibrationOptions& options,
                                               const std::string& source, CalibrationResult* result,
-                                              std::vector<Pose2<double>>* poses) {
+                                              std::vector<Pose2<double>>* poses,
+                                              std::vector<std::size_t>* set_aside) {
   std::vector<CalibrationSample> reachable;
-  std::vector<std::string> unreachable, outside;
+  std::vector<std::string> unreachable, outside, aside;
   ForwardSequence sequence(nominal, options.fk);
   for (std::size_t j = 0; j < data.size(); ++j) {
     const JointVector& q = data[j].q;
+    bool in_stroke = true;
     for (int i = 0; i < nominal.num_limbs; ++i) {
       const auto& limb = nominal.limb(i);
       if (limb.q_min < limb.q_max && (q[i] < limb.q_min || q[i] > limb.q_max)) {
+        in_stroke = false;
         outside.push_back(origin_of(data, j) + ": q" + std::to_string(i + 1) + " = " +
                           format_number(q[i]) + " m outside [" + format_number(limb.q_min) + ", " +
                           format_number(limb.q_max) + "]");
@@ -267,11 +273,16 @@ std::vector<CalibrationSample> reachable_rows(const RobotParams<double>& nominal
     }
     const ForwardSolution& solution = sequence.solve(q);
     const SolveStatus status = solution.summary.status;
+    const std::string row = origin_of(data, j) + " (" + joints_text(q) + "): " + to_string(status);
     if (status == SolveStatus::kConverged) {
       reachable.push_back(data[j]);
+      reachable.back().origin = origin_of(data, j);  // its place in `data`, not in `reachable`
       poses->push_back(solution.pose);
+    } else if (in_stroke) {
+      set_aside->push_back(j);
+      aside.push_back(row);
     } else {
-      unreachable.push_back(origin_of(data, j) + " (" + joints_text(q) + "): " + to_string(status));
+      unreachable.push_back(row);
     }
   }
   warn_of_units(reachable, *poses, result);
@@ -284,10 +295,18 @@ std::vector<CalibrationSample> reachable_rows(const RobotParams<double>& nominal
   if (!unreachable.empty() && !options.drop_unreachable) {
     throw InputError(source + ": " + std::to_string(unreachable.size()) + " of " +
                      std::to_string(data.size()) +
-                     " rows have no forward-kinematics solution on the nominal geometry (a "
-                     "wrong unit, a typo, another robot's data?): " +
+                     " rows have joints outside the stroke and no forward-kinematics solution on "
+                     "the nominal geometry (a wrong unit, a typo, another robot's data?): " +
                      listing(unreachable) + ". Leave them out with drop_unreachable " +
                      "(pcr_calibrate --drop-unreachable)");
+  }
+  if (!aside.empty()) {
+    result->warnings.push_back(
+        std::to_string(aside.size()) +
+        " rows within the stroke have no forward-kinematics solution on the nominal geometry "
+        "(past a fold of the design?): set aside, brought back if the identified geometry "
+        "reaches them: " +
+        listing(aside));
   }
   result->dropped = unreachable;
   if (reachable.empty())
@@ -1283,22 +1302,81 @@ RobotParams<double> fix_gauge(const RobotParams<double>& params,
   return move_along_gauge(params, m.G, m.H, m.stiffness_scale);
 }
 
+/// The equilibria of `robot` at the joints of `at` other than `at` itself, found from seeds where
+/// one rod is bent further one way or the other (its proximal moment moved by 1 and 2 times
+/// 2 pi EI / l: a clamped-clamped rod's buckled shapes) and solved at the same joints: the one
+/// whose platform pose lies nearest `target`, if any.
+std::optional<Pose2<double>> nearest_other_equilibrium(const RobotParams<double>& robot,
+                                                       const ForwardSolution& at,
+                                                       const Pose2<double>& target,
+                                                       const SolverOptions& fk,
+                                                       const PlatformLoad<double>& load) {
+  std::optional<Pose2<double>> best;
+  double best_distance = HUGE_VAL;
+  for (int rod = 0; rod < robot.num_limbs; ++rod) {
+    const LimbParams<double>& limb = robot.limb(rod);
+    const double bend = 2.0 * M_PI * limb.bending_stiffness() / limb.length;
+    for (double amount : {1.0, -1.0, 2.0, -2.0}) {
+      ForwardSolution seed = at;
+      seed.jacobian = internal::ChordMatrix();  // not at the seed
+      seed.wrenches[static_cast<std::size_t>(rod)].m += amount * bend;
+      const ForwardSolution s = forward_kinematics(robot, at.q, seed, fk, load);
+      if (!s.summary.converged()) continue;
+      const double from_at =
+          std::hypot(s.pose.x - at.pose.x, s.pose.y - at.pose.y) +
+          kDefaultOrientationWeight * std::abs(wrap_angle(s.pose.theta - at.pose.theta));
+      if (!(from_at > kDistinctEquilibrium)) continue;  // `at` again
+      const double distance = std::hypot(s.pose.x - target.x, s.pose.y - target.y);
+      if (distance < best_distance) {
+        best_distance = distance;
+        best = s.pose;
+      }
+    }
+  }
+  return best;
+}
+
 ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
                                          const std::vector<CalibrationSample>& data,
                                          const SolverOptions& fk,
                                          const PlatformLoad<double>& load) {
   ConfigurationErrors errors;
+  errors.branch_mismatch.assign(data.size(), false);
+  errors.other_pose.assign(data.size(), Pose2<double>{kNaN, kNaN, kNaN});
   ForwardSequence sequence(robot, fk, load);
-  for (const CalibrationSample& sample : data) {
-    const ForwardSolution& s = sequence.solve(sample.q);
+  std::vector<ForwardSolution> solutions(data.size());
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    const ForwardSolution& s = sequence.solve(data[j].q);
+    solutions[j] = s;
     if (!s.summary.converged()) {
       errors.e_p.push_back(kNaN);
       errors.e_theta.push_back(kNaN);
       continue;
     }
-    const Pose2<double> measured = robot.extrinsics.platform_from_measurement(sample.measured);
+    const Pose2<double> measured = robot.extrinsics.platform_from_measurement(data[j].measured);
     errors.e_p.push_back(std::hypot(s.pose.x - measured.x, s.pose.y - measured.y));
     errors.e_theta.push_back(std::abs(wrap_angle(s.pose.theta - measured.theta)));
+  }
+  // A row far off the others (kMismatchFactor times their median error) whose measurement lies
+  // next to another equilibrium at the same joints was measured on another branch than the one
+  // the model predicts: a branch mismatch, not an error of the model's geometry.
+  std::vector<double> finite;
+  for (double e : errors.e_p) {
+    if (std::isfinite(e)) finite.push_back(e);
+  }
+  if (finite.empty()) return errors;
+  std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());
+  const double median = finite[finite.size() / 2];
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    if (!(errors.e_p[j] > kMismatchFactor * median)) continue;
+    const Pose2<double> measured = robot.extrinsics.platform_from_measurement(data[j].measured);
+    const std::optional<Pose2<double>> other =
+        nearest_other_equilibrium(robot, solutions[j], measured, fk, load);
+    if (other && kMismatchFactor * std::hypot(other->x - measured.x, other->y - measured.y) <
+                     errors.e_p[j]) {
+      errors.branch_mismatch[j] = true;
+      errors.other_pose[j] = *other;
+    }
   }
   return errors;
 }
@@ -1316,6 +1394,10 @@ PoseErrorStats error_statistics(const ConfigurationErrors& errors) {
     const double e_p = errors.e_p[j], e_t = errors.e_theta[j];
     if (std::isnan(e_p)) {
       ++stats.failed;
+      continue;
+    }
+    if (j < errors.branch_mismatch.size() && errors.branch_mismatch[j]) {
+      ++stats.branch_mismatches;
       continue;
     }
     stats.max_p = std::max(stats.max_p, e_p);
@@ -1366,33 +1448,70 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   CalibrationResult result;
   result.residual_variance = kNaN;
   std::vector<Pose2<double>> nominal_poses;
-  const std::vector<CalibrationSample> rows =
-      reachable_rows(nominal.params, data, options, source, &result, &nominal_poses);
-  Identification id(nominal, rows, options);
+  std::vector<std::size_t> set_aside;
+  std::vector<CalibrationSample> rows =
+      reachable_rows(nominal.params, data, options, source, &result, &nominal_poses, &set_aside);
+  auto identification = std::make_unique<Identification>(nominal, rows, options);
   {
     RobotParams<double> start = nominal.params;
     start.extrinsics = registered_extrinsics(nominal_poses, rows, nominal.params.extrinsics);
-    id.set_robot(start);
+    identification->set_robot(start);
     warn_of_mirror(nominal_poses, rows, start.extrinsics, nominal.params.extrinsics, &result);
   }
-  const std::vector<double> registered = id.values();
-  const int count = id.count();
-  const int block = id.block();
+  const std::vector<double> registered = identification->values();
+  const int count = identification->count();
+  const int block = identification->block();
 
   // Table 3's "nominal model": the nominal robot with the extrinsics alone identified.
   bool first_is_extrinsics = true;
-  for (int k : id.free_indices(options.stages.front())) {
+  for (int k : identification->free_indices(options.stages.front())) {
     first_is_extrinsics = first_is_extrinsics && k < count && parameter_id(k, n).limb < 0;
   }
   if (!first_is_extrinsics) {
-    id.run_stage(CalibrationStage{"extrinsics (nominal model)", {"extrinsics"}, 1.0});
-    result.extrinsics_only = id.robot();
-    id.set_values(registered);
+    identification->run_stage(CalibrationStage{"extrinsics (nominal model)", {"extrinsics"}, 1.0});
+    result.extrinsics_only = identification->robot();
+    identification->set_values(registered);
   }
   for (std::size_t s = 0; s < options.stages.size(); ++s) {
-    result.stages.push_back(id.run_stage(options.stages[s], s + 1 == options.stages.size()));
-    if (s == 0 && first_is_extrinsics) result.extrinsics_only = id.robot();
+    result.stages.push_back(
+        identification->run_stage(options.stages[s], s + 1 == options.stages.size()));
+    if (s == 0 && first_is_extrinsics) result.extrinsics_only = identification->robot();
   }
+
+  // The rows set aside that the identified geometry reaches join the last stage, run again.
+  if (!set_aside.empty()) {
+    const RobotParams<double> identified = identification->robot();
+    ForwardSequence sequence(identified, options.fk, identification->load());
+    std::vector<std::string> back, still;
+    std::vector<CalibrationSample> joining;
+    for (std::size_t j : set_aside) {
+      const ForwardSolution& s = sequence.solve(data[j].q);
+      const std::string row = origin_of(data, j) + " (" + joints_text(data[j].q) + ")";
+      if (s.summary.converged()) {
+        joining.push_back(data[j]);
+        joining.back().origin = origin_of(data, j);
+        back.push_back(row);
+      } else {
+        still.push_back(row + ": " + to_string(s.summary.status));
+      }
+    }
+    if (!joining.empty()) {
+      const std::vector<double> values = identification->values();
+      identification.reset();  // it holds `rows`, which grows
+      rows.insert(rows.end(), joining.begin(), joining.end());
+      identification = std::make_unique<Identification>(nominal, rows, options);
+      identification->set_values(values);
+      CalibrationStage again = options.stages.back();
+      again.name += " (with " + std::to_string(joining.size()) + " rows brought back)";
+      result.stages.push_back(identification->run_stage(again, true));
+      result.warnings.push_back(
+          std::to_string(joining.size()) +
+          " rows set aside reached by the identified geometry, used in stage '" + again.name +
+          "': " + listing(back));
+    }
+    result.dropped.insert(result.dropped.end(), still.begin(), still.end());
+  }
+  Identification& id = *identification;
 
   // Parameters at a bound (before the gauge fix, in the last stage's box).
   const std::vector<int>& free = id.last_free();

@@ -43,8 +43,12 @@
 //   half-widths) on the free parameters with the gauge references held, scaled by the residual
 //   variance (sum of squares / (m - rank)). Computed only from a Jacobian that evaluated and is
 //   finite: Ceres' own covariance crashes after a failed evaluation.
-// - Rows: every configuration is first solved on the nominal geometry. One it cannot reach (a typo,
-//   a wrong unit, another robot's row) is an InputError naming the row, or, with
+// - Rows: every configuration is first solved on the nominal geometry (each on its own, on the
+//   branch connected to home, as everywhere in the calibration). One it cannot reach whose joints
+//   lie within their stroke may lie past a fold of the design that the robot does not have: it is
+//   set aside with a warning, and joins a second run of the last stage when the identified
+//   geometry reaches it (the stage reports say which rows each used). One outside the stroke (a
+//   typo, a wrong unit, another robot's row) is an InputError naming the row, or, with
 //   drop_unreachable, left out and listed; a joint value outside its stroke is a warning.
 // - Platform load: a stage that frees "load" identifies a constant force and moment on the
 //   platform (air-bearing drag, a cable) with the geometry, which would otherwise absorb it (at
@@ -137,8 +141,9 @@ struct CalibrationOptions {
   /// error. Clean data is unaffected (a 3-dof chi-square exceeds 5^2 once in 60,000 rows). 0:
   /// plain least squares.
   double robust_scale = 5.0;
-  /// Rows without an FK solution on the nominal geometry are left out (and listed in
-  /// CalibrationResult::dropped) instead of being an InputError.
+  /// Rows with joints outside their stroke and without an FK solution on the nominal geometry are
+  /// left out (and listed in CalibrationResult::dropped) instead of being an InputError. (Rows
+  /// within the stroke that the nominal geometry does not reach are always set aside, see above.)
   bool drop_unreachable = false;
   /// Progress lines (stage, iteration, cost); empty: silent.
   std::function<void(const std::string&)> progress;
@@ -151,6 +156,9 @@ struct PoseErrorStats {
   double max_theta = 0, mean_theta = 0, min_theta = 0;
   int count = 0;   ///< configurations evaluated
   int failed = 0;  ///< configurations whose FK did not converge (not in the statistics)
+  /// Configurations measured on another equilibrium than the model's (ConfigurationErrors::
+  /// branch_mismatch; not in the statistics).
+  int branch_mismatches = 0;
 };
 
 struct StageReport {
@@ -169,7 +177,7 @@ struct StageReport {
   double jacobian_time_s = 0;    ///< Ceres' Jacobian evaluation time
   double linear_solver_time_s = 0;
   int fk_solves = 0;               ///< double FK solves (all configurations)
-  int fk_warm_start_failures = 0;  ///< warm starts that failed (a cold start followed)
+  int fk_warm_start_failures = 0;  ///< warm solves that failed (continued in the parameters)
   int fk_newton_iterations = 0;    ///< FK Newton iterations, all solves
 };
 
@@ -237,7 +245,8 @@ struct CalibrationResult {
   /// at the held parameters (zero: a held value has no covariance with any). The other entries
   /// leave out the unidentifiable directions (pseudo-inverse). Empty without compute_covariance.
   Eigen::MatrixXd covariance;
-  /// Rows left out (drop_unreachable): origin, joints and the nominal FK status.
+  /// Rows left out: origin, joints and FK status; those outside the stroke (drop_unreachable) and
+  /// those set aside that the identified geometry does not reach either.
   std::vector<std::string> dropped;
   /// Rows whose whitened residual norm at the result exceeds robust_scale: origin and norm. The
   /// rank, residual variance and standard deviations are the other rows'.
@@ -284,10 +293,22 @@ CalibrationResult calibrate(const RobotDescription& nominal,
                             const CalibrationOptions& options = CalibrationOptions());
 
 /// Per-configuration errors of one model on one set (the paper's Figures 8 and 9): e_p (Eq. 8,
-/// m) and e_theta (Eq. 9, rad), NaN where FK failed. FK is warm-started along the set.
+/// m) and e_theta (Eq. 9, rad), NaN where FK failed. Each configuration on its own, on the
+/// branch connected to home (SequenceMode::kIndependent), as the calibration solves it.
+///
+/// A row whose error is kMismatchFactor times the set's median or more, and whose measurement
+/// lies kMismatchFactor times nearer another equilibrium of the model at the same joints, is a
+/// branch mismatch: the robot held another equilibrium than the one the model predicts there.
 struct ConfigurationErrors {
   std::vector<double> e_p, e_theta;
+  std::vector<bool> branch_mismatch;
+  /// Where branch_mismatch: the platform pose of the equilibrium the measurement lies next to.
+  std::vector<Pose2<double>> other_pose;
 };
+inline constexpr double kMismatchFactor = 10.0;
+/// Two equilibria at the same joints are distinct beyond this (m, with angles at the orientation
+/// weight): far above the solver's accuracy.
+inline constexpr double kDistinctEquilibrium = 1e-7;
 ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
                                          const std::vector<CalibrationSample>& data,
                                          const SolverOptions& fk = SolverOptions(),

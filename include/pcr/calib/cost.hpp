@@ -9,10 +9,11 @@
 // measurement and w the orientation weight (m/rad). Scaling by a constant changes neither the
 // minimiser nor the ratios, but keeps Ceres' absolute tolerances meaningful.
 //
-// Derivatives are exact: FK is converged in double (warm-started from the last converged solution
-// of this configuration, kept in a cache the functor points to), then the implicit function
-// theorem gives d pose / d p = -(dr/dz)^-1 dr/dp. A configuration whose FK fails makes the
-// evaluation return false, so Ceres rejects the step.
+// Derivatives are exact: FK is converged in double (the last converged solution of this
+// configuration, kept in a cache the functor points to, continued to the new parameters: the
+// equilibrium the robot holds, followed as its geometry is identified), then the implicit function
+// theorem gives d pose / d p = -(dr/dz)^-1 dr/dp. A configuration whose equilibrium cannot be
+// continued makes the evaluation return false, so Ceres rejects the step.
 //
 // Two exact implementations of that derivative:
 // - DerivativeMode::kImplicit (default), PoseMeasurementCost: assembled per limb. Rod i's residual
@@ -71,8 +72,8 @@ struct FkCache {
   // Profiling counters (written by every evaluation).
   int evaluations = 0;           ///< double FK solves requested (residual or Jacobian)
   int jacobian_evaluations = 0;  ///< of which with a Jacobian (analytic mode only)
-  int warm_start_failures = 0;   ///< warm starts that did not converge (cold start followed)
-  int newton_iterations = 0;     ///< FK Newton iterations, all solves
+  int warm_start_failures = 0;  ///< warm solves that did not converge (continued in the parameters)
+  int newton_iterations = 0;    ///< FK Newton iterations, all solves
 };
 
 namespace internal {
@@ -322,7 +323,9 @@ class PoseMeasurementError {
     residuals[2] = (predicted.y - T(measured_.y)) * T(inverse_scale_);
   }
 
-  /// Converged double FK at `robot`: warm start from the cache, then a cold start from home.
+  /// Converged double FK at `robot`: the cached equilibrium continued to these parameters (see
+  /// continue_in_parameters); a cold start from home only for the first solve. Null when the
+  /// equilibrium cannot be continued: the evaluation fails, and Ceres rejects the step.
   const ForwardSolution* solve(const RobotParams<double>& robot, const double* params) const {
     const int count = block_size();
     if (cache_->valid && std::equal(params, params + count, cache_->parameters.begin())) {
@@ -333,12 +336,16 @@ class PoseMeasurementError {
     if (cache_->valid) {
       ForwardSolution s = forward_kinematics(robot, q_, cache_->solution, options_, load);
       cache_->newton_iterations += s.summary.iterations;
-      if (s.summary.converged()) {
-        cache_->solution = s;
-        std::copy(params, params + count, cache_->parameters.begin());
-        return &cache_->solution;
+      if (!s.summary.converged()) {
+        ++cache_->warm_start_failures;
+        if (!continue_in_parameters(params, s)) {
+          ++cache_->failures;
+          return nullptr;
+        }
       }
-      ++cache_->warm_start_failures;
+      cache_->solution = s;
+      std::copy(params, params + count, cache_->parameters.begin());
+      return &cache_->solution;
     }
     ForwardSolution s = forward_kinematics(robot, q_, options_, load);
     cache_->newton_iterations += s.summary.iterations;
@@ -350,6 +357,36 @@ class PoseMeasurementError {
     cache_->valid = true;
     std::copy(params, params + count, cache_->parameters.begin());
     return &cache_->solution;
+  }
+
+  /// The cached equilibrium carried to `params` along the straight line from the cached
+  /// parameters, in steps halved where a warm solve fails: the same equilibrium as the robot's
+  /// geometry moves, never another one a cold start from home would give where the robot has
+  /// several (a configuration past a fold of the design, reached on the robot measured). False
+  /// when the steps fall below 1/64 of the line: no equilibrium continues to `params`.
+  bool continue_in_parameters(const double* params, ForwardSolution& out) const {
+    const int count = block_size();
+    double values[kMaxParameters + kLoadParameters];
+    const double* from = cache_->parameters.data();
+    ForwardSolution at = cache_->solution;
+    double t = 0.0, dt = 0.25;
+    while (t < 1.0 && dt >= 1.0 / 64) {
+      const double t_next = std::min(1.0, t + dt);
+      for (int k = 0; k < count; ++k) values[k] = from[k] + t_next * (params[k] - from[k]);
+      const ForwardSolution s =
+          forward_kinematics(with_parameters(base_, values), q_, at, options_, load_of(values));
+      cache_->newton_iterations += s.summary.iterations;
+      if (s.summary.converged()) {
+        at = s;
+        t = t_next;
+        dt = std::min(2.0 * dt, 0.5);
+      } else {
+        dt *= 0.5;
+      }
+    }
+    if (t < 1.0) return false;
+    out = at;
+    return true;
   }
 
   RobotParams<double> base_;

@@ -100,7 +100,7 @@ def outcome_columns(parameter_names):
     for s in _TABLE3_SETS:
         for quantity in ("e_p_m", "e_theta_rad"):
             columns += [f"table3.{s}.{quantity}.{stat}" for stat in ("max", "mean")]
-        columns.append(f"table3.{s}.failed")
+        columns += [f"table3.{s}.failed", f"table3.{s}.branch_mismatches"]
     for path in _PATHS:
         for model in _MODELS:
             for stat in _ISO_STATS:
