@@ -135,9 +135,6 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
     ++summary.residual_evaluations;
     if (J.allFinite()) chord.compute(J);
   }
-  // The chord matrix at the start, for a step that is rejected (Newton may have refreshed it far
-  // from the branch).
-  const ChordMatrix chord_at_start = moves ? chord : ChordMatrix();
   const bool predicted = moves && predict_along_tangent(problem, chord, du, z);
   const ShootingVector z_direct = z;
   problem.set_input(u1);
@@ -149,7 +146,8 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   const bool direct_on_branch = !predicted || stayed_on_branch(z0, z_direct, z);
   if (direct.status == SolveStatus::kConverged && direct_on_branch) return direct.status;
   if (direct.status == SolveStatus::kConverged) direct.status = SolveStatus::kMaxIterations;
-  if (moves) chord = chord_at_start;
+  // A rejected step leaves the chord matrix where Newton took it; the continuation below
+  // factorises the Jacobian at the start again (no copy kept on every solve for it).
   // What a failure returns is the last solved point: the start.
   z = z0;
   problem.set_input(u0);
