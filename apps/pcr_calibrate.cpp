@@ -95,7 +95,8 @@ int main(int argc, char** argv) {
       residuals_path;
   double weight = pcr::kDefaultOrientationWeight;
   double robust_scale = pcr::CalibrationOptions().robust_scale;
-  bool quiet = false, drop_unreachable = false, strict = false, identify_load = false;
+  bool quiet = false, drop_unreachable = false, strict = false, identify_load = false,
+       select_load = false;
   app.add_option("--robot", robot_path, "nominal pcr-robot description (with uncertainty)")
       ->required();
   app.add_option("--data", data_path, "calibration dataset CSV (q1..qn,x,y,theta)")->required();
@@ -129,6 +130,12 @@ int main(int argc, char** argv) {
                "identify a constant platform load (f_x, f_y, m_z: air-bearing drag, a cable) with "
                "the last stage; the report gives it, and pcr fk --force --moment predicts under "
                "it");
+  app.add_flag("--select-load", select_load,
+               "when the residuals exceed the declared noise, also fit the load model (as "
+               "--identify-load) and keep it when the validation set supports it (a paired "
+               "t-test on its rows); the report gives both fits")
+      ->needs(app.get_option("--validation"))
+      ->excludes(app.get_option("--identify-load"));
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -159,14 +166,21 @@ int main(int argc, char** argv) {
 
     pcr::CalibrationOptions options;
     if (!stages_path.empty()) options.stages = pcr::load_calibration_stages(stages_path);
-    if (identify_load) options.stages.back().free.push_back("load");
+    if (identify_load) options.stages = pcr::with_load_stage(options.stages);
     check_enough_measurements(options.stages, nominal, calibration.size(), data_path);
     options.orientation_weight = weight;
     options.drop_unreachable = drop_unreachable;
     options.robust_scale = robust_scale;
     if (!quiet) options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
 
-    const pcr::CalibrationResult result = pcr::calibrate(nominal, calibration, options);
+    // With --select-load the stages' model and, when tried, the load model; `result` is chosen.
+    pcr::ModelSelection selection;
+    if (select_load) {
+      selection = pcr::calibrate_selecting_model(nominal, calibration, validation, options);
+    } else {
+      selection.stages = pcr::calibrate(nominal, calibration, options);
+    }
+    const pcr::CalibrationResult& result = selection.chosen();
 
     pcr::OutputTransaction outputs;              // the robot and the report: all or none
     pcr::RobotDescription identified = nominal;  // uncertainty section kept from the nominal
@@ -175,8 +189,13 @@ int main(int argc, char** argv) {
 
     const pcr::CalibrationTable table = pcr::calibration_table(result, calibration, validation);
     std::cout << pcr::calibration_report_text(result, table);
+    if (select_load) std::cout << "\nModel selection: " << selection.decision << "\n";
     if (!report_path.empty()) {
       json report = json::parse(pcr::calibration_report_json(result, table));
+      if (select_load) {
+        report["model_selection"] =
+            json::parse(pcr::model_selection_json(selection, calibration, validation));
+      }
       report["inputs"] = {{"robot", robot_path},
                           {"data", data_path},
                           {"validation", validation_path},

@@ -8,17 +8,21 @@
 //   of the measurement noise (the reference is the empirical spread);
 // - a row millimetres off among clean ones;
 // - a constant load on the platform, identified with the geometry: both against the truth, within
-//   the reported standard deviations, and the validation set at the floor.
+//   the reported standard deviations, and the validation set at the floor;
+// - model selection: an unknown load drawn at random is found by the residual test, the load
+//   model is kept by the validation test and reaches the floor; clean data keep the stages.
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "pcr/calib/calibrator.hpp"
+#include "pcr/calib/model_selection.hpp"
 #include "pcr/calib/sampling.hpp"
 #include "pcr/calib/virtual_robot.hpp"
 
@@ -314,6 +318,73 @@ INSTANTIATE_TEST_SUITE_P(Forces, CalibrationLoad, ::testing::Values(2e-3, 2e-4),
                          [](const ::testing::TestParamInfo<double>& info) {
                            return std::to_string(static_cast<int>(info.param * 1e6)) + "uN";
                          });
+
+// An unknown constant load (5 to 10 mN in a random direction, a random moment of up to 100 uN m)
+// on a truth drawn inside the intervals: the stages' residuals exceed the noise, the load model
+// is fitted, the validation test keeps it, and it predicts the validation set at the noise floor
+// (the truth's own noise-free predictions are the reference) where the stages' model does not.
+class SelectingTheLoadModel : public ::testing::TestWithParam<std::uint64_t> {};
+
+TEST_P(SelectingTheLoadModel, AnUnknownLoadIsFoundAndKept) {
+  std::mt19937_64 rng(GetParam());
+  const double magnitude = std::uniform_real_distribution<double>(5e-3, 10e-3)(rng);
+  const double direction = std::uniform_real_distribution<double>(-M_PI, M_PI)(rng);
+  const double moment = std::uniform_real_distribution<double>(-1e-4, 1e-4)(rng);
+  const RobotDescription nominal = default_robot();
+  VirtualRobotOptions vo;
+  vo.seed = GetParam();
+  vo.effects.external_load = true;
+  vo.effects.load = PlatformLoad<double>{
+      Vector2<double>(std::cos(direction), std::sin(direction)) * magnitude, moment};
+  VirtualRobot robot(nominal, vo);
+  const auto [calibration, validation] = measure_paper_sets(nominal, robot, GetParam());
+  CalibrationOptions options;
+  options.compute_covariance = false;
+  const ModelSelection selection =
+      calibrate_selecting_model(nominal, calibration, validation, options);
+  std::printf("load %.2f mN at %.2f rad, %.3g N m: %s\n", magnitude * 1e3, direction, moment,
+              selection.decision.c_str());
+  for (const CalibrationResult* fit : {&selection.stages, &selection.load}) {
+    for (const StageReport& stage : fit->stages) {
+      std::printf("  %s: %d iterations, %.2f s, %d FK solves (%d warm starts failed)\n",
+                  stage.name.c_str(), stage.iterations, stage.time_s, stage.fk_solves,
+                  stage.fk_warm_start_failures);
+    }
+  }
+  std::printf("the stages' residual variance %.4g\n", selection.stages.residual_variance);
+  for (const std::string& w : selection.stages.warnings) std::printf("  warning: %s\n", w.c_str());
+  ASSERT_TRUE(selection.tried_load);
+  EXPECT_TRUE(selection.load_chosen);
+  EXPECT_EQ(&selection.chosen(), &selection.load);
+  const PoseErrorStats stages = pose_errors(selection.stages.identified, validation);
+  const PoseErrorStats chosen = pose_errors(selection.chosen().identified, validation,
+                                            SolverOptions(), selection.chosen().load);
+  std::printf("validation e_p mean: stages %.4f um, chosen %.4f um\n", stages.mean_p * 1e6,
+              chosen.mean_p * 1e6);
+  EXPECT_EQ(chosen.failed, 0);
+  EXPECT_LE(chosen.mean_p, 0.05e-6);
+  EXPECT_GT(stages.mean_p, 2 * chosen.mean_p);
+}
+
+INSTANTIATE_TEST_SUITE_P(RandomLoads, SelectingTheLoadModel, ::testing::Values(21u, 22u));
+
+// Clean data (a truth inside the intervals, the declared noise): the residual test passes and the
+// stages' model is kept without fitting the load model.
+TEST(SelectingTheLoadModel, CleanDataKeepTheStagesModel) {
+  const RobotDescription nominal = default_robot();
+  VirtualRobotOptions vo;
+  vo.seed = 23;
+  VirtualRobot robot(nominal, vo);
+  const auto [calibration, validation] = measure_paper_sets(nominal, robot, 23);
+  CalibrationOptions options;
+  options.compute_covariance = false;
+  const ModelSelection selection =
+      calibrate_selecting_model(nominal, calibration, validation, options);
+  EXPECT_FALSE(selection.stages.residuals_exceed_noise) << selection.stages.residual_variance;
+  EXPECT_FALSE(selection.tried_load);
+  EXPECT_FALSE(selection.load_chosen);
+  EXPECT_EQ(&selection.chosen(), &selection.stages);
+}
 
 }  // namespace
 }  // namespace pcr

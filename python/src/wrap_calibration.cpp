@@ -12,6 +12,7 @@
 #include "pcr/calib/calibration_report.hpp"
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/calib/dataset.hpp"
+#include "pcr/calib/model_selection.hpp"
 #include "pcr/calib/predicted_accuracy.hpp"
 #include "pcr/calib/sampling.hpp"
 #include "pcr/calib/sensitivity.hpp"
@@ -231,11 +232,51 @@ struct Calibration {
   std::vector<CalibrationSample> calibration;
 };
 
+/// The CalibrationOptions of a call: `options` (None: the defaults) with the keyword changes made
+/// through the properties' setters (checked alike, no default written here), and `progress`.
+/// A Python exception in `progress` must not unwind through Ceres: it is kept, later lines are
+/// dropped, and raise_progress_error() raises it once the calibration has returned.
+struct CalledOptions {
+  CalibrationOptions options;
+  std::shared_ptr<std::unique_ptr<py::error_already_set>> progress_error =
+      std::make_shared<std::unique_ptr<py::error_already_set>>();
+
+  CalledOptions(const char* function, const std::optional<CalibrationOptions>& given,
+                const py::object& progress, const py::kwargs& changes) {
+    py::object settings = py::cast(given ? *given : CalibrationOptions());
+    const py::object type = py::type::of(settings);
+    for (const auto& item : changes) {
+      const std::string name = py::str(item.first).cast<std::string>();
+      if (!is_read_write_property(type, name)) {
+        throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" +
+                             name + "' (not a CalibrationOptions field)");
+      }
+      py::setattr(settings, item.first, item.second);
+    }
+    options = settings.cast<CalibrationOptions>();
+    if (progress.is_none()) return;
+    options.progress = [progress, error = progress_error](const std::string& line) {
+      py::gil_scoped_acquire acquire;
+      if (*error) return;
+      try {
+        progress(line);
+      } catch (py::error_already_set& e) {
+        *error = std::make_unique<py::error_already_set>(std::move(e));
+      }
+    };
+  }
+
+  void raise_progress_error() {
+    if (*progress_error) throw std::move(**progress_error);
+  }
+};
+
 /// The fields of a CalibrationResult that pickle as they are, in the order of the pickled state.
 auto result_fields(CalibrationResult& r) {
   return std::tie(r.stages, r.parameters, r.load_identified, r.gauge, r.free_count, r.jacobian_rank,
-                  r.singular_values, r.residual_variance, r.covariance_ok, r.covariance, r.dropped,
-                  r.outliers, r.outlier_threshold, r.unidentifiable, r.warnings);
+                  r.singular_values, r.residual_variance, r.residuals_exceed_noise, r.covariance_ok,
+                  r.covariance, r.dropped, r.outliers, r.outlier_threshold, r.unidentifiable,
+                  r.warnings);
 }
 
 RobotDescription with_params(const RobotDescription& nominal, const RobotParams<double>& params) {
@@ -682,6 +723,12 @@ void wrap_calibration(py::module_& m) {
       "default_stages", [] { return stages_list(default_stages()); },
       "The paper's three calibration stages, as a list of dicts (name, free, bounds_scale).");
   m.def(
+      "with_load_stage",
+      [](const py::handle& stages) { return stages_list(with_load_stage(stages_from(stages))); },
+      py::arg("stages"),
+      "The load model: `stages` (a list of dicts or a stages JSON file's path) with the last "
+      "stage also freeing 'load' (unchanged when a stage frees it already).");
+  m.def(
       "load_calibration_stages",
       [](const std::filesystem::path& path) {
         return stages_list(load_calibration_stages(input_path(path)));
@@ -1052,6 +1099,12 @@ void wrap_calibration(py::module_& m) {
           "of the whitened residuals: ~1 at the noise floor; NaN when the model could not be "
           "evaluated at the result")
       .def_property_readonly(
+          "residuals_exceed_noise",
+          [](const Calibration& c) { return c.result.residuals_exceed_noise; },
+          "the residual test: the residual variance lies more than 5 standard deviations of its "
+          "chi-square estimate above 1 (an unmodelled effect, outliers, wrong extrinsics or more "
+          "noise than declared)")
+      .def_property_readonly(
           "covariance_ok", [](const Calibration& c) { return c.result.covariance_ok; },
           "the standard deviations and the covariance were computed")
       .def_property_readonly(
@@ -1208,41 +1261,15 @@ void wrap_calibration(py::module_& m) {
       [](const RobotDescription& nominal, const InputMatrix& q, const InputMatrix& measured,
          const std::optional<CalibrationOptions>& options, const py::object& progress,
          const py::kwargs& changes) {
-        // The changes go through the properties' setters, so they are checked alike and no
-        // default is written here.
-        py::object settings = py::cast(options ? *options : CalibrationOptions());
-        const py::object type = py::type::of(settings);
-        for (const auto& item : changes) {
-          const std::string name = py::str(item.first).cast<std::string>();
-          if (!is_read_write_property(type, name)) {
-            throw py::type_error("calibrate() got an unexpected keyword argument '" + name +
-                                 "' (not a CalibrationOptions field)");
-          }
-          py::setattr(settings, item.first, item.second);
-        }
-        CalibrationOptions o = settings.cast<CalibrationOptions>();
-        // A Python exception in `progress` must not unwind through Ceres: it is kept, later
-        // lines are dropped, and it is raised once calibrate() has returned.
-        auto progress_error = std::make_shared<std::unique_ptr<py::error_already_set>>();
-        if (!progress.is_none()) {
-          o.progress = [progress, progress_error](const std::string& line) {
-            py::gil_scoped_acquire acquire;
-            if (*progress_error) return;
-            try {
-              progress(line);
-            } catch (py::error_already_set& e) {
-              *progress_error = std::make_unique<py::error_already_set>(std::move(e));
-            }
-          };
-        }
+        CalledOptions o("calibrate", options, progress, changes);
         Calibration c;
         c.nominal = nominal;
         c.calibration = samples(q, measured, nominal.params.num_limbs);
         {
           py::gil_scoped_release release;
-          c.result = calibrate(nominal, c.calibration, o);
+          c.result = calibrate(nominal, c.calibration, o.options);
         }
-        if (*progress_error) throw std::move(**progress_error);
+        o.raise_progress_error();
         return py::make_tuple(with_params(nominal, c.result.identified), std::move(c));
       },
       py::arg("nominal"), py::arg("q"), py::arg("measured"), py::arg("options") = py::none(),
@@ -1255,6 +1282,66 @@ void wrap_calibration(py::module_& m) {
       "the nominal geometry are left out, else they are a ValueError naming them. progress: "
       "optional callable(str). Returns (identified Robot, CalibrationResult); "
       "result.to_json() is the report pcr_calibrate writes. Releases the GIL.");
+
+  py::class_<ModelSelection>(m, "ModelSelection",
+                             "The calibration's stages against the load model, chosen on the "
+                             "validation set (pcr.calibrate_selecting_model).")
+      .def_property_readonly(
+          "load_chosen", [](const ModelSelection& s) { return s.load_chosen; },
+          "the validation test kept the load model")
+      .def_property_readonly(
+          "tried_load", [](const ModelSelection& s) { return s.tried_load; },
+          "the residuals exceeded the noise and the load model was fitted")
+      .def_property_readonly(
+          "rows", [](const ModelSelection& s) { return s.rows; }, "validation rows in the test")
+      .def_property_readonly(
+          "mean_difference", [](const ModelSelection& s) { return s.mean_difference; },
+          "mean over the rows of the stages' squared whitened error less the "
+          "load model's")
+      .def_property_readonly(
+          "t", [](const ModelSelection& s) { return s.t; },
+          "the paired t statistic (the load model is kept above "
+          "pcr.MODEL_SELECTION_T)")
+      .def_property_readonly(
+          "decision", [](const ModelSelection& s) { return s.decision; },
+          "the choice in words, with the numbers");
+  m.attr("MODEL_SELECTION_T") = kModelSelectionT;
+
+  m.def(
+      "calibrate_selecting_model",
+      [](const RobotDescription& nominal, const InputMatrix& q, const InputMatrix& measured,
+         const InputMatrix& validation_q, const InputMatrix& validation_measured,
+         const std::optional<CalibrationOptions>& options, const py::object& progress,
+         const py::kwargs& changes) {
+        CalledOptions o("calibrate_selecting_model", options, progress, changes);
+        const int n = nominal.params.num_limbs;
+        const std::vector<CalibrationSample> calibration = samples(q, measured, n);
+        const std::vector<CalibrationSample> validation =
+            samples(validation_q, validation_measured, n);
+        ModelSelection selection;
+        {
+          py::gil_scoped_release release;
+          selection = calibrate_selecting_model(nominal, calibration, validation, o.options);
+        }
+        o.raise_progress_error();
+        const auto wrapped = [&](CalibrationResult result) {
+          return Calibration{std::move(result), nominal, calibration};
+        };
+        py::object load = py::none();
+        if (selection.tried_load) load = py::cast(wrapped(selection.load));
+        const CalibrationResult& chosen = selection.chosen();
+        return py::make_tuple(with_params(nominal, chosen.identified), wrapped(chosen),
+                              wrapped(selection.stages), load, selection);
+      },
+      py::arg("nominal"), py::arg("q"), py::arg("measured"), py::arg("validation_q"),
+      py::arg("validation_measured"), py::arg("options") = py::none(), py::kw_only(),
+      py::arg("progress") = py::none(),
+      "calibrate() with model selection: when the residuals exceed the noise "
+      "(CalibrationResult.residuals_exceed_noise), the load model (the last stage also frees a "
+      "constant platform load) is fitted too and kept when a paired one-sided t-test on the "
+      "validation rows' squared whitened pose errors passes pcr.MODEL_SELECTION_T (1 %). "
+      "Returns (identified Robot, chosen CalibrationResult, the stages' CalibrationResult, the "
+      "load model's CalibrationResult or None, ModelSelection). Releases the GIL.");
 }
 
 }  // namespace pcr::python

@@ -342,4 +342,22 @@ std::string calibration_report_json(const CalibrationResult& result,
   return report.dump(2) + "\n";
 }
 
+std::string model_selection_json(const ModelSelection& selection,
+                                 const std::vector<CalibrationSample>& calibration,
+                                 const std::vector<CalibrationSample>& validation) {
+  ordered_json out{{"decision", selection.decision},
+                   {"load_tried", selection.tried_load},
+                   {"load_chosen", selection.load_chosen},
+                   {"validation_rows", selection.rows},
+                   {"mean_difference", selection.mean_difference},
+                   {"t", selection.t},
+                   {"threshold_t", kModelSelectionT}};
+  if (selection.tried_load) {
+    const CalibrationResult& other = selection.load_chosen ? selection.stages : selection.load;
+    out["other_fit"] = ordered_json::parse(
+        calibration_report_json(other, calibration_table(other, calibration, validation)));
+  }
+  return out.dump();
+}
+
 }  // namespace pcr

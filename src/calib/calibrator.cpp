@@ -85,13 +85,6 @@ std::array<double, kLoadParameters> load_scales(const RobotParams<double>& robot
   return out;
 }
 
-bool frees_load(const std::vector<CalibrationStage>& stages) {
-  for (const CalibrationStage& stage : stages) {
-    if (std::find(stage.free.begin(), stage.free.end(), "load") != stage.free.end()) return true;
-  }
-  return false;
-}
-
 /// Flat indices of a parameter kind name ("A" covers A_x and A_y, "camera" three values...).
 std::vector<int> indices_of_kind(const std::string& kind, int n) {
   std::vector<ParameterKind> limb_kinds;
@@ -484,14 +477,42 @@ class Identification {
     const double* l = values_.data() + count_;
     return PlatformLoad<double>{Vector2<double>(l[0], l[1]), l[2]};
   }
-  /// Moves the values along the gauge orbit, the load with them (move_load_along_gauge).
+  /// Moves the values along the gauge orbit, the load with them (move_load_along_gauge), and
+  /// carries each row's cached equilibrium along the orbit in kGaugeSteps: every robot on it
+  /// predicts the same poses (with no load exactly), where the straight line in the parameters
+  /// that the cost's own continuation follows passes through robots that may not reach a row
+  /// near a fold.
   void move(const GaugeMotion& m) {
-    const PlatformLoad<double> moved = move_load_along_gauge(load(), m.G, m.H, m.stiffness_scale);
-    set_robot(move_along_gauge(robot(), m.G, m.H, m.stiffness_scale));
-    if (identify_load_) {
-      values_[static_cast<std::size_t>(count_)] = moved.force.x();
-      values_[static_cast<std::size_t>(count_) + 1] = moved.force.y();
-      values_[static_cast<std::size_t>(count_) + 2] = moved.moment;
+    constexpr int kGaugeSteps = 8;
+    const RobotParams<double> from = robot();
+    const PlatformLoad<double> from_load = load();
+    for (int step = 1; step <= kGaugeSteps; ++step) {
+      const double t = static_cast<double>(step) / kGaugeSteps;
+      const GaugeMotion part{Pose2<double>{t * m.G.x, t * m.G.y, t * m.G.theta},
+                             Pose2<double>{t * m.H.x, t * m.H.y, t * m.H.theta},
+                             1.0 + t * (m.stiffness_scale - 1.0)};
+      const PlatformLoad<double> moved =
+          move_load_along_gauge(from_load, part.G, part.H, part.stiffness_scale);
+      set_robot(move_along_gauge(from, part.G, part.H, part.stiffness_scale));
+      if (identify_load_) {
+        values_[static_cast<std::size_t>(count_)] = moved.force.x();
+        values_[static_cast<std::size_t>(count_) + 1] = moved.force.y();
+        values_[static_cast<std::size_t>(count_) + 2] = moved.moment;
+      }
+      carry_caches();
+    }
+  }
+  /// Continues every valid cache to the current values (a row that cannot follow keeps its
+  /// cache, and the cost continues it from there when evaluated).
+  void carry_caches() {
+    const double* values = values_.data();
+    double residuals[3];
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      if (!caches_[j].valid) continue;
+      const std::unique_ptr<ceres::CostFunction> cost(PoseMeasurementError::Create(
+          nominal_, data_[j].q, data_[j].measured, options_.orientation_weight,
+          options_.residual_scale, &caches_[j], options_.fk, options_.derivatives, identify_load_));
+      cost->Evaluate(&values, residuals, nullptr);
     }
   }
   /// Whether `is_free` (over the block) frees a load parameter.
@@ -613,7 +634,14 @@ class Identification {
     // a bound met in the gauge a round started in may not be met in the next one's, and a
     // parameter held at a bound is released. A truth inside the box has a representative inside
     // it, which the rounds reach (the sweep in tests/test_calibration.cpp).
+    // A round whose start (recentred, clamped) the model cannot evaluate, a row past a fold
+    // there, goes on from the last values it evaluated instead: the stage's start, or the end
+    // of the last round.
     constexpr int kMaxRounds = 4;
+    std::vector<double> last_evaluated = values_;
+    std::vector<FkCache> caches_evaluated = caches_;  // the equilibria at last_evaluated
+    ceres::Solver::Summary last_summary;
+    bool solved = false, restored = false;
     recentre_in_gauge(stage_free, stage.bounds_scale);
     double previous_round_cost = std::numeric_limits<double>::infinity();
     for (int round = 0; round < kMaxRounds; ++round) {
@@ -651,6 +679,23 @@ class Identification {
         problem.SetParameterUpperBound(values_.data(), k, c + h);
       }
       ceres::Solve(solver, &problem, &summary);
+      const bool failed_at_start = summary.termination_type == ceres::FAILURE &&
+                                   (summary.iterations.empty() || summary.initial_cost < 0);
+      if (failed_at_start && !restored) {
+        values_ = last_evaluated;
+        for (std::size_t j = 0; j < caches_.size(); ++j) {  // the counters go on counting
+          caches_[j].solution = caches_evaluated[j].solution;
+          caches_[j].valid = caches_evaluated[j].valid;
+          caches_[j].parameters = caches_evaluated[j].parameters;
+        }
+        restored = true;
+        if (solved) {
+          summary = last_summary;
+          break;
+        }
+        --round;  // round 0 again, from the stage's own start
+        continue;
+      }
       if (round == 0) report.initial_cost = summary.initial_cost * to_m2;
       report.iterations += static_cast<int>(summary.iterations.size()) - 1;
       add_counters(summary, &report);
@@ -674,6 +719,10 @@ class Identification {
       const bool any_at_bound = std::any_of(free.begin(), free.end(), at_bound);
       if (!any_at_bound || !(summary.final_cost < (1 - 1e-2) * previous_round_cost)) break;
       previous_round_cost = summary.final_cost;
+      last_evaluated = values_;
+      caches_evaluated = caches_;
+      last_summary = summary;
+      solved = summary.IsSolutionUsable();
       recentre_in_gauge(stage_free, stage.bounds_scale);
     }
     report.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -1035,7 +1084,8 @@ void add_warnings(const Identification& id, CalibrationResult* result) {
   const double dof = 3.0 * static_cast<double>(id.rows() - result->outliers.size()) -
                      static_cast<double>(result->jacobian_rank);
   const double v = result->residual_variance;
-  if (std::isfinite(v) && dof > 0 && v > 1 + 5 * std::sqrt(2 / dof)) {
+  result->residuals_exceed_noise = std::isfinite(v) && dof > 0 && v > 1 + 5 * std::sqrt(2 / dof);
+  if (result->residuals_exceed_noise) {
     result->warnings.push_back(
         "the residuals are " + format_number(std::sqrt(v)) +
         " times the declared noise (residual_scale): an unmodelled effect, outliers, wrong "
@@ -1142,6 +1192,18 @@ std::vector<CalibrationStage> default_stages() {
       {"influential", {"l", "A", "B", "alpha", "camera", "pattern"}, 1.0},
       {"all", {"all"}, 1.0},
   };
+}
+
+bool frees_load(const std::vector<CalibrationStage>& stages) {
+  for (const CalibrationStage& stage : stages) {
+    if (std::find(stage.free.begin(), stage.free.end(), "load") != stage.free.end()) return true;
+  }
+  return false;
+}
+
+std::vector<CalibrationStage> with_load_stage(std::vector<CalibrationStage> stages) {
+  if (!stages.empty() && !frees_load(stages)) stages.back().free.push_back("load");
+  return stages;
 }
 
 void validate_stages(const std::vector<CalibrationStage>& stages, const std::string& source) {

@@ -9,6 +9,7 @@
 
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/calib/dataset.hpp"
+#include "pcr/calib/model_selection.hpp"
 
 namespace pcr {
 
@@ -61,5 +62,12 @@ std::string residuals_csv(const CalibrationResult& result, const CalibrationTabl
 
 /// The whole report as JSON text (SI units, field names carry them: e_p_m, e_theta_rad, ...).
 std::string calibration_report_json(const CalibrationResult& result, const CalibrationTable& table);
+
+/// A model selection (pcr/calib/model_selection.hpp) as JSON text: the decision and its numbers
+/// and, when the load model was fitted, the fit not chosen as calibration_report_json on the same
+/// sets ("other_fit").
+std::string model_selection_json(const ModelSelection& selection,
+                                 const std::vector<CalibrationSample>& calibration,
+                                 const std::vector<CalibrationSample>& validation);
 
 }  // namespace pcr

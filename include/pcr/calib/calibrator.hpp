@@ -90,6 +90,13 @@ struct CalibrationStage {
 /// The paper's three stages.
 std::vector<CalibrationStage> default_stages();
 
+/// Whether a stage frees "load" (the calibration then identifies a constant platform load).
+bool frees_load(const std::vector<CalibrationStage>& stages);
+
+/// The load model: `stages` with their last stage also freeing "load" (unchanged when a stage
+/// frees it already).
+std::vector<CalibrationStage> with_load_stage(std::vector<CalibrationStage> stages);
+
 /// Throws InputError naming `source` on an unknown kind or a non-positive bounds scale.
 void validate_stages(const std::vector<CalibrationStage>& stages, const std::string& source);
 
@@ -230,6 +237,11 @@ struct CalibrationResult {
   /// Of the whitened residuals: ~1 at the noise floor; NaN when the model could not be
   /// evaluated at the result.
   double residual_variance = 0;
+  /// The residual test: residual_variance lies more than 5 standard deviations of its chi-square
+  /// estimate (3 rows - rank degrees of freedom, outliers left out) above 1, so the model or the
+  /// declared noise does not explain the data: an unmodelled effect, outliers, wrong extrinsics
+  /// or more noise than declared (one of `warnings` says so).
+  bool residuals_exceed_noise = false;
   /// The standard deviations and the covariance were computed (a Jacobian that evaluated, a
   /// finite residual variance, compute_covariance). True even when some directions are not
   /// identifiable: those parameters' entries are NaN (see covariance).

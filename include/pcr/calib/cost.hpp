@@ -363,18 +363,22 @@ class PoseMeasurementError {
   /// parameters, in steps halved where a warm solve fails: the same equilibrium as the robot's
   /// geometry moves, never another one a cold start from home would give where the robot has
   /// several (a configuration past a fold of the design, reached on the robot measured). False
-  /// when the steps fall below 1/64 of the line: no equilibrium continues to `params`.
+  /// when the steps fall below 1/8 of the line: the step is rejected, and Ceres tries a shorter
+  /// one, which costs less than continuing a long step finely (a long trial step of a model
+  /// that cannot fit its data is rejected anyway).
   bool continue_in_parameters(const double* params, ForwardSolution& out) const {
     const int count = block_size();
     double values[kMaxParameters + kLoadParameters];
     const double* from = cache_->parameters.data();
     ForwardSolution at = cache_->solution;
-    double t = 0.0, dt = 0.25;
-    while (t < 1.0 && dt >= 1.0 / 64) {
+    SolverOptions step_options = options_;
+    step_options.max_iterations = options_.max_continuation_iterations;
+    double t = 0.0, dt = 0.5;
+    while (t < 1.0 && dt >= 1.0 / 8) {
       const double t_next = std::min(1.0, t + dt);
       for (int k = 0; k < count; ++k) values[k] = from[k] + t_next * (params[k] - from[k]);
       const ForwardSolution s =
-          forward_kinematics(with_parameters(base_, values), q_, at, options_, load_of(values));
+          forward_kinematics(with_parameters(base_, values), q_, at, step_options, load_of(values));
       cache_->newton_iterations += s.summary.iterations;
       if (s.summary.converged()) {
         at = s;

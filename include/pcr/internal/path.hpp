@@ -196,6 +196,9 @@ inline SolveStatus solve_path_at_fixed_steps(ShootingProblem& problem, const Sho
   const auto stall_status = [&](SolveStatus otherwise) {
     return singular_ahead() || rc_last <= kStallSingularRcond ? singular_status() : otherwise;
   };
+  // With no input change there is no path to step along: the direct solve was the whole attempt
+  // (steps would retry the same problem from the same start, up to max_continuation_steps times).
+  if (!moves) return stall_status(direct.status);
   ChordMatrix chord_at_last = chord;
   while (t < 1.0) {
     if (summary.continuation_steps >= options.max_continuation_steps) {

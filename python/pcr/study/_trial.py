@@ -46,6 +46,10 @@ FACTORS = {
     "validation_count": Factor(int, 56, "", "validation configurations"),
     "design": Factor(str, "poisson-disc", "", "choice of the configurations: 'poisson-disc' or "
                      "'d-optimal'", ("poisson-disc", "d-optimal")),
+    "model": Factor(str, "stages", "", "the calibrated model: 'stages' (the paper's), 'load' (the "
+                    "last stage also frees a constant platform load) or 'selected' (the load "
+                    "model when the residuals exceed the noise and the validation set supports "
+                    "it, pcr.calibrate_selecting_model)", ("stages", "load", "selected")),
     "misalignment": Factor(float, 0.0, "rad", "unmodelled: U(-h, h) added to beta and gamma"),
     "diameter_spread": Factor(float, 0.0, "m", "unmodelled: U(-h, h) added to each rod's d"),
     "load_force_x": Factor(float, 0.0, "N", "unmodelled: a constant force on the platform"),
@@ -108,7 +112,8 @@ def outcome_columns(parameter_names):
     for name in parameter_names:
         columns += [f"parameters.{name}.error", f"parameters.{name}.std"]
     columns += ["configurations.calibration", "configurations.validation",
-                "configurations.unreachable", "calibration.iterations"]
+                "configurations.unreachable", "calibration.iterations",
+                "calibration.load_identified"]
     columns += [f"time.{t}_s" for t in _TIMES] + ["time_s"]
     return columns
 
@@ -273,8 +278,17 @@ def _run(factors, seed, design, row, stages):
 
     stages.enter("calibration")
     q, poses = measured["calibration"]
-    identified, result = pcr.calibrate(nominal, q, poses, drop_unreachable=True)
+    if factors["model"] == "selected":
+        identified, result, *_ = pcr.calibrate_selecting_model(
+            nominal, q, poses, *measured["validation"], drop_unreachable=True)
+    else:
+        stages = pcr.default_stages()
+        if factors["model"] == "load":
+            stages = pcr.with_load_stage(stages)
+        identified, result = pcr.calibrate(nominal, q, poses, stages=stages,
+                                           drop_unreachable=True)
     row["calibration.iterations"] = sum(s.iterations for s in result.stages)
+    row["calibration.load_identified"] = float(result.load_identified)
     truth_values = result.in_gauge(truth).parameters  # compared in the same frames
     for p, true_value in zip(result.parameters, truth_values):
         row[f"parameters.{p.name}.error"] = p.value - true_value
@@ -285,11 +299,15 @@ def _run(factors, seed, design, row, stages):
     _put(row, "table3", result.to_dict(table)["table3"])
 
     stages.enter("accuracy")
-    models = {"nominal": result.extrinsics_only, "identified": identified}
+    # The identified model commands under its identified load (zeros without one).
+    f_x, f_y, m_z = result.load
+    models = {"nominal": (result.extrinsics_only, {}),
+              "identified": (identified, dict(force=(f_x, f_y), moment=m_z))}
     for path_name, path in (("square", pcr.square_path()), ("circle", pcr.circle_path())):
         for model_name in _MODELS:
-            iso = pcr.evaluate_on_virtual_robot(models[model_name], robot, path,
-                                                repeat=factors["repeat"]).iso
+            model, load = models[model_name]
+            iso = pcr.evaluate_on_virtual_robot(model, robot, path, repeat=factors["repeat"],
+                                                **load).iso
             _put(row, f"accuracy.{path_name}.{model_name}", iso.summary)
 
     unusable = [s for s in result.stages if not s.usable]
