@@ -282,10 +282,10 @@ def _run(factors, seed, design, row, stages):
         identified, result, *_ = pcr.calibrate_selecting_model(
             nominal, q, poses, *measured["validation"], drop_unreachable=True)
     else:
-        stages = pcr.default_stages()
+        calibration_stages = pcr.default_stages()
         if factors["model"] == "load":
-            stages = pcr.with_load_stage(stages)
-        identified, result = pcr.calibrate(nominal, q, poses, stages=stages,
+            calibration_stages = pcr.with_load_stage(calibration_stages)
+        identified, result = pcr.calibrate(nominal, q, poses, stages=calibration_stages,
                                            drop_unreachable=True)
     row["calibration.iterations"] = sum(s.iterations for s in result.stages)
     row["calibration.load_identified"] = float(result.load_identified)
