@@ -448,7 +448,8 @@ class Identification {
         values_(static_cast<std::size_t>(block_)),
         nominal_values_(static_cast<std::size_t>(block_), 0.0),
         caches_(data.size()),
-        gross_(data.size(), false) {
+        gross_(data.size(), false),
+        lost_(data.size(), false) {
     half_widths_ = parameter_half_widths(*nominal.uncertainty, n_);
     if (identify_load_) {
       const auto scales = load_scales(nominal_, half_widths_, data_, options);
@@ -499,12 +500,12 @@ class Identification {
         values_[static_cast<std::size_t>(count_) + 1] = moved.force.y();
         values_[static_cast<std::size_t>(count_) + 2] = moved.moment;
       }
-      carry_caches();
+      settle();
     }
   }
-  /// Continues every valid cache to the current values (a row that cannot follow keeps its
-  /// cache, and the cost continues it from there when evaluated).
-  void carry_caches() {
+  /// Continues every valid cache to the current values and accepts them there (a row that cannot
+  /// follow keeps its anchor, and the cost continues it from there when evaluated).
+  void settle() {
     const double* values = values_.data();
     double residuals[3];
     for (std::size_t j = 0; j < data_.size(); ++j) {
@@ -513,6 +514,25 @@ class Identification {
           nominal_, data_[j].q, data_[j].measured, options_.orientation_weight,
           options_.residual_scale, &caches_[j], options_.fk, options_.derivatives, identify_load_));
       cost->Evaluate(&values, residuals, nullptr);
+    }
+    accept_evaluated();
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      lost_[j] = caches_[j].valid &&
+                 !std::equal(values_.begin(), values_.end(), caches_[j].parameters.begin());
+    }
+  }
+  /// The rows left out because their equilibrium does not follow the current values.
+  std::vector<std::string> lost_rows() const {
+    std::vector<std::string> out;
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      if (lost_[j]) out.push_back(origin(j));
+    }
+    return out;
+  }
+  /// Accepts the caches solved at the current values (a point Ceres kept).
+  void accept_evaluated() {
+    for (FkCache& c : caches_) {
+      if (c.valid && std::equal(values_.begin(), values_.end(), c.parameters.begin())) c.accept();
     }
   }
   /// Whether `is_free` (over the block) frees a load parameter.
@@ -556,7 +576,7 @@ class Identification {
     ceres::LossFunction* loss =
         robust && loss_scale_ > 0 ? new ceres::HuberLoss(loss_scale_) : nullptr;
     for (std::size_t j = 0; j < data_.size(); ++j) {
-      if (robust && gross_[j]) continue;
+      if ((robust && gross_[j]) || lost_[j]) continue;
       problem.AddResidualBlock(PoseMeasurementError::Create(
                                    nominal_, data_[j].q, data_[j].measured,
                                    options_.orientation_weight, options_.residual_scale,
@@ -622,8 +642,10 @@ class Identification {
       }
       return false;
     });
+    AcceptCallback accept(this);
+    solver.callbacks.push_back(&accept);
     solver.callbacks.push_back(&stop_at_bound);
-    solver.update_state_every_iteration = true;  // the callback reads values_
+    solver.update_state_every_iteration = true;  // the callbacks read values_
     ceres::Solver::Summary summary;
     const auto start = std::chrono::steady_clock::now();
     for (FkCache& c : caches_) c.evaluations = c.warm_start_failures = c.newton_iterations = 0;
@@ -652,6 +674,7 @@ class Identification {
         double& v = values_[static_cast<std::size_t>(k)];
         v = std::min(std::max(v, c - h), c + h);
       }
+      settle();
       if (round == 0) {
         update_loss_scale();
         exclude_gross_outliers();
@@ -678,7 +701,7 @@ class Identification {
         problem.SetParameterLowerBound(values_.data(), k, c - h);
         problem.SetParameterUpperBound(values_.data(), k, c + h);
       }
-      ceres::Solve(solver, &problem, &summary);
+      solve(solver, &problem, &summary, stage.name);
       const bool failed_at_start = summary.termination_type == ceres::FAILURE &&
                                    (summary.iterations.empty() || summary.initial_cost < 0);
       if (failed_at_start && !restored) {
@@ -712,7 +735,7 @@ class Identification {
           break;
         }
         problem.SetManifold(values_.data(), make_manifold(is_free, subspace));
-        ceres::Solve(solver, &problem, &summary);
+        solve(solver, &problem, &summary, stage.name + " (active set)");
         report.iterations += static_cast<int>(summary.iterations.size()) - 1;
         add_counters(summary, &report);
       }
@@ -759,6 +782,27 @@ class Identification {
       }
     }
     return report;
+  }
+
+  /// Solves, accepts the equilibria at the result, and names a failure on the progress stream:
+  /// Ceres' message and the rows whose FK failed during the solve.
+  void solve(const ceres::Solver::Options& solver, ceres::Problem* problem,
+             ceres::Solver::Summary* summary, const std::string& what) {
+    std::vector<int> failures_before(caches_.size());
+    for (std::size_t j = 0; j < caches_.size(); ++j) failures_before[j] = caches_[j].failures;
+    ceres::Solve(solver, problem, summary);
+    settle();
+    if (summary->termination_type != ceres::FAILURE || !options_.progress) return;
+    std::vector<std::string> rows;
+    for (std::size_t j = 0; j < caches_.size(); ++j) {
+      if (caches_[j].failures > failures_before[j]) rows.push_back(origin(j));
+    }
+    options_.progress("stage " + what + ": " + summary->message + " FK failed on " +
+                      std::to_string(rows.size()) + " rows" +
+                      (rows.empty() ? std::string() : ": " + listing(rows, 5)));
+  }
+  std::string origin(std::size_t j) const {
+    return data_[j].origin.empty() ? "configuration " + std::to_string(j + 1) : data_[j].origin;
   }
 
   static void add_counters(const ceres::Solver::Summary& summary, StageReport* report) {
@@ -883,6 +927,7 @@ class Identification {
     const ceres::Solver::Options solver = solver_options(options_.function_tolerance);
     ceres::Solver::Summary summary;
     ceres::Solve(solver, &problem, &summary);
+    settle();
   }
 
   /// The smallest singular value of the scaled Jacobian on `columns` at the current values,
@@ -977,6 +1022,21 @@ class Identification {
  private:
   /// Ends a solve (successfully: the values are the last accepted step's) when `stop` says so
   /// after an accepted step.
+  /// Accepts the caches at every point Ceres keeps (the start and each successful step): the
+  /// solves of the next trial points start from there (FkCache::anchor). Needs
+  /// update_state_every_iteration.
+  class AcceptCallback : public ceres::IterationCallback {
+   public:
+    explicit AcceptCallback(Identification* id) : id_(id) {}
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+      if (s.iteration == 0 || s.step_is_successful) id_->accept_evaluated();
+      return ceres::SOLVER_CONTINUE;
+    }
+
+   private:
+    Identification* id_;
+  };
+
   class BoundCallback : public ceres::IterationCallback {
    public:
     explicit BoundCallback(std::function<bool()> stop) : stop_(std::move(stop)) {}
@@ -1063,6 +1123,9 @@ class Identification {
   double loss_scale_ = 0;          ///< Huber scale of the current stage (whitened units; 0: none)
   std::vector<double> row_norms_;  ///< whitened residual norms at the last update_loss_scale
   std::vector<bool> gross_;        ///< rows left out of the stage (exclude_gross_outliers)
+  /// Rows whose equilibrium did not follow the values (settle): left out of the solves until it
+  /// does, so that one row past a fold of the current geometry does not end a solve at its start.
+  std::vector<bool> lost_;
 };
 
 /// What makes `result` doubtful, in words: extrinsics outside their declared interval, residuals
@@ -1654,6 +1717,13 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   // cannot be evaluated at the result (an FK that fails there) has no rank, variance or std.
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
+  const std::vector<std::string> lost = id.lost_rows();
+  if (!lost.empty()) {
+    result.warnings.push_back(std::to_string(lost.size()) +
+                              " rows left out: their equilibrium does not continue to the "
+                              "identified geometry (past a fold of it?): " +
+                              listing(lost));
+  }
   const bool evaluated = !free.empty() && id.jacobian(&J, &r) && J.allFinite() && r.allFinite();
   if (!free.empty() && !evaluated) {
     result.warnings.push_back(

@@ -61,13 +61,28 @@ enum class DerivativeMode {
 /// origin) as identified parameters: appended to the flat parameters in the cost's block.
 inline constexpr int kLoadParameters = 3;
 
-/// Warm-start cache of one configuration: the last converged double FK solution.
+/// Warm-start cache of one configuration: the last converged double FK solution, and the
+/// equilibrium at the last accepted parameters that every solve starts from.
 struct FkCache {
   ForwardSolution solution;
   bool valid = false;
   /// The flat parameters `solution` was solved at: Ceres evaluates the Jacobian at the point whose
   /// residual it has just evaluated, and that solve is then reused as is.
   std::array<double, kMaxParameters + kLoadParameters> parameters{};
+  /// The equilibrium at the parameters last accepted (accept(): a step Ceres kept, the end of a
+  /// solve, a move along the gauge). Solves start from it, never from a trial point Ceres
+  /// rejected: a trial step across a fold may have reached another equilibrium, from which the
+  /// way back to the accepted parameters does not exist.
+  ForwardSolution anchor;
+  std::array<double, kMaxParameters + kLoadParameters> anchor_parameters{};
+  bool anchored = false;
+  /// Makes `solution` the start of the following solves.
+  void accept() {
+    if (!valid) return;
+    anchor = solution;
+    anchor_parameters = parameters;
+    anchored = true;
+  }
   int failures = 0;  ///< evaluations where FK did not converge
   // Profiling counters (written by every evaluation).
   int evaluations = 0;           ///< double FK solves requested (residual or Jacobian)
@@ -323,9 +338,10 @@ class PoseMeasurementError {
     residuals[2] = (predicted.y - T(measured_.y)) * T(inverse_scale_);
   }
 
-  /// Converged double FK at `robot`: the cached equilibrium continued to these parameters (see
-  /// continue_in_parameters); a cold start from home only for the first solve. Null when the
-  /// equilibrium cannot be continued: the evaluation fails, and Ceres rejects the step.
+  /// Converged double FK at `robot`: the anchored equilibrium continued to these parameters (see
+  /// continue_in_parameters); a cold start from home only for the first solve, which anchors.
+  /// Null when the equilibrium cannot be continued: the evaluation fails, and Ceres rejects the
+  /// step.
   const ForwardSolution* solve(const RobotParams<double>& robot, const double* params) const {
     const int count = block_size();
     if (cache_->valid && std::equal(params, params + count, cache_->parameters.begin())) {
@@ -333,8 +349,8 @@ class PoseMeasurementError {
     }
     ++cache_->evaluations;
     const PlatformLoad<double> load = load_of(params);
-    if (cache_->valid) {
-      ForwardSolution s = forward_kinematics(robot, q_, cache_->solution, options_, load);
+    if (cache_->anchored) {
+      ForwardSolution s = forward_kinematics(robot, q_, cache_->anchor, options_, load);
       cache_->newton_iterations += s.summary.iterations;
       if (!s.summary.converged()) {
         ++cache_->warm_start_failures;
@@ -356,10 +372,11 @@ class PoseMeasurementError {
     cache_->solution = s;
     cache_->valid = true;
     std::copy(params, params + count, cache_->parameters.begin());
+    cache_->accept();
     return &cache_->solution;
   }
 
-  /// The cached equilibrium carried to `params` along the straight line from the cached
+  /// The anchored equilibrium carried to `params` along the straight line from the anchored
   /// parameters, in steps halved where a warm solve fails: the same equilibrium as the robot's
   /// geometry moves, never another one a cold start from home would give where the robot has
   /// several (a configuration past a fold of the design, reached on the robot measured). False
@@ -369,8 +386,8 @@ class PoseMeasurementError {
   bool continue_in_parameters(const double* params, ForwardSolution& out) const {
     const int count = block_size();
     double values[kMaxParameters + kLoadParameters];
-    const double* from = cache_->parameters.data();
-    ForwardSolution at = cache_->solution;
+    const double* from = cache_->anchor_parameters.data();
+    ForwardSolution at = cache_->anchor;
     SolverOptions step_options = options_;
     step_options.max_iterations = options_.max_continuation_iterations;
     double t = 0.0, dt = 0.5;
