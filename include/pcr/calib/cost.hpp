@@ -349,7 +349,7 @@ class PoseMeasurementError {
     }
     ++cache_->evaluations;
     const PlatformLoad<double> load = load_of(params);
-    if (cache_->anchored) {
+    if (cache_->valid && cache_->anchored) {  // an emptied cache (valid false) solves cold
       ForwardSolution s = forward_kinematics(robot, q_, cache_->anchor, options_, load);
       cache_->newton_iterations += s.summary.iterations;
       if (!s.summary.converged()) {
