@@ -15,6 +15,7 @@
 #include "pcr/calib/calibration_report.hpp"
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/calib/dataset.hpp"
+#include "pcr/calib/model_selection.hpp"
 #include "pcr/commands.hpp"
 #include "pcr/csv_io.hpp"
 #include "pcr/parameters.hpp"
@@ -30,58 +31,6 @@ bool same_file(const std::string& a, const std::string& b) {
     return std::filesystem::equivalent(a, b, ec);
   }
   return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
-}
-
-/// Whether the stage kind `kind` frees the flat parameter `index` (the kinds of
-/// pcr::CalibrationStage: a parameter's own name, its prefix before '_' such as "A" or "camera",
-/// "extrinsics" for camera and pattern, "all" for every one).
-bool kind_frees(const std::string& kind, int index, int num_limbs) {
-  const std::string name = pcr::parameter_kind_name(pcr::parameter_id(index, num_limbs).kind);
-  const bool extrinsic = index >= pcr::kLimbParameters * num_limbs;
-  return kind == "all" || kind == name || name.rfind(kind + "_", 0) == 0 ||
-         (kind == "extrinsics" && extrinsic);
-}
-
-/// The free parameters of `stage`: those its kinds name with a non-zero half-width (the others
-/// are held at their value), plus the platform load's for "load".
-int free_parameters(const pcr::CalibrationStage& stage, const std::vector<double>& half_widths,
-                    int num_limbs) {
-  int count = 0;
-  for (int k = 0; k < pcr::num_parameters(num_limbs); ++k) {
-    bool freed = false;
-    for (const std::string& kind : stage.free) freed = freed || kind_frees(kind, k, num_limbs);
-    count += freed && half_widths[static_cast<std::size_t>(k)] > 0 ? 1 : 0;
-  }
-  for (const std::string& kind : stage.free) count += kind == "load" ? pcr::kLoadParameters : 0;
-  return count;
-}
-
-/// A stage with more free parameters than measured values (3 per row) has no unique solution: the
-/// least-squares problem is underdetermined whatever the data.
-void check_enough_measurements(const std::vector<pcr::CalibrationStage>& stages,
-                               const pcr::RobotDescription& nominal, std::size_t rows,
-                               const std::string& source) {
-  const int n = nominal.params.num_limbs;
-  if (!nominal.uncertainty) return;  // pcr::calibrate names the missing section
-  const std::vector<double> half_widths = pcr::parameter_half_widths(*nominal.uncertainty, n);
-  // The stage with the most free parameters (the last, "all", for the default stages) decides.
-  const pcr::CalibrationStage* largest = nullptr;
-  int free = 0;
-  for (const pcr::CalibrationStage& stage : stages) {
-    const int count = free_parameters(stage, half_widths, n);
-    if (largest == nullptr || count > free) {
-      largest = &stage;
-      free = count;
-    }
-  }
-  const std::size_t measured = 3 * rows;
-  if (largest == nullptr || measured >= static_cast<std::size_t>(free)) return;
-  throw pcr::InputError(
-      source + ": " + std::to_string(rows) +
-      (rows == 1 ? " configuration gives " : " configurations give ") + std::to_string(measured) +
-      " measured values (x, y, theta each), fewer than the " + std::to_string(free) +
-      " free parameters of stage '" + largest->name + "': at least " +
-      std::to_string((free + 2) / 3) + " configurations are needed");
 }
 
 }  // namespace
@@ -167,7 +116,7 @@ int main(int argc, char** argv) {
     pcr::CalibrationOptions options;
     if (!stages_path.empty()) options.stages = pcr::load_calibration_stages(stages_path);
     if (identify_load) options.stages = pcr::with_load_stage(options.stages);
-    check_enough_measurements(options.stages, nominal, calibration.size(), data_path);
+    pcr::check_enough_measurements(options.stages, nominal, calibration.size(), data_path);
     options.orientation_weight = weight;
     options.drop_unreachable = drop_unreachable;
     options.robust_scale = robust_scale;
@@ -179,6 +128,7 @@ int main(int argc, char** argv) {
       selection = pcr::calibrate_selecting_model(nominal, calibration, validation, options);
     } else {
       selection.stages = pcr::calibrate(nominal, calibration, options);
+      selection.stages_table = pcr::calibration_table(selection.stages, calibration, validation);
     }
     const pcr::CalibrationResult& result = selection.chosen();
 
@@ -187,14 +137,13 @@ int main(int argc, char** argv) {
     identified.params = result.identified;
     pcr::save_robot(identified, output_path);
 
-    const pcr::CalibrationTable table = pcr::calibration_table(result, calibration, validation);
+    const pcr::CalibrationTable& table = selection.chosen_table();
     std::cout << pcr::calibration_report_text(result, table);
     if (select_load) std::cout << "\nModel selection: " << selection.decision << "\n";
     if (!report_path.empty()) {
       json report = json::parse(pcr::calibration_report_json(result, table));
       if (select_load) {
-        report["model_selection"] =
-            json::parse(pcr::model_selection_json(selection, calibration, validation));
+        report["model_selection"] = json::parse(pcr::model_selection_json(selection));
       }
       report["inputs"] = {{"robot", robot_path},
                           {"data", data_path},

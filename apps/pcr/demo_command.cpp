@@ -530,13 +530,12 @@ void run_demo(const DemoArgs& args) {
   identified.name = "femto-3pf (identified)";
   identified.params = calibrated.identified;
   pcr::save_robot(identified, (out / "identified.json").string());
-  const pcr::CalibrationTable table3 = pcr::calibration_table(calibrated, calibration, validation);
+  const pcr::CalibrationTable& table3 = selection.chosen_table();
   pcr::write_file_atomically((out / "calibration-report.txt").string(),
                              pcr::calibration_report_text(calibrated, table3));
   pcr::write_file_atomically((out / "calibration-errors.csv").string(), errors_csv(table3));
   report["calibration"] = json::parse(pcr::calibration_report_json(calibrated, table3));
-  report["calibration"]["model_selection"] =
-      json::parse(pcr::model_selection_json(selection, calibration, validation));
+  report["calibration"]["model_selection"] = json::parse(pcr::model_selection_json(selection));
   md +=
       "## 3. Calibration (Table 3)\n\n| model, set | e_p max (um) | e_p mean (um) | e_p min (um) | "
       "e_theta max (urad) | e_theta mean (urad) | e_theta min (urad) "
@@ -555,9 +554,7 @@ void run_demo(const DemoArgs& args) {
   }
   md += "\nModel: " + selection.decision + ".\n";
   if (selection.tried_load) {
-    const pcr::CalibrationResult& other = selection.load_chosen ? selection.stages : selection.load;
-    const pcr::CalibrationTable other_table =
-        pcr::calibration_table(other, calibration, validation);
+    const pcr::CalibrationTable& other_table = selection.other_table();
     md += std::string("\nThe fit not chosen (") +
           (selection.load_chosen ? "the paper's stages" : "the load model") +
           "), for comparison:\n\n| model, set | e_p max (um) | e_p mean (um) | e_p min (um) | "

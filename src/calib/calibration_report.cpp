@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "pcr/calib/model_selection.hpp"
 #include "pcr/csv_io.hpp"
 
 namespace pcr {
@@ -235,6 +236,17 @@ std::string calibration_report_text(const CalibrationResult& result,
   return out.str();
 }
 
+std::vector<double> whitened_error_norms(const ConfigurationErrors& errors,
+                                         const CalibrationOptions& options) {
+  std::vector<double> out(errors.e_p.size());
+  for (std::size_t j = 0; j < out.size(); ++j) {
+    const double weighted = options.orientation_weight * errors.e_theta[j];
+    out[j] =
+        std::sqrt(errors.e_p[j] * errors.e_p[j] + weighted * weighted) / options.residual_scale;
+  }
+  return out;
+}
+
 std::string residuals_csv(const CalibrationResult& result, const CalibrationTable& table,
                           const std::vector<CalibrationSample>& calibration,
                           const CalibrationOptions& options) {
@@ -243,12 +255,9 @@ std::string residuals_csv(const CalibrationResult& result, const CalibrationTabl
   std::string out = "row,line";
   for (int i = 1; i <= n; ++i) out += ",q" + std::to_string(i);
   out += ",e_p,e_theta,residual_norm,outlier\n";
+  const std::vector<double> norms = whitened_error_norms(errors, options);
   for (std::size_t j = 0; j < calibration.size() && j < errors.e_p.size(); ++j) {
-    // The whitened residual of Eq. 6: rigid transforms keep e_p, so its norm follows from e_p
-    // and e_theta.
-    const double weighted = options.orientation_weight * errors.e_theta[j];
-    const double norm =
-        std::sqrt(errors.e_p[j] * errors.e_p[j] + weighted * weighted) / options.residual_scale;
+    const double norm = norms[j];
     out += std::to_string(j + 1) + "," + std::to_string(calibration[j].line);
     for (int i = 0; i < n; ++i) out += "," + format_double(calibration[j].q[i]);
     out += "," + format_double(errors.e_p[j]) + "," + format_double(errors.e_theta[j]) + "," +
@@ -342,9 +351,7 @@ std::string calibration_report_json(const CalibrationResult& result,
   return report.dump(2) + "\n";
 }
 
-std::string model_selection_json(const ModelSelection& selection,
-                                 const std::vector<CalibrationSample>& calibration,
-                                 const std::vector<CalibrationSample>& validation) {
+std::string model_selection_json(const ModelSelection& selection) {
   ordered_json out{{"decision", selection.decision},
                    {"load_tried", selection.tried_load},
                    {"load_chosen", selection.load_chosen},
@@ -353,9 +360,8 @@ std::string model_selection_json(const ModelSelection& selection,
                    {"t", selection.t},
                    {"threshold_t", kModelSelectionT}};
   if (selection.tried_load) {
-    const CalibrationResult& other = selection.load_chosen ? selection.stages : selection.load;
-    out["other_fit"] = ordered_json::parse(
-        calibration_report_json(other, calibration_table(other, calibration, validation)));
+    out["other_fit"] =
+        ordered_json::parse(calibration_report_json(selection.other(), selection.other_table()));
   }
   return out.dump();
 }

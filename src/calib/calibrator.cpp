@@ -135,6 +135,20 @@ std::vector<int> indices_of_kind(const std::string& kind, int n) {
   return out;
 }
 
+/// Free flat indices of a stage: its kinds, restricted to non-zero half-widths (an index past
+/// `half_widths`, the load's when its scales are not known yet, counts as free).
+std::vector<int> stage_free_indices(const CalibrationStage& stage,
+                                    const std::vector<double>& half_widths, int n) {
+  std::set<int> free;
+  for (const std::string& kind : stage.free) {
+    for (int k : indices_of_kind(kind, n)) {
+      const std::size_t at = static_cast<std::size_t>(k);
+      if (at >= half_widths.size() || half_widths[at] > 0) free.insert(k);
+    }
+  }
+  return std::vector<int>(free.begin(), free.end());
+}
+
 bool known_kind(const std::string& kind) {
   static const char* const kKinds[] = {"E",      "d",       "l",          "A",   "A_x",  "A_y",
                                        "alpha",  "B",       "B_x",        "B_y", "beta", "gamma",
@@ -479,29 +493,24 @@ class Identification {
     return PlatformLoad<double>{Vector2<double>(l[0], l[1]), l[2]};
   }
   /// Moves the values along the gauge orbit, the load with them (move_load_along_gauge), and
-  /// carries each row's cached equilibrium along the orbit in kGaugeSteps: every robot on it
-  /// predicts the same poses (with no load exactly), where the straight line in the parameters
-  /// that the cost's own continuation follows passes through robots that may not reach a row
-  /// near a fold.
+  /// each row's anchored equilibrium with them by the model's symmetry
+  /// (move_equilibrium_along_gauge), then settles there: every robot on the orbit predicts the
+  /// same poses, and no continuation is needed to find the same equilibrium (one through robots
+  /// off the orbit can fail near a fold).
   void move(const GaugeMotion& m) {
-    constexpr int kGaugeSteps = 8;
-    const RobotParams<double> from = robot();
-    const PlatformLoad<double> from_load = load();
-    for (int step = 1; step <= kGaugeSteps; ++step) {
-      const double t = static_cast<double>(step) / kGaugeSteps;
-      const GaugeMotion part{Pose2<double>{t * m.G.x, t * m.G.y, t * m.G.theta},
-                             Pose2<double>{t * m.H.x, t * m.H.y, t * m.H.theta},
-                             1.0 + t * (m.stiffness_scale - 1.0)};
-      const PlatformLoad<double> moved =
-          move_load_along_gauge(from_load, part.G, part.H, part.stiffness_scale);
-      set_robot(move_along_gauge(from, part.G, part.H, part.stiffness_scale));
-      if (identify_load_) {
-        values_[static_cast<std::size_t>(count_)] = moved.force.x();
-        values_[static_cast<std::size_t>(count_) + 1] = moved.force.y();
-        values_[static_cast<std::size_t>(count_) + 2] = moved.moment;
-      }
-      settle();
+    const PlatformLoad<double> moved = move_load_along_gauge(load(), m.G, m.H, m.stiffness_scale);
+    set_robot(move_along_gauge(robot(), m.G, m.H, m.stiffness_scale));
+    if (identify_load_) {
+      values_[static_cast<std::size_t>(count_)] = moved.force.x();
+      values_[static_cast<std::size_t>(count_) + 1] = moved.force.y();
+      values_[static_cast<std::size_t>(count_) + 2] = moved.moment;
     }
+    for (FkCache& c : caches_) {
+      if (!c.valid || !c.anchored) continue;
+      c.anchor = move_equilibrium_along_gauge(c.anchor, m.G, m.H, m.stiffness_scale);
+      std::copy(values_.begin(), values_.end(), c.anchor_parameters.begin());
+    }
+    settle();
   }
   /// Continues every valid cache to the current values and accepts them there (a row that cannot
   /// follow keeps its anchor, and the cost continues it from there when evaluated).
@@ -520,6 +529,14 @@ class Identification {
       lost_[j] = caches_[j].valid &&
                  !std::equal(values_.begin(), values_.end(), caches_[j].parameters.begin());
     }
+  }
+  /// The rows whose residuals add_residuals(problem, false) adds, in its order: all but the lost.
+  std::vector<std::size_t> evaluated_rows() const {
+    std::vector<std::size_t> out;
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      if (!lost_[j]) out.push_back(j);
+    }
+    return out;
   }
   /// The rows left out because their equilibrium does not follow the current values.
   std::vector<std::string> lost_rows() const {
@@ -558,15 +575,9 @@ class Identification {
     return present;
   }
 
-  /// Free flat indices of a stage: its kinds, restricted to nonzero half-widths.
+  /// Free flat indices of a stage (stage_free_indices).
   std::vector<int> free_indices(const CalibrationStage& stage) const {
-    std::set<int> free;
-    for (const std::string& kind : stage.free) {
-      for (int k : indices_of_kind(kind, n_)) {
-        if (half_widths_[static_cast<std::size_t>(k)] > 0) free.insert(k);
-      }
-    }
-    return std::vector<int>(free.begin(), free.end());
+    return stage_free_indices(stage, half_widths_, n_);
   }
 
   /// Adds every residual block on values_.data(). With `robust`, each configuration's block goes
@@ -956,7 +967,8 @@ class Identification {
     return c;
   }
 
-  /// Whitened residuals and the dense Jacobian over every flat parameter at the current values.
+  /// Whitened residuals and the dense Jacobian over every flat parameter at the current values;
+  /// their 3-row blocks are those of evaluated_rows().
   bool jacobian(Eigen::MatrixXd* J, Eigen::VectorXd* r) {
     ceres::Problem problem;
     add_residuals(problem, false);  // raw residuals: the loss is the stages' business
@@ -990,11 +1002,16 @@ class Identification {
     double c = 0;
     std::vector<double> r;
     if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), &c, &r, nullptr, nullptr)) return;
-    for (std::size_t j = 0; 3 * j + 2 < r.size(); ++j)
-      row_norms_.push_back(std::sqrt(r[3 * j] * r[3 * j] + r[3 * j + 1] * r[3 * j + 1] +
-                                     r[3 * j + 2] * r[3 * j + 2]));
-    if (row_norms_.empty()) return;
-    std::vector<double> norms = row_norms_;
+    // Per data row; a lost row has no residual (NaN), and exclude_gross_outliers leaves it out.
+    const std::vector<std::size_t> in = evaluated_rows();
+    if (r.size() != 3 * in.size() || in.empty()) return;
+    row_norms_.assign(data_.size(), kNaN);
+    std::vector<double> norms;
+    for (std::size_t b = 0; b < in.size(); ++b) {
+      norms.push_back(std::sqrt(r[3 * b] * r[3 * b] + r[3 * b + 1] * r[3 * b + 1] +
+                                r[3 * b + 2] * r[3 * b + 2]));
+      row_norms_[in[b]] = norms.back();
+    }
     std::nth_element(norms.begin(), norms.begin() + norms.size() / 2, norms.end());
     const double median = norms[norms.size() / 2];
     if (std::isfinite(median)) loss_scale_ *= std::max(1.0, median / 1.538);
@@ -1360,6 +1377,20 @@ PlatformLoad<double> move_load_along_gauge(const PlatformLoad<double>& load, con
   return out;
 }
 
+ForwardSolution move_equilibrium_along_gauge(const ForwardSolution& solution,
+                                             const Pose2<double>& G, const Pose2<double>& H,
+                                             double stiffness_scale) {
+  const double stiffness = std::pow(stiffness_scale, 4);  // EI ~ d^4
+  ForwardSolution out = solution;
+  out.pose = G * solution.pose * H.inverse();
+  for (Wrench<double>& w : out.wrenches) {
+    const Vector2<double> n = stiffness * G.rotate(Vector2<double>(w.nx, w.ny));
+    w = Wrench<double>{n.x(), n.y(), stiffness * w.m};  // m(0), about the rod's start: not turned
+  }
+  out.jacobian = internal::ChordMatrix();
+  return out;
+}
+
 std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot,
                                              const PlatformLoad<double>& load) {
   std::vector<GaugeGenerator> out = gauge_generators(robot);
@@ -1429,15 +1460,27 @@ RobotParams<double> fix_gauge(const RobotParams<double>& params,
 
 /// The equilibria of `robot` at the joints of `at` other than `at` itself, found from seeds where
 /// one rod is bent further one way or the other (its proximal moment moved by 1 and 2 times
-/// 2 pi EI / l: a clamped-clamped rod's buckled shapes) and solved at the same joints: the one
+/// 2 pi EI / l: a clamped-clamped rod's buckled shapes) and solved at the same joints, and
+/// `reached` (an equilibrium at those joints the robot may have come to along a path): the one
 /// whose platform pose lies nearest `target`, if any.
-std::optional<Pose2<double>> nearest_other_equilibrium(const RobotParams<double>& robot,
-                                                       const ForwardSolution& at,
-                                                       const Pose2<double>& target,
-                                                       const SolverOptions& fk,
-                                                       const PlatformLoad<double>& load) {
+std::optional<Pose2<double>> nearest_other_equilibrium(
+    const RobotParams<double>& robot, const ForwardSolution& at, const ForwardSolution* reached,
+    const Pose2<double>& target, const SolverOptions& fk, const PlatformLoad<double>& load) {
   std::optional<Pose2<double>> best;
   double best_distance = HUGE_VAL;
+  const auto consider = [&](const ForwardSolution& s) {
+    if (!s.summary.converged()) return;
+    const double from_at =
+        std::hypot(s.pose.x - at.pose.x, s.pose.y - at.pose.y) +
+        kDefaultOrientationWeight * std::abs(wrap_angle(s.pose.theta - at.pose.theta));
+    if (!(from_at > kDistinctEquilibrium)) return;  // `at` again
+    const double distance = std::hypot(s.pose.x - target.x, s.pose.y - target.y);
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = s.pose;
+    }
+  };
+  if (reached != nullptr) consider(*reached);
   for (int rod = 0; rod < robot.num_limbs; ++rod) {
     const LimbParams<double>& limb = robot.limb(rod);
     const double bend = 2.0 * M_PI * limb.bending_stiffness() / limb.length;
@@ -1445,17 +1488,7 @@ std::optional<Pose2<double>> nearest_other_equilibrium(const RobotParams<double>
       ForwardSolution seed = at;
       seed.jacobian = internal::ChordMatrix();  // not at the seed
       seed.wrenches[static_cast<std::size_t>(rod)].m += amount * bend;
-      const ForwardSolution s = forward_kinematics(robot, at.q, seed, fk, load);
-      if (!s.summary.converged()) continue;
-      const double from_at =
-          std::hypot(s.pose.x - at.pose.x, s.pose.y - at.pose.y) +
-          kDefaultOrientationWeight * std::abs(wrap_angle(s.pose.theta - at.pose.theta));
-      if (!(from_at > kDistinctEquilibrium)) continue;  // `at` again
-      const double distance = std::hypot(s.pose.x - target.x, s.pose.y - target.y);
-      if (distance < best_distance) {
-        best_distance = distance;
-        best = s.pose;
-      }
+      consider(forward_kinematics(robot, at.q, seed, fk, load));
     }
   }
   return best;
@@ -1492,11 +1525,22 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
   if (finite.empty()) return errors;
   std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());
   const double median = finite[finite.size() / 2];
+  // The rows as the path a robot measured in their order followed (through folds, where it snaps
+  // through): past a snap, its rows lie on the branch the path reached, not on the one connected
+  // to home. A candidate only, as the bent seeds are: the measurement decides, so rows in another
+  // order cost nothing but the solves.
+  std::vector<ForwardSolution> along_path;
   for (std::size_t j = 0; j < data.size(); ++j) {
     if (!(errors.e_p[j] > kMismatchFactor * median)) continue;
+    if (along_path.empty()) {
+      SolverOptions through = fk;
+      through.through_folds = true;
+      ForwardSequence path(robot, through, load, SequenceMode::kPath);
+      for (const CalibrationSample& row : data) along_path.push_back(path.solve(row.q));
+    }
     const Pose2<double> measured = robot.extrinsics.platform_from_measurement(data[j].measured);
     const std::optional<Pose2<double>> other =
-        nearest_other_equilibrium(robot, solutions[j], measured, fk, load);
+        nearest_other_equilibrium(robot, solutions[j], &along_path[j], measured, fk, load);
     if (other && kMismatchFactor * std::hypot(other->x - measured.x, other->y - measured.y) <
                      errors.e_p[j]) {
       errors.branch_mismatch[j] = true;
@@ -1543,6 +1587,36 @@ PoseErrorStats error_statistics(const ConfigurationErrors& errors) {
   return stats;
 }
 
+int free_parameter_count(const CalibrationStage& stage, const RobotDescription& nominal) {
+  if (!nominal.uncertainty) throw InputError("free_parameter_count: no uncertainty section");
+  const int n = nominal.params.num_limbs;
+  return static_cast<int>(
+      stage_free_indices(stage, parameter_half_widths(*nominal.uncertainty, n), n).size());
+}
+
+void check_enough_measurements(const std::vector<CalibrationStage>& stages,
+                               const RobotDescription& nominal, std::size_t rows,
+                               const std::string& source) {
+  // The stage with the most free parameters (the last, "all", for the default stages) decides.
+  const CalibrationStage* largest = nullptr;
+  int free = 0;
+  for (const CalibrationStage& stage : stages) {
+    const int count = free_parameter_count(stage, nominal);
+    if (largest == nullptr || count > free) {
+      largest = &stage;
+      free = count;
+    }
+  }
+  const std::size_t measured = 3 * rows;
+  if (largest == nullptr || measured >= static_cast<std::size_t>(free)) return;
+  throw InputError(source + ": " + std::to_string(rows) +
+                   (rows == 1 ? " configuration gives " : " configurations give ") +
+                   std::to_string(measured) +
+                   " measured values (x, y, theta each), fewer than the " + std::to_string(free) +
+                   " free parameters of stage '" + largest->name + "': at least " +
+                   std::to_string((free + 2) / 3) + " configurations are needed");
+}
+
 CalibrationResult calibrate(const RobotDescription& nominal,
                             const std::vector<CalibrationSample>& data,
                             const CalibrationOptions& options) {
@@ -1569,6 +1643,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
                      format_number(options.residual_scale));
   }
   validate_stages(options.stages, source);
+  check_enough_measurements(options.stages, nominal, data.size(), source);
 
   CalibrationResult result;
   result.residual_variance = kNaN;
@@ -1735,9 +1810,11 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   id.update_loss_scale();
   result.outlier_threshold = id.loss_scale();
   if (evaluated && id.loss_scale() > 0) {
+    const std::vector<std::size_t> in = id.evaluated_rows();
     std::vector<Eigen::Index> kept;
-    for (std::size_t j = 0; j < rows.size(); ++j) {
-      const Eigen::Index at = 3 * static_cast<Eigen::Index>(j);
+    for (std::size_t b = 0; b < in.size(); ++b) {
+      const std::size_t j = in[b];
+      const Eigen::Index at = 3 * static_cast<Eigen::Index>(b);
       const double norm = r.segment<3>(at).norm();
       if (norm > id.loss_scale()) {
         result.outliers.push_back(origin_of(rows, j) + " (" + format_number(norm) +

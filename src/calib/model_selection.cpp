@@ -14,19 +14,14 @@ std::string fixed(const char* format, double v) {
   return buffer;
 }
 
-/// Whitened pose error of each validation row under `result`'s model; NaN where FK fails or the
-/// row meets a branch mismatch.
-std::vector<double> whitened_errors(const CalibrationResult& result,
-                                    const std::vector<CalibrationSample>& validation,
-                                    const CalibrationOptions& options) {
-  const ConfigurationErrors errors =
-      configuration_errors(result.identified, validation, SolverOptions(), result.load);
-  std::vector<double> out(validation.size(), std::nan(""));
-  for (std::size_t j = 0; j < validation.size(); ++j) {
-    if (errors.branch_mismatch[j]) continue;
-    const double weighted = options.orientation_weight * errors.e_theta[j];
-    out[j] =
-        std::sqrt(errors.e_p[j] * errors.e_p[j] + weighted * weighted) / options.residual_scale;
+/// Whitened pose error of each validation row in `table`; NaN where FK fails or the row meets a
+/// branch mismatch.
+std::vector<double> validation_errors(const CalibrationTable& table,
+                                      const CalibrationOptions& options) {
+  const ConfigurationErrors& errors = table.identified_validation_errors;
+  std::vector<double> out = whitened_error_norms(errors, options);
+  for (std::size_t j = 0; j < out.size(); ++j) {
+    if (errors.branch_mismatch[j]) out[j] = std::nan("");
   }
   return out;
 }
@@ -39,6 +34,7 @@ ModelSelection calibrate_selecting_model(const RobotDescription& nominal,
                                          const CalibrationOptions& options) {
   ModelSelection out;
   out.stages = calibrate(nominal, calibration, options);
+  out.stages_table = calibration_table(out.stages, calibration, validation);
   // A fit the model cannot evaluate at its result (residual variance NaN) has not shown that it
   // explains the data either.
   const bool unexplained =
@@ -61,6 +57,7 @@ ModelSelection calibrate_selecting_model(const RobotDescription& nominal,
   with_load.stages = with_load_stage(options.stages);
   try {
     out.load = calibrate(nominal, calibration, with_load);
+    out.load_table = calibration_table(out.load, calibration, validation);
   } catch (const std::exception& e) {
     out.decision =
         std::string("the load model could not be fitted (") + e.what() + "): the stages' model";
@@ -68,8 +65,8 @@ ModelSelection calibrate_selecting_model(const RobotDescription& nominal,
   }
   out.tried_load = true;
 
-  const std::vector<double> a = whitened_errors(out.stages, validation, options);
-  const std::vector<double> b = whitened_errors(out.load, validation, options);
+  const std::vector<double> a = validation_errors(out.stages_table, options);
+  const std::vector<double> b = validation_errors(out.load_table, options);
   double sum = 0, sum_squares = 0;
   for (std::size_t j = 0; j < validation.size(); ++j) {
     if (!std::isfinite(a[j]) || !std::isfinite(b[j])) continue;

@@ -9,9 +9,10 @@
 
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/calib/dataset.hpp"
-#include "pcr/calib/model_selection.hpp"
 
 namespace pcr {
+
+struct ModelSelection;  // pcr/calib/model_selection.hpp
 
 /// The dataset's rows as calibration samples; `source` (the file) names them in messages as
 /// "source:line".
@@ -52,6 +53,12 @@ std::string calibration_table_text(const CalibrationTable& table);
 /// a bound, gauge directions, residual variance, the result's and the table's warnings.
 std::string calibration_report_text(const CalibrationResult& result, const CalibrationTable& table);
 
+/// Each row's whitened pose error, the norm of its residual of Eq. 6 in declared-noise units:
+/// sqrt(e_p^2 + (w e_theta)^2) / residual_scale (rigid transforms keep e_p, so the norm follows
+/// from e_p and e_theta); NaN where FK failed.
+std::vector<double> whitened_error_norms(const ConfigurationErrors& errors,
+                                         const CalibrationOptions& options);
+
 /// The per-configuration residuals of the identified model on the calibration set, as CSV:
 /// `row,line,q1..qn,e_p,e_theta,residual_norm,outlier` (row: 1-based in the dataset; line: in its
 /// file, 0 if unknown; e_p in m, e_theta in rad, NaN where FK failed; residual_norm: the whitened
@@ -66,8 +73,6 @@ std::string calibration_report_json(const CalibrationResult& result, const Calib
 /// A model selection (pcr/calib/model_selection.hpp) as JSON text: the decision and its numbers
 /// and, when the load model was fitted, the fit not chosen as calibration_report_json on the same
 /// sets ("other_fit").
-std::string model_selection_json(const ModelSelection& selection,
-                                 const std::vector<CalibrationSample>& calibration,
-                                 const std::vector<CalibrationSample>& validation);
+std::string model_selection_json(const ModelSelection& selection);
 
 }  // namespace pcr

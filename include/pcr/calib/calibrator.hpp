@@ -100,6 +100,18 @@ std::vector<CalibrationStage> with_load_stage(std::vector<CalibrationStage> stag
 /// Throws InputError naming `source` on an unknown kind or a non-positive bounds scale.
 void validate_stages(const std::vector<CalibrationStage>& stages, const std::string& source);
 
+/// The number of parameters `stage` frees on `nominal` (which has an uncertainty section): those
+/// its kinds name with a non-zero half-width (the others are held), and the platform load's three
+/// for "load".
+int free_parameter_count(const CalibrationStage& stage, const RobotDescription& nominal);
+
+/// Throws InputError, naming `source`, when `rows` configurations give fewer measured values
+/// (3 each) than a stage has free parameters: its least squares would be underdetermined whatever
+/// the data. calibrate() checks it; a front-end may check it first to name its file.
+void check_enough_measurements(const std::vector<CalibrationStage>& stages,
+                               const RobotDescription& nominal, std::size_t rows,
+                               const std::string& source);
+
 /// Reads a stages file: {"stages": [{"name": ..., "free": [kinds], "bounds_scale": 1}, ...]} or
 /// the bare list. Throws InputError naming the file, the field and the value.
 std::vector<CalibrationStage> load_calibration_stages(const std::string& path);
@@ -311,6 +323,9 @@ CalibrationResult calibrate(const RobotDescription& nominal,
 /// A row whose error is kMismatchFactor times the set's median or more, and whose measurement
 /// lies kMismatchFactor times nearer another equilibrium of the model at the same joints, is a
 /// branch mismatch: the robot held another equilibrium than the one the model predicts there.
+/// The other equilibria looked at: the one the rows reach as a path in their order, through folds
+/// (a robot measured in that order that snapped through one), and buckled variants of the
+/// predicted one (each rod bent one or two turns further either way).
 struct ConfigurationErrors {
   std::vector<double> e_p, e_theta;
   std::vector<bool> branch_mismatch;
@@ -354,6 +369,15 @@ RobotParams<double> move_along_gauge(const RobotParams<double>& params, const Po
 /// data sees it, weakly), and the predictions are kept exactly only when H does not translate.
 PlatformLoad<double> move_load_along_gauge(const PlatformLoad<double>& load, const Pose2<double>& G,
                                            const Pose2<double>& H, double stiffness_scale);
+
+/// The equilibrium `solution` of a robot moved along the gauge orbit by (G, H, stiffness_scale):
+/// the same rods turned by G, the platform pose G P H^-1, the proximal forces turned by G and every
+/// wrench scaled with the bending stiffness (stiffness_scale^4). The model's symmetry makes it the
+/// equilibrium of move_along_gauge(...) exactly under move_load_along_gauge(...) when H does not
+/// translate; otherwise a start one Newton step away. Its chord matrix is dropped.
+ForwardSolution move_equilibrium_along_gauge(const ForwardSolution& solution,
+                                             const Pose2<double>& G, const Pose2<double>& H,
+                                             double stiffness_scale);
 
 /// The seven generators at `robot` under a constant platform load, with the load's components
 /// (move_load_along_gauge to first order, the distal translations' at platform angle 0) after

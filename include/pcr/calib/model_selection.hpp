@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "pcr/calib/calibration_report.hpp"
 #include "pcr/calib/calibrator.hpp"
 
 namespace pcr {
@@ -23,22 +24,28 @@ namespace pcr {
 inline constexpr double kModelSelectionT = 2.326;
 
 struct ModelSelection {
-  CalibrationResult stages;  ///< the options' stages
+  CalibrationResult stages;       ///< the options' stages
+  CalibrationTable stages_table;  ///< its Table 3 on the calibration and validation sets
   /// The stages' residuals exceed the noise (or cannot be evaluated), the stages did not free the
   /// load already, and a validation set was given: the load model was fitted.
   bool tried_load = false;
-  CalibrationResult load;      ///< the stages with the load (with_load_stage), when tried_load
-  bool load_chosen = false;    ///< the test kept the load model
-  int rows = 0;                ///< validation rows in the test
-  double mean_difference = 0;  ///< mean of d_j (whitened units squared)
-  double t = 0;                ///< mean(d) / (sd(d) / sqrt(rows))
-  std::string decision;        ///< in words, with the numbers
+  CalibrationResult load;       ///< the stages with the load (with_load_stage), when tried_load
+  CalibrationTable load_table;  ///< its Table 3, when tried_load
+  bool load_chosen = false;     ///< the test kept the load model
+  int rows = 0;                 ///< validation rows in the test
+  double mean_difference = 0;   ///< mean of d_j (whitened units squared)
+  double t = 0;                 ///< mean(d) / (sd(d) / sqrt(rows))
+  std::string decision;         ///< in words, with the numbers
   const CalibrationResult& chosen() const { return load_chosen ? load : stages; }
+  const CalibrationTable& chosen_table() const { return load_chosen ? load_table : stages_table; }
+  /// The fit not chosen (meaningful when tried_load).
+  const CalibrationResult& other() const { return load_chosen ? stages : load; }
+  const CalibrationTable& other_table() const { return load_chosen ? stages_table : load_table; }
 };
 
 /// Calibrates `nominal` on `calibration` with `options` and, when its residuals exceed the noise,
-/// with the load model too, choosing between them on `validation` (see above). Throws as
-/// calibrate() does.
+/// with the load model too, choosing between them on `validation` (see above), with each fit's
+/// Table 3 (calibration_table). Throws as calibrate() does.
 ModelSelection calibrate_selecting_model(const RobotDescription& nominal,
                                          const std::vector<CalibrationSample>& calibration,
                                          const std::vector<CalibrationSample>& validation,
