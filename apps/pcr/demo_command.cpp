@@ -496,6 +496,7 @@ void run_demo(const DemoArgs& args) {
   pcr::split_configurations(sampled.configurations, args.calibration_count, &calibration_q,
                             &validation_q);
   const auto simulate = [&](const std::vector<pcr::JointVector>& qs) {
+    robot.return_home();  // each dataset an experiment from home, as Table 3 predicts it
     pcr::Dataset data;
     data.num_joints = nominal.params.num_limbs;
     for (const pcr::JointVector& q : qs) data.add(q, robot.measure_or_throw(q));

@@ -175,7 +175,8 @@ def pose_errors_per_configuration(robot, q, measured, **solve_args):
     """Per-configuration errors of ``robot`` (with its extrinsics) on a dataset.
 
     q: (N, n) joints (m); measured: (N, 3) pattern poses ^Se T_M. The platform pose follows
-    from the measurement by Eq. 5 and is compared with FK (batched, warm-started).
+    from the measurement by Eq. 5 and is compared with FK along the rows in their order from
+    home (path=True: the path the experiment followed, as Table 3 predicts it).
     Returns (e_p (N,) m, Eq. 8; e_theta (N,) rad, Eq. 9); NaN where FK failed.
     """
     measured = _np.atleast_2d(_np.asarray(measured, dtype=float))
@@ -183,6 +184,7 @@ def pose_errors_per_configuration(robot, q, measured, **solve_args):
     camera = ext.camera.to_array()
     pattern = ext.pattern.to_array()
     platform = compose_poses(compose_poses(camera, measured), pattern)
+    solve_args.setdefault("path", True)
     fk = robot.forward(_np.atleast_2d(_np.asarray(q, dtype=float)), **solve_args)
     e_p = _np.hypot(fk.pose[:, 0] - platform[:, 0], fk.pose[:, 1] - platform[:, 1])
     e_t = _np.abs(_wrap(fk.pose[:, 2] - platform[:, 2]))

@@ -510,7 +510,11 @@ void wrap_calibration(py::module_& m) {
       .def("measure", &virtual_measure, py::arg("q"),
            "Moves to q (m) and measures ^Se T_M. One configuration -> dict(ok, measured, exact, "
            "platform (Pose), status); an (N, n) array -> dict of arrays (N, 3), NaN where ok is "
-           "False. Warm-started from the previous measurement. Releases the GIL.");
+           "False. Continued from the previous measurement, as the robot moves. Releases the GIL.")
+      .def("return_home", &VirtualRobot::return_home,
+           "The robot goes back home: the next measurement starts there, as each dataset's "
+           "experiment does (its rows measured in their order from home, which Table 3 "
+           "follows).");
 
   m.def(
       "read_dataset",
@@ -755,7 +759,8 @@ void wrap_calibration(py::module_& m) {
       "The paper's Table 3 statistics of `robot` on (q (N, n) m, measured ^Se T_M (N, 3)), FK "
       "under the platform load (force fx, fy in N, moment in N m; e.g. a CalibrationResult's "
       "load): dict of max_p, mean_p, min_p (m, Eq. 8), max_theta, mean_theta, min_theta (rad, "
-      "Eq. 9), count, failed.");
+      "Eq. 9), count, failed, branch_mismatches. The rows are predicted in their order from home, "
+      "the path the experiment followed (a dataset's row order is its measurement order).");
 
   auto options =
       py::class_<CalibrationOptions>(

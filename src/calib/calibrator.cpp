@@ -1461,11 +1461,12 @@ RobotParams<double> fix_gauge(const RobotParams<double>& params,
 /// The equilibria of `robot` at the joints of `at` other than `at` itself, found from seeds where
 /// one rod is bent further one way or the other (its proximal moment moved by 1 and 2 times
 /// 2 pi EI / l: a clamped-clamped rod's buckled shapes) and solved at the same joints, and
-/// `reached` (an equilibrium at those joints the robot may have come to along a path): the one
-/// whose platform pose lies nearest `target`, if any.
+/// `reached` (equilibria at those joints the robot may have come to otherwise): the one whose
+/// platform pose lies nearest `target`, if any.
 std::optional<Pose2<double>> nearest_other_equilibrium(
-    const RobotParams<double>& robot, const ForwardSolution& at, const ForwardSolution* reached,
-    const Pose2<double>& target, const SolverOptions& fk, const PlatformLoad<double>& load) {
+    const RobotParams<double>& robot, const ForwardSolution& at,
+    const std::vector<const ForwardSolution*>& reached, const Pose2<double>& target,
+    const SolverOptions& fk, const PlatformLoad<double>& load) {
   std::optional<Pose2<double>> best;
   double best_distance = HUGE_VAL;
   const auto consider = [&](const ForwardSolution& s) {
@@ -1480,7 +1481,7 @@ std::optional<Pose2<double>> nearest_other_equilibrium(
       best = s.pose;
     }
   };
-  if (reached != nullptr) consider(*reached);
+  for (const ForwardSolution* r : reached) consider(*r);
   for (int rod = 0; rod < robot.num_limbs; ++rod) {
     const LimbParams<double>& limb = robot.limb(rod);
     const double bend = 2.0 * M_PI * limb.bending_stiffness() / limb.length;
@@ -1496,16 +1497,20 @@ std::optional<Pose2<double>> nearest_other_equilibrium(
 
 ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
                                          const std::vector<CalibrationSample>& data,
-                                         const SolverOptions& fk,
-                                         const PlatformLoad<double>& load) {
+                                         const SolverOptions& fk, const PlatformLoad<double>& load,
+                                         SequenceMode order) {
   ConfigurationErrors errors;
   errors.branch_mismatch.assign(data.size(), false);
   errors.other_pose.assign(data.size(), Pose2<double>{kNaN, kNaN, kNaN});
-  ForwardSequence sequence(robot, fk, load);
-  std::vector<ForwardSolution> solutions(data.size());
+  const auto solve_all = [&](const SolverOptions& options, SequenceMode mode) {
+    ForwardSequence sequence(robot, options, load, mode);
+    std::vector<ForwardSolution> out;
+    for (const CalibrationSample& row : data) out.push_back(sequence.solve(row.q));
+    return out;
+  };
+  const std::vector<ForwardSolution> solutions = solve_all(fk, order);
   for (std::size_t j = 0; j < data.size(); ++j) {
-    const ForwardSolution& s = sequence.solve(data[j].q);
-    solutions[j] = s;
+    const ForwardSolution& s = solutions[j];
     if (!s.summary.converged()) {
       errors.e_p.push_back(kNaN);
       errors.e_theta.push_back(kNaN);
@@ -1525,22 +1530,28 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
   if (finite.empty()) return errors;
   std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());
   const double median = finite[finite.size() / 2];
-  // The rows as the path a robot measured in their order followed (through folds, where it snaps
-  // through): past a snap, its rows lie on the branch the path reached, not on the one connected
-  // to home. A candidate only, as the bent seeds are: the measurement decides, so rows in another
-  // order cost nothing but the solves.
-  std::vector<ForwardSolution> along_path;
+  // The equilibria the rows reach in the set's other readings, solved once a row needs them: each
+  // on its own from home, as a path in their order, as a path through folds (a robot that
+  // snapped through one). Candidates only, as the buckled seeds are: the measurement decides.
+  SolverOptions through = fk;
+  through.through_folds = true;
+  std::vector<std::pair<SolverOptions, SequenceMode>> readings;
+  if (order != SequenceMode::kIndependent) readings.emplace_back(fk, SequenceMode::kIndependent);
+  if (order != SequenceMode::kPath) readings.emplace_back(fk, SequenceMode::kPath);
+  if (order != SequenceMode::kPath || !fk.through_folds) {
+    readings.emplace_back(through, SequenceMode::kPath);
+  }
+  std::vector<std::vector<ForwardSolution>> others;
   for (std::size_t j = 0; j < data.size(); ++j) {
     if (!(errors.e_p[j] > kMismatchFactor * median)) continue;
-    if (along_path.empty()) {
-      SolverOptions through = fk;
-      through.through_folds = true;
-      ForwardSequence path(robot, through, load, SequenceMode::kPath);
-      for (const CalibrationSample& row : data) along_path.push_back(path.solve(row.q));
+    if (others.empty()) {
+      for (const auto& [options, mode] : readings) others.push_back(solve_all(options, mode));
     }
+    std::vector<const ForwardSolution*> reached;
+    for (const std::vector<ForwardSolution>& other : others) reached.push_back(&other[j]);
     const Pose2<double> measured = robot.extrinsics.platform_from_measurement(data[j].measured);
     const std::optional<Pose2<double>> other =
-        nearest_other_equilibrium(robot, solutions[j], &along_path[j], measured, fk, load);
+        nearest_other_equilibrium(robot, solutions[j], reached, measured, fk, load);
     if (other && kMismatchFactor * std::hypot(other->x - measured.x, other->y - measured.y) <
                      errors.e_p[j]) {
       errors.branch_mismatch[j] = true;
@@ -1552,8 +1563,8 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
 
 PoseErrorStats pose_errors(const RobotParams<double>& robot,
                            const std::vector<CalibrationSample>& data, const SolverOptions& fk,
-                           const PlatformLoad<double>& load) {
-  return error_statistics(configuration_errors(robot, data, fk, load));
+                           const PlatformLoad<double>& load, SequenceMode order) {
+  return error_statistics(configuration_errors(robot, data, fk, load, order));
 }
 
 PoseErrorStats error_statistics(const ConfigurationErrors& errors) {

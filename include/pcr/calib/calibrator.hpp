@@ -317,15 +317,18 @@ CalibrationResult calibrate(const RobotDescription& nominal,
                             const CalibrationOptions& options = CalibrationOptions());
 
 /// Per-configuration errors of one model on one set (the paper's Figures 8 and 9): e_p (Eq. 8,
-/// m) and e_theta (Eq. 9, rad), NaN where FK failed. Each configuration on its own, on the
-/// branch connected to home (SequenceMode::kIndependent), as the calibration solves it.
+/// m) and e_theta (Eq. 9, rad), NaN where FK failed. The rows are solved as `order` says: by
+/// default the path the experiment followed, from home in the rows' order (a dataset's row order
+/// is its measurement order, each dataset an experiment from home: see the README, "File
+/// formats"), as the robot moved; SequenceMode::kIndependent solves each from home, as the
+/// calibration's residuals do.
 ///
 /// A row whose error is kMismatchFactor times the set's median or more, and whose measurement
 /// lies kMismatchFactor times nearer another equilibrium of the model at the same joints, is a
 /// branch mismatch: the robot held another equilibrium than the one the model predicts there.
-/// The other equilibria looked at: the one the rows reach as a path in their order, through folds
-/// (a robot measured in that order that snapped through one), and buckled variants of the
-/// predicted one (each rod bent one or two turns further either way).
+/// The other equilibria looked at: the rows' solutions in the other readings of the set (each
+/// from home, as a path, as a path through folds: a robot that snapped through one), and
+/// buckled variants of the predicted one (each rod bent one or two turns further either way).
 struct ConfigurationErrors {
   std::vector<double> e_p, e_theta;
   std::vector<bool> branch_mismatch;
@@ -339,16 +342,18 @@ inline constexpr double kDistinctEquilibrium = 1e-7;
 ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
                                          const std::vector<CalibrationSample>& data,
                                          const SolverOptions& fk = SolverOptions(),
-                                         const PlatformLoad<double>& load = PlatformLoad<double>());
+                                         const PlatformLoad<double>& load = PlatformLoad<double>(),
+                                         SequenceMode order = SequenceMode::kPath);
 
 /// Table 3 statistics (max, mean, min) of per-configuration errors; failures are counted apart.
 PoseErrorStats error_statistics(const ConfigurationErrors& errors);
 
-/// Table 3 statistics of `robot` (with its extrinsics) on `data`.
+/// Table 3 statistics of `robot` (with its extrinsics) on `data` (configuration_errors).
 PoseErrorStats pose_errors(const RobotParams<double>& robot,
                            const std::vector<CalibrationSample>& data,
                            const SolverOptions& fk = SolverOptions(),
-                           const PlatformLoad<double>& load = PlatformLoad<double>());
+                           const PlatformLoad<double>& load = PlatformLoad<double>(),
+                           SequenceMode order = SequenceMode::kPath);
 
 /// The flat half-widths of `uncertainty` for a robot with `num_limbs` limbs.
 std::vector<double> parameter_half_widths(const RobotUncertainty& uncertainty, int num_limbs);

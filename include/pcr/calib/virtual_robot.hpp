@@ -85,6 +85,10 @@ class VirtualRobot {
   /// measure(q), throwing std::runtime_error (naming q and the solver status) on failure.
   Pose2<double> measure_or_throw(const JointVector& q);
 
+  /// The robot goes back home: the next measurement starts there, as each dataset's experiment
+  /// does (its rows measured in their order from home, which configuration_errors follows).
+  void return_home() { sequence_.reset(); }
+
  private:
   RobotDescription nominal_;
   RobotDescription truth_;
