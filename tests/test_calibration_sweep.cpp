@@ -52,6 +52,7 @@ Measured measure_paper_sets(const RobotDescription& nominal, VirtualRobot& robot
   Measured out;
   for (std::size_t j = 0; j < sampled.configurations.size(); ++j) {
     const JointVector& q = sampled.configurations[j];
+    if (static_cast<int>(j) == kCalibration) robot.return_home();  // each set from home
     (static_cast<int>(j) < kCalibration ? out.calibration : out.validation)
         .push_back({q, robot.measure_or_throw(q)});
   }
