@@ -1608,6 +1608,7 @@ int free_parameter_count(const CalibrationStage& stage, const RobotDescription& 
 void check_enough_measurements(const std::vector<CalibrationStage>& stages,
                                const RobotDescription& nominal, std::size_t rows,
                                const std::string& source) {
+  if (!nominal.uncertainty) return;  // calibrate() names the missing section and what needs it
   // The stage with the most free parameters (the last, "all", for the default stages) decides.
   const CalibrationStage* largest = nullptr;
   int free = 0;
