@@ -24,6 +24,30 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+/// The ways a robot may have reached the equilibria of a dataset's rows at their joints (its
+/// readings): each row on its own from home, the rows as a path in their order from home, and as
+/// a path through folds (a robot that snapped through one).
+std::vector<std::pair<SolverOptions, SequenceMode>> dataset_readings(const SolverOptions& fk) {
+  SolverOptions through = fk;
+  through.through_folds = true;
+  std::vector<std::pair<SolverOptions, SequenceMode>> out{{fk, SequenceMode::kIndependent},
+                                                          {fk, SequenceMode::kPath}};
+  if (!fk.through_folds) out.emplace_back(through, SequenceMode::kPath);
+  return out;
+}
+
+/// The rows' equilibria in one reading.
+std::vector<ForwardSolution> solve_rows(const RobotParams<double>& robot,
+                                        const std::vector<CalibrationSample>& data,
+                                        const SolverOptions& options, SequenceMode mode,
+                                        const PlatformLoad<double>& load) {
+  ForwardSequence sequence(robot, options, load, mode);
+  std::vector<ForwardSolution> out;
+  out.reserve(data.size());
+  for (const CalibrationSample& row : data) out.push_back(sequence.solve(row.q));
+  return out;
+}
+
 /// gauge_generators' order.
 enum GaugeIndex {
   kProximalX,
@@ -256,12 +280,14 @@ void warn_of_copies(const std::vector<CalibrationSample>& rows, CalibrationResul
 /// of the design that the robot itself does not have: it is set aside (`set_aside`), to be brought
 /// back when the identified geometry reaches it. One with joints outside the stroke is a typo, a
 /// wrong unit or another robot's: an InputError, or with drop_unreachable left out and listed in
-/// result->dropped; joints outside their stroke are warned of.
+/// result->dropped; joints outside their stroke are warned of. `used`: the reachable rows' places
+/// in `data`.
 std::vector<CalibrationSample> reachable_rows(const RobotParams<double>& nominal,
                                               const std::vector<CalibrationSample>& data,
                                               const CalibrationOptions& options,
                                               const std::string& source, CalibrationResult* result,
                                               std::vector<Pose2<double>>* poses,
+                                              std::vector<std::size_t>* used,
                                               std::vector<std::size_t>* set_aside) {
   std::vector<CalibrationSample> reachable;
   std::vector<std::string> unreachable, outside, aside;
@@ -285,6 +311,7 @@ std::vector<CalibrationSample> reachable_rows(const RobotParams<double>& nominal
       reachable.push_back(data[j]);
       reachable.back().origin = origin_of(data, j);  // its place in `data`, not in `reachable`
       poses->push_back(solution.pose);
+      used->push_back(j);
     } else if (in_stroke) {
       set_aside->push_back(j);
       aside.push_back(row);
@@ -511,6 +538,38 @@ class Identification {
       std::copy(values_.begin(), values_.end(), c.anchor_parameters.begin());
     }
     settle();
+  }
+  /// Starts each row on the equilibrium its experiment reached: of those the rows reach at the
+  /// current values in the dataset's readings (dataset_readings: on its own from home, along the
+  /// rows' path, through folds), the one whose platform pose lies nearest the row's measurement
+  /// (Eq. 6's metric). Rows are measured in their order from home (the formats page), and a robot
+  /// that came to a row along its path may hold it on another equilibrium than the one a cold
+  /// start from home gives: fitted there, the row would look like a gross outlier, and the model
+  /// would be fitted without it. At the start values the model is within its intervals of the
+  /// robot, and equilibria at the same joints are millimetres apart.
+  void start_on_measured_branches() {
+    const RobotParams<double> robot_now = robot();
+    std::vector<double> nearest(data_.size(), HUGE_VAL);
+    for (const auto& [options, mode] : dataset_readings(options_.fk)) {
+      const std::vector<ForwardSolution> reached =
+          solve_rows(robot_now, data_, options, mode, load());
+      for (std::size_t j = 0; j < data_.size(); ++j) {
+        if (!reached[j].summary.converged()) continue;
+        const Pose2<double> measured =
+            robot_now.extrinsics.platform_from_measurement(data_[j].measured);
+        const double distance =
+            std::hypot(reached[j].pose.x - measured.x, reached[j].pose.y - measured.y) +
+            options_.orientation_weight *
+                std::abs(wrap_angle(reached[j].pose.theta - measured.theta));
+        if (!(distance < nearest[j])) continue;  // a tie keeps the equilibrium connected to home
+        nearest[j] = distance;
+        FkCache& c = caches_[j];
+        c.solution = reached[j];
+        c.valid = true;
+        std::copy(values_.begin(), values_.end(), c.parameters.begin());
+        c.accept();
+      }
+    }
   }
   /// Continues every valid cache to the current values and accepts them there (a row that cannot
   /// follow keeps its anchor, and the cost continues it from there when evaluated).
@@ -1502,13 +1561,7 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
   ConfigurationErrors errors;
   errors.branch_mismatch.assign(data.size(), false);
   errors.other_pose.assign(data.size(), Pose2<double>{kNaN, kNaN, kNaN});
-  const auto solve_all = [&](const SolverOptions& options, SequenceMode mode) {
-    ForwardSequence sequence(robot, options, load, mode);
-    std::vector<ForwardSolution> out;
-    for (const CalibrationSample& row : data) out.push_back(sequence.solve(row.q));
-    return out;
-  };
-  const std::vector<ForwardSolution> solutions = solve_all(fk, order);
+  const std::vector<ForwardSolution> solutions = solve_rows(robot, data, fk, order, load);
   for (std::size_t j = 0; j < data.size(); ++j) {
     const ForwardSolution& s = solutions[j];
     if (!s.summary.converged()) {
@@ -1533,19 +1586,14 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
   // The equilibria the rows reach in the set's other readings, solved once a row needs them: each
   // on its own from home, as a path in their order, as a path through folds (a robot that
   // snapped through one). Candidates only, as the buckled seeds are: the measurement decides.
-  SolverOptions through = fk;
-  through.through_folds = true;
-  std::vector<std::pair<SolverOptions, SequenceMode>> readings;
-  if (order != SequenceMode::kIndependent) readings.emplace_back(fk, SequenceMode::kIndependent);
-  if (order != SequenceMode::kPath) readings.emplace_back(fk, SequenceMode::kPath);
-  if (order != SequenceMode::kPath || !fk.through_folds) {
-    readings.emplace_back(through, SequenceMode::kPath);
-  }
   std::vector<std::vector<ForwardSolution>> others;
   for (std::size_t j = 0; j < data.size(); ++j) {
     if (!(errors.e_p[j] > kMismatchFactor * median)) continue;
     if (others.empty()) {
-      for (const auto& [options, mode] : readings) others.push_back(solve_all(options, mode));
+      for (const auto& [options, mode] : dataset_readings(fk)) {
+        if (mode == order && options.through_folds == fk.through_folds) continue;  // `solutions`
+        others.push_back(solve_rows(robot, data, options, mode, load));
+      }
     }
     std::vector<const ForwardSolution*> reached;
     for (const std::vector<ForwardSolution>& other : others) reached.push_back(&other[j]);
@@ -1660,9 +1708,9 @@ CalibrationResult calibrate(const RobotDescription& nominal,
   CalibrationResult result;
   result.residual_variance = kNaN;
   std::vector<Pose2<double>> nominal_poses;
-  std::vector<std::size_t> set_aside;
-  std::vector<CalibrationSample> rows =
-      reachable_rows(nominal.params, data, options, source, &result, &nominal_poses, &set_aside);
+  std::vector<std::size_t> used, set_aside;
+  std::vector<CalibrationSample> rows = reachable_rows(nominal.params, data, options, source,
+                                                       &result, &nominal_poses, &used, &set_aside);
   auto identification = std::make_unique<Identification>(nominal, rows, options);
   {
     RobotParams<double> start = nominal.params;
@@ -1670,6 +1718,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     identification->set_robot(start);
     warn_of_mirror(nominal_poses, rows, start.extrinsics, nominal.params.extrinsics, &result);
   }
+  identification->start_on_measured_branches();
   const std::vector<double> registered = identification->values();
   const int count = identification->count();
   const int block = identification->block();
@@ -1695,29 +1744,33 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     const RobotParams<double> identified = identification->robot();
     ForwardSequence sequence(identified, options.fk, identification->load());
     std::vector<std::string> back, still;
-    std::vector<CalibrationSample> joining;
     for (std::size_t j : set_aside) {
       const ForwardSolution& s = sequence.solve(data[j].q);
       const std::string row = origin_of(data, j) + " (" + joints_text(data[j].q) + ")";
       if (s.summary.converged()) {
-        joining.push_back(data[j]);
-        joining.back().origin = origin_of(data, j);
+        used.push_back(j);
         back.push_back(row);
       } else {
         still.push_back(row + ": " + to_string(s.summary.status));
       }
     }
-    if (!joining.empty()) {
+    if (!back.empty()) {
       const std::vector<double> values = identification->values();
-      identification.reset();  // it holds `rows`, which grows
-      rows.insert(rows.end(), joining.begin(), joining.end());
+      identification.reset();               // it holds `rows`, which grows
+      std::sort(used.begin(), used.end());  // the measurement order: the rows' path
+      rows.clear();
+      for (std::size_t j : used) {
+        rows.push_back(data[j]);
+        rows.back().origin = origin_of(data, j);
+      }
       identification = std::make_unique<Identification>(nominal, rows, options);
       identification->set_values(values);
+      identification->start_on_measured_branches();
       CalibrationStage again = options.stages.back();
-      again.name += " (with " + std::to_string(joining.size()) + " rows brought back)";
+      again.name += " (with " + std::to_string(back.size()) + " rows brought back)";
       result.stages.push_back(identification->run_stage(again, true));
       result.warnings.push_back(
-          std::to_string(joining.size()) +
+          std::to_string(back.size()) +
           " rows set aside reached by the identified geometry, used in stage '" + again.name +
           "': " + listing(back));
     }
