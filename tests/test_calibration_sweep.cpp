@@ -49,13 +49,21 @@ Measured measure_paper_sets(const RobotDescription& nominal, VirtualRobot& robot
   so.seed = seed;
   const SamplingResult sampled = poisson_disc_sample(nominal.params, so);
   EXPECT_TRUE(sampled.complete);
+  if (sampled.configurations.size() < static_cast<std::size_t>(kCalibration + kValidation)) return {};
+  const auto measure = [&](std::size_t from, std::size_t to) {  // each set from home
+    const std::vector<JointVector> rows(sampled.configurations.begin() + from,
+                                        sampled.configurations.begin() + to);
+    const std::vector<VirtualMeasurement> measured = robot.measure_dataset(rows);
+    std::vector<CalibrationSample> out;
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      EXPECT_TRUE(measured[k].ok) << "configuration " << from + k + 1;
+      out.push_back({rows[k], measured[k].measured});
+    }
+    return out;
+  };
   Measured out;
-  for (std::size_t j = 0; j < sampled.configurations.size(); ++j) {
-    const JointVector& q = sampled.configurations[j];
-    if (static_cast<int>(j) == kCalibration) robot.return_home();  // each set from home
-    (static_cast<int>(j) < kCalibration ? out.calibration : out.validation)
-        .push_back({q, robot.measure_or_throw(q)});
-  }
+  out.calibration = measure(0, kCalibration);
+  out.validation = measure(kCalibration, sampled.configurations.size());
   return out;
 }
 

@@ -496,10 +496,17 @@ void run_demo(const DemoArgs& args) {
   pcr::split_configurations(sampled.configurations, args.calibration_count, &calibration_q,
                             &validation_q);
   const auto simulate = [&](const std::vector<pcr::JointVector>& qs) {
-    robot.return_home();  // each dataset an experiment from home, as Table 3 predicts it
+    const std::vector<pcr::VirtualMeasurement> measured = robot.measure_dataset(qs);
     pcr::Dataset data;
     data.num_joints = nominal.params.num_limbs;
-    for (const pcr::JointVector& q : qs) data.add(q, robot.measure_or_throw(q));
+    for (std::size_t k = 0; k < qs.size(); ++k) {
+      if (!measured[k].ok) {
+        throw std::runtime_error("demo: the virtual robot has no equilibrium at configuration " +
+                                 std::to_string(k + 1) + " (" +
+                                 pcr::to_string(measured[k].summary.status) + ")");
+      }
+      data.add(qs[k], measured[k].measured);
+    }
     return data;
   };
   const pcr::Dataset calibration_data = simulate(calibration_q);

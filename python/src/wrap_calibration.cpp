@@ -303,7 +303,9 @@ py::dict measurement_dict(const VirtualMeasurement& v) {
   return d;
 }
 
-py::object virtual_measure(VirtualRobot& robot, const py::object& q_in) {
+/// `robot.measure` of each row of q (one configuration or (N, n)), or with `dataset`
+/// `robot.measure_dataset` of them.
+py::object virtual_measure(VirtualRobot& robot, const py::object& q_in, bool dataset) {
   const int n = robot.nominal().params.num_limbs;
   const InputArray q = input_array(q_in, n, "q", "m");
   const Eigen::Index rows = q.ndim() == 1 ? 1 : q.shape(0);
@@ -312,9 +314,13 @@ py::object virtual_measure(VirtualRobot& robot, const py::object& q_in) {
   std::vector<VirtualMeasurement> out(joints.size());
   {
     py::gil_scoped_release release;
-    for (std::size_t r = 0; r < joints.size(); ++r) out[r] = robot.measure(joints[r]);
+    if (dataset) {
+      out = robot.measure_dataset(joints);
+    } else {
+      for (std::size_t r = 0; r < joints.size(); ++r) out[r] = robot.measure(joints[r]);
+    }
   }
-  if (q.ndim() == 1) return measurement_dict(out[0]);
+  if (q.ndim() == 1 && !dataset) return measurement_dict(out[0]);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   RowMatrix measured(rows, 3), exact(rows, 3), platform(rows, 3);
   py::array_t<bool> ok(rows);
@@ -507,14 +513,22 @@ void wrap_calibration(py::module_& m) {
             return py::make_tuple(Eigen::Vector2d(v.load().force), v.load().moment);
           },
           "the applied load: (force (fx, fy) N, moment N m)")
-      .def("measure", &virtual_measure, py::arg("q"),
-           "Moves to q (m) and measures ^Se T_M. One configuration -> dict(ok, measured, exact, "
-           "platform (Pose), status); an (N, n) array -> dict of arrays (N, 3), NaN where ok is "
-           "False. Continued from the previous measurement, as the robot moves. Releases the GIL.")
+      .def(
+          "measure",
+          [](VirtualRobot& robot, const py::object& q) { return virtual_measure(robot, q, false); },
+          py::arg("q"),
+          "Moves to q (m) and measures ^Se T_M. One configuration -> dict(ok, measured, exact, "
+          "platform (Pose), status); an (N, n) array -> dict of arrays (N, 3), NaN where ok is "
+          "False. Continued from the previous measurement, as the robot moves. Releases the GIL.")
+      .def(
+          "measure_dataset",
+          [](VirtualRobot& robot, const py::object& q) { return virtual_measure(robot, q, true); },
+          py::arg("q"),
+          "A dataset's experiment: the robot goes home, then measures the rows of q (N, n) m in "
+          "their order (a dataset's measurement order, which calibrate and Table 3 follow) -> "
+          "measure's dict of arrays. Releases the GIL.")
       .def("return_home", &VirtualRobot::return_home,
-           "The robot goes back home: the next measurement starts there, as each dataset's "
-           "experiment does (its rows measured in their order from home, which Table 3 "
-           "follows).");
+           "The robot goes back home: the next measurement starts there.");
 
   m.def(
       "read_dataset",

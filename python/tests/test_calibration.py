@@ -57,6 +57,21 @@ def test_virtual_robot_measures_fk_of_its_truth(robot):
     assert single["ok"] and isinstance(single["measured"], pcr.Pose)
 
 
+def test_measure_dataset_starts_from_home():
+    # A tour after which the truth of seed 6 holds the last row on another equilibrium than the
+    # one connected to home (tests/test_calibration.cpp, ARowTheRobotReachedOnAnotherBranch...).
+    v = pcr.VirtualRobot(pcr.Robot.default(), seed=6, noise_position=0.0, noise_angle=0.0)
+    tour = np.array([[3.6e-3, 1.5e-3, -10.2e-3], [6.0e-3, 1.5e-3, -1.6e-3]])
+    moved = v.measure(tour)["platform"]
+    cold = v.truth.forward(tour[1]).pose.to_array()
+    assert np.hypot(*(moved[1][:2] - cold[:2])) > 1e-3  # the setting: the tour snapped
+    again = v.measure(tour[1])["platform"].to_array()  # continued: stays where it is
+    assert again == pytest.approx(moved[1], abs=1e-12)
+    alone = v.measure_dataset(tour[1:])["platform"][0]  # from home
+    assert alone == pytest.approx(cold, abs=1e-12)
+    assert v.measure_dataset(tour)["platform"] == pytest.approx(moved, abs=1e-12)
+
+
 def test_noise_has_the_requested_size(robot):
     v = pcr.VirtualRobot(robot, seed=2, noise_position=1e-6, noise_angle=1e-5)
     q = np.tile([0.001, 0.0, -0.001], (200, 1))

@@ -132,9 +132,8 @@ def test_trial_outcomes_are_those_of_the_json_report():
     exact.uncertainty = None
     robot = pcr.VirtualRobot(exact, seed=camera_seed)
     q, v = (_tour(sets[name]) for name in ("calibration", "validation"))  # as measured
-    measured_q = robot.measure(q)["measured"]
-    robot.return_home()  # each dataset an experiment from home
-    measured_v = robot.measure(v)["measured"]
+    measured_q = robot.measure_dataset(q)["measured"]
+    measured_v = robot.measure_dataset(v)["measured"]
     identified, result = pcr.calibrate(design, q, measured_q, drop_unreachable=True)
     table = pcr.calibration_table(result, q, measured_q, v, measured_v)
     report = result.to_dict(table)["table3"]

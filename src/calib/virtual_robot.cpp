@@ -139,6 +139,14 @@ VirtualMeasurement VirtualRobot::measure(const JointVector& q) {
   return m;
 }
 
+std::vector<VirtualMeasurement> VirtualRobot::measure_dataset(const std::vector<JointVector>& rows) {
+  return_home();
+  std::vector<VirtualMeasurement> out;
+  out.reserve(rows.size());
+  for (const JointVector& q : rows) out.push_back(measure(q));
+  return out;
+}
+
 Pose2<double> VirtualRobot::measure_or_throw(const JointVector& q) {
   const VirtualMeasurement m = measure(q);
   if (!m.ok) {

@@ -85,9 +85,14 @@ class VirtualRobot {
   /// measure(q), throwing std::runtime_error (naming q and the solver status) on failure.
   Pose2<double> measure_or_throw(const JointVector& q);
 
-  /// The robot goes back home: the next measurement starts there, as each dataset's experiment
-  /// does (its rows measured in their order from home, which configuration_errors follows).
+  /// The robot goes back home: the next measurement starts there.
   void return_home() { sequence_.reset(); }
+
+  /// A dataset's experiment: the robot goes home, then moves to each row of `rows` in their
+  /// order and measures it (the rows of a dataset file are its measurement order, which the
+  /// calibration and configuration_errors follow). One measurement per row, ok false where the
+  /// truth has no equilibrium.
+  std::vector<VirtualMeasurement> measure_dataset(const std::vector<JointVector>& rows);
 
  private:
   RobotDescription nominal_;
