@@ -48,6 +48,78 @@ std::vector<ForwardSolution> solve_rows(const RobotParams<double>& robot,
   return out;
 }
 
+/// The equilibria of `robot` at the joints of `at` other than `at` itself, found from its buckled
+/// seeds (internal::buckled_seed) and `reached` (equilibria at those joints the robot may have
+/// come to otherwise, dataset_readings): the one whose platform pose lies nearest `target`, if
+/// any.
+std::optional<ForwardSolution> nearest_other_equilibrium(
+    const RobotParams<double>& robot, const ForwardSolution& at,
+    const std::vector<const ForwardSolution*>& reached, const Pose2<double>& target,
+    const SolverOptions& fk, const PlatformLoad<double>& load) {
+  std::optional<ForwardSolution> best;
+  double best_distance = HUGE_VAL;
+  const auto consider = [&](const ForwardSolution& s) {
+    if (!s.summary.converged()) return;
+    const double from_at =
+        std::hypot(s.pose.x - at.pose.x, s.pose.y - at.pose.y) +
+        kDefaultOrientationWeight * std::abs(wrap_angle(s.pose.theta - at.pose.theta));
+    if (!(from_at > kDistinctEquilibrium)) return;  // `at` again
+    const double distance = std::hypot(s.pose.x - target.x, s.pose.y - target.y);
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = s;
+    }
+  };
+  for (const ForwardSolution* r : reached) consider(*r);
+  for (int k = 0; k < internal::kBuckledSeedsPerRod * robot.num_limbs; ++k) {
+    consider(forward_kinematics(robot, at.q, internal::buckled_seed(robot, at, k), fk, load));
+  }
+  return best;
+}
+
+/// The branch-mismatch rule: a row whose equilibrium `predicted[j]` misses its measurement by
+/// kMismatchFactor times the rows' median position error or more, and whose measurement lies
+/// kMismatchFactor times nearer another equilibrium at the same joints (nearest_other_equilibrium,
+/// with the rows' readings, solved once a row needs them), was measured on that one: the robot
+/// came to it another way than the one predicted. Per row, that equilibrium or none (also for a
+/// row without a converged prediction, or a null one).
+std::vector<std::optional<ForwardSolution>> equilibria_measured_instead(
+    const RobotParams<double>& robot, const std::vector<CalibrationSample>& data,
+    const std::vector<const ForwardSolution*>& predicted, const SolverOptions& fk,
+    const PlatformLoad<double>& load) {
+  std::vector<std::optional<ForwardSolution>> out(data.size());
+  std::vector<double> errors(data.size(), kNaN), finite;
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    if (predicted[j] == nullptr || !predicted[j]->summary.converged()) continue;
+    const Pose2<double> measured = robot.extrinsics.platform_from_measurement(data[j].measured);
+    errors[j] = std::hypot(predicted[j]->pose.x - measured.x, predicted[j]->pose.y - measured.y);
+    if (std::isfinite(errors[j])) finite.push_back(errors[j]);
+  }
+  if (finite.empty()) return out;
+  std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());
+  const double median = finite[finite.size() / 2];
+  std::vector<std::vector<ForwardSolution>> readings;
+  for (std::size_t j = 0; j < data.size(); ++j) {
+    if (!(errors[j] > kMismatchFactor * median)) continue;
+    if (readings.empty()) {
+      for (const auto& [options, mode] : dataset_readings(fk)) {
+        readings.push_back(solve_rows(robot, data, options, mode, load));
+      }
+    }
+    std::vector<const ForwardSolution*> reached;
+    for (const std::vector<ForwardSolution>& reading : readings) reached.push_back(&reading[j]);
+    const Pose2<double> measured = robot.extrinsics.platform_from_measurement(data[j].measured);
+    std::optional<ForwardSolution> other =
+        nearest_other_equilibrium(robot, *predicted[j], reached, measured, fk, load);
+    if (other &&
+        kMismatchFactor * std::hypot(other->pose.x - measured.x, other->pose.y - measured.y) <
+            errors[j]) {
+      out[j] = std::move(other);
+    }
+  }
+  return out;
+}
+
 /// gauge_generators' order.
 enum GaugeIndex {
   kProximalX,
@@ -570,6 +642,27 @@ class Identification {
         c.accept();
       }
     }
+  }
+  /// Moves each row that the model's equilibrium at the current values misses by far onto the
+  /// equilibrium at its joints that its measurement names (equilibria_measured_instead): one the
+  /// robot came to in a way the readings at the start values did not follow (a fold the nominal
+  /// geometry places elsewhere). The rows moved, by name.
+  std::vector<std::string> move_to_measured_equilibria() {
+    settle();
+    std::vector<const ForwardSolution*> predicted(data_.size(), nullptr);
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      if (caches_[j].valid && !lost_[j]) predicted[j] = &caches_[j].solution;
+    }
+    const std::vector<std::optional<ForwardSolution>> measured =
+        equilibria_measured_instead(robot(), data_, predicted, options_.fk, load());
+    std::vector<std::string> moved;
+    for (std::size_t j = 0; j < data_.size(); ++j) {
+      if (!measured[j]) continue;
+      caches_[j].solution = *measured[j];
+      caches_[j].accept();
+      moved.push_back(origin(j));
+    }
+    return moved;
   }
   /// Continues every valid cache to the current values and accepts them there (a row that cannot
   /// follow keeps its anchor, and the cost continues it from there when evaluated).
@@ -1517,43 +1610,6 @@ RobotParams<double> fix_gauge(const RobotParams<double>& params,
   return move_along_gauge(params, m.G, m.H, m.stiffness_scale);
 }
 
-/// The equilibria of `robot` at the joints of `at` other than `at` itself, found from seeds where
-/// one rod is bent further one way or the other (its proximal moment moved by 1 and 2 times
-/// 2 pi EI / l: a clamped-clamped rod's buckled shapes) and solved at the same joints, and
-/// `reached` (equilibria at those joints the robot may have come to otherwise): the one whose
-/// platform pose lies nearest `target`, if any.
-std::optional<Pose2<double>> nearest_other_equilibrium(
-    const RobotParams<double>& robot, const ForwardSolution& at,
-    const std::vector<const ForwardSolution*>& reached, const Pose2<double>& target,
-    const SolverOptions& fk, const PlatformLoad<double>& load) {
-  std::optional<Pose2<double>> best;
-  double best_distance = HUGE_VAL;
-  const auto consider = [&](const ForwardSolution& s) {
-    if (!s.summary.converged()) return;
-    const double from_at =
-        std::hypot(s.pose.x - at.pose.x, s.pose.y - at.pose.y) +
-        kDefaultOrientationWeight * std::abs(wrap_angle(s.pose.theta - at.pose.theta));
-    if (!(from_at > kDistinctEquilibrium)) return;  // `at` again
-    const double distance = std::hypot(s.pose.x - target.x, s.pose.y - target.y);
-    if (distance < best_distance) {
-      best_distance = distance;
-      best = s.pose;
-    }
-  };
-  for (const ForwardSolution* r : reached) consider(*r);
-  for (int rod = 0; rod < robot.num_limbs; ++rod) {
-    const LimbParams<double>& limb = robot.limb(rod);
-    const double bend = 2.0 * M_PI * limb.bending_stiffness() / limb.length;
-    for (double amount : {1.0, -1.0, 2.0, -2.0}) {
-      ForwardSolution seed = at;
-      seed.jacobian = internal::ChordMatrix();  // not at the seed
-      seed.wrenches[static_cast<std::size_t>(rod)].m += amount * bend;
-      consider(forward_kinematics(robot, at.q, seed, fk, load));
-    }
-  }
-  return best;
-}
-
 ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
                                          const std::vector<CalibrationSample>& data,
                                          const SolverOptions& fk, const PlatformLoad<double>& load,
@@ -1573,38 +1629,14 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
     errors.e_p.push_back(std::hypot(s.pose.x - measured.x, s.pose.y - measured.y));
     errors.e_theta.push_back(std::abs(wrap_angle(s.pose.theta - measured.theta)));
   }
-  // A row far off the others (kMismatchFactor times their median error) whose measurement lies
-  // next to another equilibrium at the same joints was measured on another branch than the one
-  // the model predicts: a branch mismatch, not an error of the model's geometry.
-  std::vector<double> finite;
-  for (double e : errors.e_p) {
-    if (std::isfinite(e)) finite.push_back(e);
-  }
-  if (finite.empty()) return errors;
-  std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());
-  const double median = finite[finite.size() / 2];
-  // The equilibria the rows reach in the set's other readings, solved once a row needs them: each
-  // on its own from home, as a path in their order, as a path through folds (a robot that
-  // snapped through one). Candidates only, as the buckled seeds are: the measurement decides.
-  std::vector<std::vector<ForwardSolution>> others;
+  std::vector<const ForwardSolution*> predicted;
+  for (const ForwardSolution& s : solutions) predicted.push_back(&s);
+  const std::vector<std::optional<ForwardSolution>> other =
+      equilibria_measured_instead(robot, data, predicted, fk, load);
   for (std::size_t j = 0; j < data.size(); ++j) {
-    if (!(errors.e_p[j] > kMismatchFactor * median)) continue;
-    if (others.empty()) {
-      for (const auto& [options, mode] : dataset_readings(fk)) {
-        if (mode == order && options.through_folds == fk.through_folds) continue;  // `solutions`
-        others.push_back(solve_rows(robot, data, options, mode, load));
-      }
-    }
-    std::vector<const ForwardSolution*> reached;
-    for (const std::vector<ForwardSolution>& other : others) reached.push_back(&other[j]);
-    const Pose2<double> measured = robot.extrinsics.platform_from_measurement(data[j].measured);
-    const std::optional<Pose2<double>> other =
-        nearest_other_equilibrium(robot, solutions[j], reached, measured, fk, load);
-    if (other && kMismatchFactor * std::hypot(other->x - measured.x, other->y - measured.y) <
-                     errors.e_p[j]) {
-      errors.branch_mismatch[j] = true;
-      errors.other_pose[j] = *other;
-    }
+    if (!other[j]) continue;
+    errors.branch_mismatch[j] = true;
+    errors.other_pose[j] = other[j]->pose;
   }
   return errors;
 }
@@ -1775,6 +1807,20 @@ CalibrationResult calibrate(const RobotDescription& nominal,
           "': " + listing(back));
     }
     result.dropped.insert(result.dropped.end(), still.begin(), still.end());
+  }
+  // Rows measured on another equilibrium at their joints than the readings at the start values
+  // gave (a fold the nominal geometry places elsewhere, a robot pushed onto a buckled shape):
+  // named by the identified model, fitted there in the last stage, run again.
+  const std::vector<std::string> moved = identification->move_to_measured_equilibria();
+  if (!moved.empty()) {
+    CalibrationStage again = options.stages.back();
+    again.name += " (with " + std::to_string(moved.size()) + " rows on the equilibria measured)";
+    result.stages.push_back(identification->run_stage(again, true));
+    result.warnings.push_back(
+        std::to_string(moved.size()) +
+        " rows were measured on another equilibrium at their joints than the one first fitted "
+        "(the robot came to it another way): fitted on it in stage '" +
+        again.name + "': " + listing(moved));
   }
   Identification& id = *identification;
 

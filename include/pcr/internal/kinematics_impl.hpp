@@ -1,6 +1,7 @@
 #pragma once
 // The bodies of the functions pcr/kinematics.hpp declares (included at its end).
 
+#include <algorithm>
 #include <cmath>
 
 #include "pcr/internal/arclength.hpp"
@@ -142,10 +143,28 @@ Solution solve_from_warm_start(ShootingProblem::Kind kind, const RobotParams<dou
   return solution;
 }
 
+/// Seeds of a solution's other equilibria at the same input (joints or pose), per rod.
+inline constexpr int kBuckledSeedsPerRod = 4;
+
+/// Seed k of the kBuckledSeedsPerRod n seeds of the other equilibria at `at`'s input: one rod
+/// bent further one way or the other, its proximal moment moved by 1 and 2 times 2 pi EI / l (a
+/// clamped-clamped rod's buckled shapes); the rods in turn from `first_rod`.
+template <class Solution>
+Solution buckled_seed(const RobotParams<double>& robot, const Solution& at, int k,
+                      int first_rod = 0) {
+  constexpr double kTurns[kBuckledSeedsPerRod] = {1.0, -1.0, 2.0, -2.0};
+  const int rod = (first_rod + k / kBuckledSeedsPerRod) % robot.num_limbs;
+  const LimbParams<double>& limb = robot.limb(rod);
+  Solution seed = at;
+  seed.jacobian = ChordMatrix();  // not at the seed
+  seed.wrenches[static_cast<std::size_t>(rod)].m +=
+      kTurns[k % kBuckledSeedsPerRod] * 2.0 * M_PI * limb.bending_stiffness() / limb.length;
+  return seed;
+}
+
 /// IK has converged on an unstable equilibrium at the input u: looks for a stable one at the same
-/// pose, from seeds where one rod is bent further one way or the other (its proximal moment moved
-/// by 1 and 2 times 2 pi EI / l: a clamped-clamped rod's buckled shapes), the rod with a conjugate
-/// point (conjugate_limb, or -1) first. Takes the stable solution whose joints lie nearest (one
+/// pose, from the buckled seeds (buckled_seed), the rod with a conjugate point (conjugate_limb,
+/// or -1) first. Takes the stable solution whose joints lie nearest (one
 /// within the stroke before one outside), else reports kUnstable with the unstable solution. The
 /// summary counts every seed's iterations and evaluations.
 inline void look_for_stable_inverse(const RobotParams<double>& robot, const ShootingVector& u,
@@ -157,30 +176,23 @@ inline void look_for_stable_inverse(const RobotParams<double>& robot, const Shoo
   bool found = false, best_in_range = false;
   double best_distance = HUGE_VAL;
   SolverSummary totals = solution.summary;
-  for (int k = 0; k < n; ++k) {
-    const int rod = conjugate_limb >= 0 ? (conjugate_limb + k) % n : k;
-    const LimbParams<double>& limb = robot.limb(rod);
-    const double bend = 2.0 * M_PI * limb.bending_stiffness() / limb.length;
-    for (double amount : {1.0, -1.0, 2.0, -2.0}) {
-      InverseSolution seed = solution;
-      seed.jacobian = ChordMatrix();
-      seed.wrenches[rod].m += amount * bend;
-      InverseSolution candidate =
-          solve_from_warm_start(ShootingProblem::Kind::kInverse, robot, u, u, seed, options, load);
-      totals.iterations += candidate.summary.iterations;
-      totals.residual_evaluations += candidate.summary.residual_evaluations;
-      if (!candidate.summary.converged()) continue;
-      check_stability(robot, options, candidate);
-      if (candidate.summary.stability != Stability::kStable) continue;
-      const bool inside = within_stroke(robot, candidate.q);
-      const double distance = (candidate.q - solution.q).norm();
-      if (!found || (inside && !best_in_range) ||
-          (inside == best_in_range && distance < best_distance)) {
-        best = candidate;
-        found = true;
-        best_in_range = inside;
-        best_distance = distance;
-      }
+  for (int k = 0; k < kBuckledSeedsPerRod * n; ++k) {
+    const InverseSolution seed = buckled_seed(robot, solution, k, std::max(conjugate_limb, 0));
+    InverseSolution candidate =
+        solve_from_warm_start(ShootingProblem::Kind::kInverse, robot, u, u, seed, options, load);
+    totals.iterations += candidate.summary.iterations;
+    totals.residual_evaluations += candidate.summary.residual_evaluations;
+    if (!candidate.summary.converged()) continue;
+    check_stability(robot, options, candidate);
+    if (candidate.summary.stability != Stability::kStable) continue;
+    const bool inside = within_stroke(robot, candidate.q);
+    const double distance = (candidate.q - solution.q).norm();
+    if (!found || (inside && !best_in_range) ||
+        (inside == best_in_range && distance < best_distance)) {
+      best = candidate;
+      found = true;
+      best_in_range = inside;
+      best_distance = distance;
     }
   }
   if (found) {
