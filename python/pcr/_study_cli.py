@@ -9,6 +9,7 @@ examples:
   pcr-study run tolerance --output tolerance-results
   pcr-study run my-study.toml --output results --trials 200 --scheduler tcp://head:8786
   pcr-study plot tolerance-results
+  pcr-study summary tolerance-results
 A stopped study (Ctrl-C, a lost job) resumes where it stopped when run again into the same
 directory. Units: SI in every file.
 """
@@ -52,6 +53,9 @@ def _parser():
     q.add_argument("--outcome", action="append", help="an outcome column to plot (repeatable; "
                    "default: validation e_p of the identified and the nominal model, e_theta, AP_p on the "
                    "square)")
+    m = sub.add_parser("summary", help="failures, Table 3 over the trials, branch mismatches, "
+                       "unmeasured configurations and times, in Markdown")
+    m.add_argument("results", help="directory written by pcr-study run")
     sub.add_parser("list", help="the built-in studies")
     return p
 
@@ -75,6 +79,12 @@ def _plot(args):
         print(path)
 
 
+def _summary(args):
+    from .study import summary
+
+    print(summary(args.results), end="")
+
+
 def _list(_):
     from .study import Study, builtin_studies
 
@@ -87,7 +97,7 @@ def _list(_):
 def main(argv=None):
     args = _parser().parse_args(argv)
     try:
-        {"run": _run, "plot": _plot, "list": _list}[args.command](args)
+        {"run": _run, "plot": _plot, "summary": _summary, "list": _list}[args.command](args)
     except KeyboardInterrupt:
         print("pcr-study: stopped; the finished trials are written, and running the same "
               "command again resumes the study", file=sys.stderr)

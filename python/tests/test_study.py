@@ -293,6 +293,22 @@ def test_the_plots_render(small, tmp_path):
                   "table3.identified_model_validation_set.e_p_m.mean"].median())
 
 
+def test_the_summary_gives_the_tables_headline(small):
+    _, table, directory = small
+    r = subprocess.run(_command("summary", str(directory)), capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("20 trials, 0 failed\n")
+    column = table["table3.identified_model_validation_set.e_p_m.mean"]
+    line = next(x for x in r.stdout.splitlines()
+                if x.startswith("| identified_model_validation_set |"))
+    cells = [c.strip() for c in line.strip("|").split("|")]
+    assert cells[1] == "20"
+    assert float(cells[2]) == pytest.approx(column.median() * 1e6, rel=1e-3)
+    assert float(cells[3]) == pytest.approx(column.max() * 1e6, rel=1e-3)
+    unmeasured = int(table["configurations.unreachable"].sum())
+    assert f"did not measure (no equilibrium there): {unmeasured} in" in r.stdout
+
+
 def test_a_study_without_finished_trials_is_not_plotted(tmp_path):
     definition = study.Study.from_toml(SMALL, "small.toml")
     study.run(definition, tmp_path / "out", trials=1, workers=1, progress=False)

@@ -11,7 +11,7 @@ JSON report, in SI units.
     pcr.study.plot("tolerance-results")
 
 Built-in studies: ``builtin_studies()`` (TOML files in pcr/study/studies). The console command
-``pcr-study run|plot|list`` does the same. Needs the [study] extra: pip install './python[study]'.
+``pcr-study run|plot|summary|list`` does the same. Needs the [study] extra: pip install './python[study]'.
 """
 from __future__ import annotations
 
@@ -31,7 +31,7 @@ from ._store import read_results, read_study  # noqa: E402
 from ._trial import FACTORS, outcome_columns, run_trial  # noqa: E402
 
 __all__ = ["FACTORS", "Progress", "Study", "Trial", "builtin_studies", "outcome_columns",
-           "plot", "read_results", "read_study", "run", "run_trial", "sensitivity"]
+           "plot", "read_results", "read_study", "run", "run_trial", "sensitivity", "summary"]
 
 
 def plot(directory, output=None, outcomes=None):
@@ -47,3 +47,10 @@ def sensitivity(table, outcome, factors):
     from ._plot import sensitivity as _sensitivity
 
     return _sensitivity(table, outcome, factors)
+
+
+def summary(directory):
+    """The headline of a study's results in Markdown; see ``pcr.study._summary.summary``."""
+    from ._summary import summary as _summary
+
+    return _summary(directory)
