@@ -49,7 +49,8 @@ Measured measure_paper_sets(const RobotDescription& nominal, VirtualRobot& robot
   so.seed = seed;
   const SamplingResult sampled = poisson_disc_sample(nominal.params, so);
   EXPECT_TRUE(sampled.complete);
-  if (sampled.configurations.size() < static_cast<std::size_t>(kCalibration + kValidation)) return {};
+  if (sampled.configurations.size() < static_cast<std::size_t>(kCalibration + kValidation))
+    return {};
   const auto measure = [&](std::size_t from, std::size_t to) {  // each set from home
     const std::vector<JointVector> rows(sampled.configurations.begin() + from,
                                         sampled.configurations.begin() + to);

@@ -139,7 +139,8 @@ VirtualMeasurement VirtualRobot::measure(const JointVector& q) {
   return m;
 }
 
-std::vector<VirtualMeasurement> VirtualRobot::measure_dataset(const std::vector<JointVector>& rows) {
+std::vector<VirtualMeasurement> VirtualRobot::measure_dataset(
+    const std::vector<JointVector>& rows) {
   return_home();
   std::vector<VirtualMeasurement> out;
   out.reserve(rows.size());
