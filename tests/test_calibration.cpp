@@ -499,11 +499,15 @@ TEST(ConfigurationErrors, ARowReachedOnAnotherBranchIsPredictedAlongTheRowsPath)
 // one connected to home: the tour of ARowReachedOnAnotherBranchIsPredictedAlongTheRowsPath, on a
 // truth drawn inside the intervals where it snaps too (7 of the first 29 seeds). The calibration
 // fits that row where the robot held it, as Table 3 predicts it: every row is used, none is an
-// outlier, and the identified model reaches the noise floor on all of them.
+// outlier, and the identified model reaches the noise floor on all of them. That equilibrium is
+// unstable on this truth, which a free robot does not hold (the virtual robot would not measure
+// it): the stability check is off so that the robot holds what its path reaches, as a robot
+// guided there would (random two-row tours on 29 truths found no stable one).
 TEST(Calibrator, ARowTheRobotReachedOnAnotherBranchIsFittedThere) {
   const RobotDescription nominal = default_robot();
   VirtualRobotOptions vo;
   vo.seed = 6;
+  vo.solver.check_stability = false;
   VirtualRobot robot(nominal, vo);
   const JointVector from = (JointVector(3) << 3.6e-3, 1.5e-3, -10.2e-3).finished();
   const JointVector to = (JointVector(3) << 6.0e-3, 1.5e-3, -1.6e-3).finished();

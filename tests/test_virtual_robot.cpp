@@ -210,6 +210,42 @@ TEST(VirtualRobot, ReportsConfigurationsWithoutSolution) {
   EXPECT_TRUE(robot.measure(joints(1e-3, 0, 0)).ok);
 }
 
+// A real robot does not hold an unstable equilibrium. The default robot, moved from home to
+// (3.57, 1.46, -10.18) mm and then to (6.01, 1.53, -1.56) mm, follows its branch past the point
+// where it stops being stable (no fold: the path goes on, the energy-Hessian margin ends at -162,
+// found by a search over random two-row tours). The virtual robot does not measure that row
+// (status unstable) and, homed again, measures the next row from home, as a cold solve. With
+// the stability check off it holds the path's equilibrium, millimetres from the cold solve's.
+TEST(VirtualRobot, DoesNotMeasureAnUnstableEquilibrium) {
+  RobotDescription nominal = default_robot();
+  nominal.uncertainty.reset();  // the truth is the nominal robot
+  const std::vector<JointVector> rows = {
+      joints(3.566415114507882e-3, 1.4601330688085983e-3, -10.177504610230644e-3),
+      joints(6.008575294285489e-3, 1.5303280691677766e-3, -1.5550781356242563e-3),
+      joints(1e-3, -2e-3, 0.5e-3)};
+  VirtualRobot robot(nominal, noiseless(1));
+  const std::vector<VirtualMeasurement> measured = robot.measure_dataset(rows);
+  ASSERT_TRUE(measured[0].ok);
+  EXPECT_FALSE(measured[1].ok);
+  EXPECT_EQ(measured[1].summary.status, SolveStatus::kUnstable);
+  ASSERT_TRUE(measured[2].ok);
+  const ForwardSolution cold = forward_kinematics(nominal.params, rows[2]);
+  ASSERT_TRUE(cold.summary.converged());
+  EXPECT_NEAR(measured[2].platform.x, cold.pose.x, 1e-12);
+  EXPECT_NEAR(measured[2].platform.y, cold.pose.y, 1e-12);
+
+  VirtualRobotOptions unchecked = noiseless(1);
+  unchecked.solver.check_stability = false;
+  VirtualRobot held(nominal, unchecked);
+  const std::vector<VirtualMeasurement> on_path = held.measure_dataset(rows);
+  ASSERT_TRUE(on_path[1].ok);
+  const ForwardSolution cold_1 = forward_kinematics(nominal.params, rows[1]);
+  ASSERT_TRUE(cold_1.summary.converged());
+  EXPECT_GT(
+      std::hypot(on_path[1].platform.x - cold_1.pose.x, on_path[1].platform.y - cold_1.pose.y),
+      1e-3);
+}
+
 TEST(VirtualRobot, RejectsBadOptions) {
   VirtualRobotOptions options;
   options.noise_position = -1;

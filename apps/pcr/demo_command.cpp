@@ -495,26 +495,35 @@ void run_demo(const DemoArgs& args) {
   std::vector<pcr::JointVector> calibration_q, validation_q;
   pcr::split_configurations(sampled.configurations, args.calibration_count, &calibration_q,
                             &validation_q);
+  std::size_t not_measured = 0;  // the robot holds no (stable) equilibrium there
   const auto simulate = [&](const std::vector<pcr::JointVector>& qs) {
     const std::vector<pcr::VirtualMeasurement> measured = robot.measure_dataset(qs);
     pcr::Dataset data;
     data.num_joints = nominal.params.num_limbs;
     for (std::size_t k = 0; k < qs.size(); ++k) {
-      if (!measured[k].ok) {
-        throw std::runtime_error("demo: the virtual robot has no equilibrium at configuration " +
-                                 std::to_string(k + 1) + " (" +
-                                 pcr::to_string(measured[k].summary.status) + ")");
+      if (measured[k].ok) {
+        data.add(qs[k], measured[k].measured);
+      } else {
+        ++not_measured;
       }
-      data.add(qs[k], measured[k].measured);
     }
     return data;
   };
   const pcr::Dataset calibration_data = simulate(calibration_q);
   const pcr::Dataset validation_data = simulate(validation_q);
+  if (calibration_data.size() == 0 || validation_data.size() == 0) {
+    throw std::runtime_error("demo: the virtual robot measured no configuration of a set");
+  }
   pcr::write_dataset(calibration_data, (out / "calibration.csv").string());
   pcr::write_dataset(validation_data, (out / "validation.csv").string());
   progress.say(fmt("      %.0f + %.0f configurations, Poisson-disc radius %.3f mm",
                    calibration_data.size(), validation_data.size(), sampled.min_distance * 1e3));
+  if (not_measured > 0) {
+    progress.say(
+        fmt("      %.0f configurations not measured: the robot holds no stable "
+            "equilibrium there",
+            not_measured));
+  }
   report["configurations"] = {{"calibration", calibration_data.size()},
                               {"validation", validation_data.size()},
                               {"min_distance_m", sampled.min_distance},

@@ -52,11 +52,12 @@ void run_simulate(const SimulateArguments& args) {
   VirtualRobot robot(nominal, options);
   Dataset data;
   data.num_joints = nominal.params.num_limbs;
+  const std::vector<VirtualMeasurement> measured = robot.measure_dataset(configs);
   for (std::size_t k = 0; k < configs.size(); ++k) {
-    const VirtualMeasurement m = robot.measure(configs[k]);
+    const VirtualMeasurement& m = measured[k];
     if (!m.ok) {
       throw std::runtime_error(args.configs + ": configuration " + std::to_string(k + 1) +
-                               ": the virtual robot has no FK solution (" +
+                               ": the virtual robot holds no equilibrium there (" +
                                to_string(m.summary.status) + ")");
     }
     data.add(configs[k], m.measured);

@@ -128,6 +128,13 @@ VirtualMeasurement VirtualRobot::measure(const JointVector& q) {
   const ForwardSolution& fk = sequence_.solve(q);
   m.summary = fk.summary;
   if (!fk.summary.converged()) return m;
+  if (fk.summary.stability == Stability::kUnstable) {
+    // A real robot does not hold an unstable equilibrium: it snaps to another one, which no
+    // statics model can say. Not measured; the robot is homed again, as a lab does after a snap.
+    m.summary.status = SolveStatus::kUnstable;
+    return_home();
+    return m;
+  }
   m.ok = true;
   m.platform = fk.pose;
   m.exact = robot.extrinsics.measurement_from_platform(fk.pose);

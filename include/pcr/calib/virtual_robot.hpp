@@ -56,7 +56,9 @@ struct VirtualRobotOptions {
 
 /// One simulated measurement.
 struct VirtualMeasurement {
-  bool ok = false;         ///< false: FK of the true robot has no solution at q (see summary)
+  /// false: FK of the true robot has no solution at q, or only an unstable one (summary.status
+  /// kUnstable: the robot would snap off it, and is homed again)
+  bool ok = false;
   Pose2<double> measured;  ///< ^Se T_M with noise: what the camera reports
   Pose2<double> exact;     ///< ^Se T_M without noise
   Pose2<double> platform;  ///< ^W T_P of the true robot
@@ -79,7 +81,9 @@ class VirtualRobot {
   /// Moves to q and measures: FK of the truth along the path from the last configuration, as the
   /// robot moves (a pcr::ForwardSequence in SequenceMode::kPath: on the branch of the last
   /// successful call, a cold retry from home where it ends; through folds with
-  /// solver.through_folds); the noise stream advances only on success.
+  /// solver.through_folds); the noise stream advances only on success. An unstable equilibrium
+  /// (solver.check_stability) is not measured: a real robot would snap off it to one no model
+  /// says; the robot is homed again.
   VirtualMeasurement measure(const JointVector& q);
 
   /// measure(q), throwing std::runtime_error (naming q and the solver status) on failure.
