@@ -9,7 +9,9 @@
 #include <sstream>
 
 #include "pcr/csv_io.hpp"
+#include "pcr/kinematics.hpp"
 #include "pcr/robot_io.hpp"
+#include "random_robots.hpp"
 #include "scratch_directory.hpp"
 
 namespace {
@@ -253,6 +255,36 @@ TEST_F(Cli, RobotCommandWritesTheCanonicalFile) {
   EXPECT_EQ(a.params.limb(2).B, b.params.limb(2).B);
   EXPECT_EQ(a.params.limb(1).alpha, b.params.limb(1).alpha);
   EXPECT_EQ(slurp(path), slurp(std::string(PCR_SOURCE_DIR) + "/robots/femto-3pf.json"));
+}
+
+// A pre-stressed 4-limb robot (two rods 300 um and 200 um longer) has several homes: `pcr robot
+// --home-pose` writes it saying which one it is in, the home with every rod bowed to its left.
+TEST_F(Cli, RobotCommandSaysWhichHomeFromItsPose) {
+  pcr::RobotDescription robot;
+  robot.name = "pre-stressed-4";
+  robot.young_modulus = pcr::default_robot().young_modulus;
+  robot.params = pcr::testing::regular_robot(4);
+  robot.params.limb(1).length += 300e-6;
+  robot.params.limb(3).length += 200e-6;
+  const std::string path = (dir_ / "pre.json").string(), out = (dir_ / "homed.json").string();
+  pcr::save_robot(robot, path);
+  pcr::RobotParams<double> left = robot.params;
+  for (int i = 0; i < 4; ++i) left.limb(i).home_bow = 1;
+  const pcr::ForwardSolution home = pcr::home_solution(left);
+  ASSERT_TRUE(home.summary.converged());
+  const pcr::ForwardSolution unsaid = pcr::home_solution(robot.params);
+  ASSERT_GT(std::hypot(home.pose.x - unsaid.pose.x, home.pose.y - unsaid.pose.y), 1e-6);
+  const std::string pose = pcr::format_double(home.pose.x) + "," + pcr::format_double(home.pose.y) +
+                           "," + pcr::format_double(home.pose.theta);
+  Result r = run("robot --robot '" + path + "' --home-pose " + pose + " --output '" + out + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("home: rods bowed"), std::string::npos) << r.err;
+  const pcr::ForwardSolution homed = pcr::home_solution(pcr::load_robot(out).params);
+  ASSERT_TRUE(homed.summary.converged());
+  EXPECT_LT(std::hypot(homed.pose.x - home.pose.x, homed.pose.y - home.pose.y), 1e-12);
+  r = run("robot --robot '" + path + "' --home-pose 0,nan,0");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--home-pose: y = nan"), std::string::npos) << r.err;
 }
 
 // The default robot with a +-40 mm stroke along a line at 75 degrees: past 22.8 mm the branch

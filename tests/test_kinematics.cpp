@@ -333,6 +333,59 @@ TEST(Kinematics, PreStressedRedundantRobotsFindTheirBowedHome) {
   }
 }
 
+// A pre-stressed robot has several homes: a 4-limb robot with two rods 300 um and 200 um longer
+// reaches seven from the 16 patterns of bow sides said (LimbParams::home_bow), in three groups of
+// platform poses up to 0.5 mm apart; within a group the poses lie 4 nm to 2 um apart and the
+// bent rods bow to other sides (the signs of their proximal moments). Said in the robot, the home
+// solve and FK near home follow the home said; choose_home names each from its pose.
+TEST(Kinematics, APreStressedRobotFollowsTheHomeItSays) {
+  RobotParams<double> robot = testing::regular_robot(4);
+  robot.limb(1).length += 300e-6;
+  robot.limb(3).length += 200e-6;
+  // The sides of the rods bent at home: the signs of the proximal moments above a tenth of the
+  // largest (a nearly straight rod has none).
+  const auto sides = [](const ForwardSolution& s) {
+    double largest = 0;
+    for (int i = 0; i < 4; ++i) largest = std::max(largest, std::abs(s.wrenches[i].m));
+    std::array<int, 4> out{};
+    for (int i = 0; i < 4; ++i) {
+      if (std::abs(s.wrenches[i].m) > 0.1 * largest) out[i] = s.wrenches[i].m > 0 ? 1 : -1;
+    }
+    return out;
+  };
+  std::vector<ForwardSolution> homes;  // distinct homes: pose or sides differ
+  for (int pattern = -1; pattern < 16; ++pattern) {
+    RobotParams<double> said = robot;
+    for (int i = 0; i < 4; ++i)
+      said.limb(i).home_bow = pattern < 0 ? 0 : ((pattern >> i) & 1 ? 1 : -1);
+    const ForwardSolution home = home_solution(said);
+    ASSERT_TRUE(home.summary.converged()) << "pattern " << pattern;
+    // FK 1 um away follows the home said: the same sides, the pose moved by about a micrometre.
+    JointVector q = JointVector::Zero(4);
+    q(0) = 1e-6;
+    const ForwardSolution moved = forward_kinematics(said, q);
+    ASSERT_TRUE(moved.summary.converged()) << "pattern " << pattern;
+    EXPECT_EQ(sides(moved), sides(home)) << "pattern " << pattern;
+    EXPECT_LT(std::hypot(moved.pose.x - home.pose.x, moved.pose.y - home.pose.y), 3e-6)
+        << "pattern " << pattern;
+    bool known = false;
+    for (const ForwardSolution& h : homes) {
+      known = known || (std::hypot(h.pose.x - home.pose.x, h.pose.y - home.pose.y) < 1e-9 &&
+                        sides(h) == sides(home));
+    }
+    if (!known) homes.push_back(home);
+  }
+  ASSERT_GE(homes.size(), 5u);
+  for (std::size_t k = 0; k < homes.size(); ++k) {
+    RobotParams<double> chosen;
+    ASSERT_TRUE(choose_home(robot, homes[k].pose, chosen));
+    const ForwardSolution home = home_solution(chosen);
+    ASSERT_TRUE(home.summary.converged());
+    EXPECT_LT(std::hypot(home.pose.x - homes[k].pose.x, home.pose.y - homes[k].pose.y), 1e-12)
+        << "home " << k;
+  }
+}
+
 // Limb 0 of the pre-stressed 4-limb robot pushed 0.1 mm in: the branch followed from the bowed
 // home folds back near 80 um (its Jacobian's smallest singular value falls to 2e-9 of the largest,
 // with the push along it). The continuation stalls there in ever shorter steps too short to show

@@ -86,6 +86,7 @@ void expect_same(const pcr::RobotDescription& a, const pcr::RobotDescription& b)
     EXPECT_TRUE(same(x.length, y.length) && same(x.diameter, y.diameter));
     EXPECT_TRUE(same(x.young_modulus, y.young_modulus));
     EXPECT_TRUE(same(x.q_min, y.q_min) && same(x.q_max, y.q_max));
+    EXPECT_EQ(x.home_bow, y.home_bow);
   }
   const pcr::Extrinsics<double>& e = a.params.extrinsics;
   const pcr::Extrinsics<double>& f = b.params.extrinsics;
@@ -242,6 +243,11 @@ TEST(RobotIo, ValueRules) {
   j["limbs"][1]["q_range"] = Json::array({0.01, -0.01});
   EXPECT_MESSAGE(error_of(j), "limbs[1].q_range", "min > max", "[0.01,-0.01]");
   j = valid();
+  j["limbs"][2]["home_bow"] = "up";
+  EXPECT_MESSAGE(error_of(j), "limbs[2].home_bow", "\"left\" or \"right\"", "\"up\"");
+  j["limbs"][2]["home_bow"] = 1;
+  EXPECT_MESSAGE(error_of(j), "limbs[2].home_bow", "\"left\" or \"right\"", "got 1");
+  j = valid();
   j["limbs"].erase(1);
   j["limbs"].erase(1);
   j.erase("uncertainty");
@@ -327,6 +333,7 @@ TEST(RobotIo, RoundTripIsBitExact) {
       l.young_modulus = (i % 2) ? random_double(rng, 6.1, 11.9, true) : r.young_modulus;
       l.q_min = -std::abs(any());
       l.q_max = std::abs(any());
+      l.home_bow = (trial + i) % 3 - 1;  // right, not said, left
       pcr::LimbUncertainty lu = u.global;
       if (i == 1) lu.beta = half();
       if (i == 2) lu.young_modulus = random_double(rng, 6.1, 8.9, true);

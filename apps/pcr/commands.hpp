@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,30 @@ inline std::vector<std::string> joint_names(int n) {
   std::vector<std::string> names;
   for (int i = 1; i <= n; ++i) names.push_back("q" + std::to_string(i));
   return names;
+}
+
+/// `option`'s text: as many comma-separated finite numbers as `names`, which name them in errors.
+inline std::vector<double> parse_list(const std::string& text,
+                                      const std::vector<std::string>& names,
+                                      const std::string& option) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    const double value = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0')
+      throw InputError(option + ": '" + text + "' is not a list of numbers");
+    if (out.size() < names.size() && !std::isfinite(value)) {
+      throw InputError(option + ": " + names[out.size()] + " = " + item +
+                       " is not a finite number");
+    }
+    out.push_back(value);
+  }
+  if (out.size() != names.size() || (!text.empty() && text.back() == ','))
+    throw InputError(option + ": expected " + std::to_string(names.size()) + " numbers (" +
+                     CLI::detail::join(names, ",") + "), got '" + text + "'");
+  return out;
 }
 
 /// The solver options and platform load shared by fk and ik.

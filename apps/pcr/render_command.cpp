@@ -11,33 +11,6 @@
 #include "commands.hpp"
 #include "pcr/vision/render.hpp"
 
-namespace {
-
-/// `option`'s text: as many comma-separated finite numbers as `names`, which name them in errors.
-std::vector<double> parse_list(const std::string& text, const std::vector<std::string>& names,
-                               const std::string& option) {
-  std::vector<double> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    char* end = nullptr;
-    const double value = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0')
-      throw pcr::InputError(option + ": '" + text + "' is not a list of numbers");
-    if (out.size() < names.size() && !std::isfinite(value)) {
-      throw pcr::InputError(option + ": " + names[out.size()] + " = " + item +
-                            " is not a finite number");
-    }
-    out.push_back(value);
-  }
-  if (out.size() != names.size() || (!text.empty() && text.back() == ','))
-    throw pcr::InputError(option + ": expected " + std::to_string(names.size()) + " numbers (" +
-                          CLI::detail::join(names, ",") + "), got '" + text + "'");
-  return out;
-}
-
-}  // namespace
-
 void register_render_command(CLI::App& app) {
   struct Args {
     std::string robot, mounts, camera, camera_out, output, truth, q, platform = "0,0,0";
@@ -115,8 +88,9 @@ void register_render_command(CLI::App& app) {
     }
     scene.plane = PlanePose::looking_down(args->height, args->tilt_x, args->tilt_y);
     const int n = robot.params.num_limbs;
-    const std::vector<double> q =
-        args->q.empty() ? std::vector<double>{} : parse_list(args->q, cli::joint_names(n), "--q");
+    const std::vector<double> q = args->q.empty()
+                                      ? std::vector<double>{}
+                                      : cli::parse_list(args->q, cli::joint_names(n), "--q");
     for (std::size_t i = 0; i < q.size(); ++i) {
       const LimbParams<double>& limb = robot.params.limb(static_cast<int>(i));
       if (q[i] < limb.q_min || q[i] > limb.q_max) {
@@ -125,7 +99,8 @@ void register_render_command(CLI::App& app) {
                          format_double(limb.q_min) + ", " + format_double(limb.q_max) + "] m");
       }
     }
-    const std::vector<double> pl = parse_list(args->platform, {"x", "y", "theta"}, "--platform");
+    const std::vector<double> pl =
+        cli::parse_list(args->platform, {"x", "y", "theta"}, "--platform");
     const Pose2<double> platform{pl[0], pl[1], pl[2]};
     if (!args->mounts.empty()) {
       scene.tags = mount_tags(load_mounts(args->mounts), robot.params, platform, q,
@@ -142,7 +117,7 @@ void register_render_command(CLI::App& app) {
         throw InputError("--square: must be > 0, got " + std::to_string(args->square));
       board.square_m = args->square;
       const std::vector<double> c =
-          parse_list(args->board_pose, {"x", "y", "theta"}, "--board-pose");
+          cli::parse_list(args->board_pose, {"x", "y", "theta"}, "--board-pose");
       scene.chessboard =
           RenderChessboard::centred(board.cols, board.rows, board.square_m, {c[0], c[1], c[2]});
     }

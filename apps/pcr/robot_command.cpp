@@ -7,12 +7,21 @@
 namespace {
 
 struct RobotArguments {
-  std::string robot, output;
+  std::string robot, output, home_pose;
 };
 
 void run_robot(const RobotArguments& args) {
   using namespace pcr;
-  const RobotDescription robot = load_robot_or_default(args.robot);
+  RobotDescription robot = load_robot_or_default(args.robot);
+  if (!args.home_pose.empty()) {
+    const std::vector<double> pose =
+        cli::parse_list(args.home_pose, {"x", "y", "theta"}, "--home-pose");
+    RobotParams<double> chosen;
+    if (!choose_home(robot.params, Pose2<double>{pose[0], pose[1], pose[2]}, chosen)) {
+      throw InputError("--home-pose: no home of the robot solves");
+    }
+    robot.params = chosen;
+  }
   if (args.output.empty() || args.output == "-") {
     std::cout << robot_to_json(robot);
   } else {
@@ -29,6 +38,14 @@ void run_robot(const RobotArguments& args) {
             << " Pa, l = " << format_double(l_min)
             << (l_max != l_min ? " to " + format_double(l_max) : std::string()) << " m, "
             << (robot.uncertainty ? "with" : "without") << " uncertainty: valid\n";
+  std::string bows;
+  for (int i = 0; i < p.num_limbs; ++i) {
+    if (p.limb(i).home_bow != 0) {
+      bows += (bows.empty() ? "" : ", ") + std::string("limbs[") + std::to_string(i) + "] " +
+              (p.limb(i).home_bow > 0 ? "left" : "right");
+    }
+  }
+  if (!bows.empty()) std::cerr << "home: rods bowed " << bows << "\n";
 }
 
 }  // namespace
@@ -41,5 +58,9 @@ void register_robot_command(CLI::App& app) {
                          "(full precision; a summary goes to stderr).");
   pcr::cli::add_robot_option(*cmd, args->robot);
   cmd->add_option("--output", args->output, "output JSON file (default: stdout)");
+  cmd->add_option("--home-pose", args->home_pose,
+                  "the robot's measured home pose x,y,theta (m, m, rad: ^W T_P at q = 0): writes "
+                  "it with each limb's home_bow, the home nearest that pose (a pre-stressed "
+                  "robot, n >= 4, has several)");
   cmd->callback([args] { run_robot(*args); });
 }

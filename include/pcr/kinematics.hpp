@@ -61,6 +61,16 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot,
                                      const SolverOptions& options = SolverOptions(),
                                      const PlatformLoad<double>& load = PlatformLoad<double>());
 
+/// `robot` saying which of its homes it is in (LimbParams::home_bow), from its home pose
+/// `measured` (^W T_P at q = 0): of the homes the robot reaches saying nothing and saying each
+/// pattern of sides (2^n of them for n >= 4; a pre-stressed robot has several homes), the one
+/// whose pose lies nearest, in |dp| + l_mean |dtheta| (1 nm ties keep the earlier: a robot in
+/// the home it reaches unsaid comes back as it is). The home solve of `out` reaches that home.
+/// False when no home solves.
+inline bool choose_home(const RobotParams<double>& robot, const Pose2<double>& measured,
+                        RobotParams<double>& out, const SolverOptions& options = SolverOptions(),
+                        const PlatformLoad<double>& load = PlatformLoad<double>());
+
 /// Forward kinematics from a cold start: the home solution, then forward_kinematics_from_home.
 inline ForwardSolution forward_kinematics(
     const RobotParams<double>& robot, const JointVector& q,

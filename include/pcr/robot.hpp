@@ -27,6 +27,12 @@ struct LimbParams {
   T young_modulus{0};        ///< E (Pa)
   double q_min{0};           ///< actuator stroke, lower end (m)
   double q_max{0};           ///< actuator stroke, upper end (m)
+  /// Which home a pre-stressed robot (n >= 4, README "Accuracy and branches") is in: the side of
+  /// the line from its proximal to its distal clamp the rod bows to in the bowed variant the home
+  /// solve starts from, +1 left, -1 right, 0 not said (the solve's documented order). Two
+  /// patterns can reach the same home, and a rod nearly straight at home bows to no clear side:
+  /// choose_home sets them from a measured home pose. A robot whose home is unique ignores it.
+  int home_bow{0};
 
   T bending_stiffness() const { return pcr::bending_stiffness(young_modulus, diameter); }
   /// EA of the circular section (N): the kinematics takes the rods as inextensible, the stability
@@ -56,6 +62,7 @@ struct LimbParams {
     out.young_modulus = U(young_modulus);
     out.q_min = q_min;
     out.q_max = q_max;
+    out.home_bow = home_bow;
     return out;
   }
 };

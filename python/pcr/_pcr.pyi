@@ -48,6 +48,7 @@ class Limb:
     d: float  # m
     E: float  # Pa
     q_range: tuple[float, float]  # m
+    home_bow: Optional[str]  # 'left', 'right' or None: which home a pre-stressed robot is in
     @property
     def EI(self) -> float: ...  # N m^2
     def __init__(self) -> None: ...
@@ -233,6 +234,8 @@ class Robot:
                       path: bool = False) -> BatchResult: ...
     def home(self, *, shapes: bool = False, force: Vector = (0.0, 0.0), moment: float = 0.0,
              options: Optional[SolverOptions] = None) -> Solution: ...
+    def with_home_at(self, pose: Pose, *, force: Vector = (0.0, 0.0), moment: float = 0.0,
+                     options: Optional[SolverOptions] = None) -> Robot: ...
     # When has_calibration. q: a Solution (no FK solve), n joint values, or (N, n) (every value
     # then an array over the rows). Keys: status, ok, pose, covariance (3, 3), position_1sigma,
     # position_3sigma (m), position_axis (2,), orientation_1sigma, orientation_3sigma (rad),

@@ -479,7 +479,27 @@ void wrap_kinematics(py::module_& m) {
             return to_python(r.params, s, s.summary.converged(), shapes);
           },
           py::kw_only(), py::arg("shapes") = false, py::arg("force") = no_force(),
-          py::arg("moment") = 0.0, py::arg("options") = py::none(), "The home solution q = 0 (m).");
+          py::arg("moment") = 0.0, py::arg("options") = py::none(), "The home solution q = 0 (m).")
+      .def(
+          "with_home_at",
+          [](const RobotDescription& r, const Pose2<double>& pose, const py::object& force,
+             double moment, const std::optional<SolverOptions>& options) {
+            const PlatformLoad<double> load = make_load(force, moment);
+            RobotDescription out = r;
+            bool found;
+            {
+              py::gil_scoped_release release;
+              found = choose_home(r.params, pose, out.params, options_or_default(options), load);
+            }
+            if (!found) throw py::value_error("with_home_at: no home of the robot solves");
+            return out;
+          },
+          py::arg("pose"), py::kw_only(), py::arg("force") = no_force(), py::arg("moment") = 0.0,
+          py::arg("options") = py::none(),
+          "A copy saying which of its homes the robot is in (each limb's home_bow), from its "
+          "measured home pose ^W T_P (a Pose, m and rad): of the homes of every pattern of bow "
+          "sides, the one nearest (a pre-stressed robot, n >= 4, has several; n <= 3: a copy). "
+          "ValueError when no home solves. Releases the GIL.");
 }
 
 }  // namespace pcr::python

@@ -209,52 +209,77 @@ void wrap_robot(py::module_& m) {
           py::arg("dtype") = py::none(), py::arg("copy") = py::none(),
           "numpy.asarray(pose): [x, y, theta] (m, m, rad)");
 
-  auto limb = py::class_<LimbParams<double>>(
-                  m, "Limb", "One limb (rod + actuator), notation of Mauze et al. 2021 Fig. 3.")
-                  .def(py::init<>())
-                  .def_property(
-                      "A", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.A; },
-                      [](LimbParams<double>& l, const py::object& v) {
-                        l.A = to_vector<2>(v, "Limb.A", "x, y in m");
-                      },
-                      py::return_value_policy::reference_internal,
-                      "proximal clamp [x, y] in W at q = 0 (m)")
-                  .def_readwrite("alpha", &LimbParams<double>::alpha,
-                                 "rod tangent angle at the proximal clamp, in W (rad)")
-                  .def_readwrite("gamma", &LimbParams<double>::gamma,
-                                 "actuator misalignment: the clamp moves along alpha + gamma (rad)")
-                  .def_property(
-                      "B", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.B; },
-                      [](LimbParams<double>& l, const py::object& v) {
-                        l.B = to_vector<2>(v, "Limb.B", "x, y in m");
-                      },
-                      py::return_value_policy::reference_internal, "distal clamp [x, y] in P (m)")
-                  .def_readwrite("beta", &LimbParams<double>::beta,
-                                 "rod tangent angle at the distal clamp, in P (rad)")
-                  .def_readwrite("l", &LimbParams<double>::length, "stress-free rod length (m)")
-                  .def_readwrite("d", &LimbParams<double>::diameter, "rod diameter (m)")
-                  .def_readwrite("E", &LimbParams<double>::young_modulus,
-                                 "Young's modulus of this rod (Pa)")
-                  .def_property(
-                      "q_range",
-                      [](const LimbParams<double>& l) { return std::make_pair(l.q_min, l.q_max); },
-                      [](LimbParams<double>& l, const std::pair<double, double>& r) {
-                        l.q_min = r.first;
-                        l.q_max = r.second;
-                      },
-                      "actuator stroke (min, max) (m)")
-                  .def_property_readonly("EI", &LimbParams<double>::bending_stiffness,
-                                         "bending stiffness E pi d^4 / 64 (N m^2)")
-                  .def("__repr__", [](const LimbParams<double>& l) {
-                    std::ostringstream s;
-                    s.precision(9);
-                    s << "Limb(A=[" << l.A.x() << ", " << l.A.y() << "], alpha=" << l.alpha
-                      << ", gamma=" << l.gamma << ", B=[" << l.B.x() << ", " << l.B.y()
-                      << "], beta=" << l.beta << ", l=" << l.length << ", d=" << l.diameter
-                      << ", E=" << l.young_modulus << ", q_range=(" << l.q_min << ", " << l.q_max
-                      << "))";
-                    return s.str();
-                  });
+  auto limb =
+      py::class_<LimbParams<double>>(
+          m, "Limb", "One limb (rod + actuator), notation of Mauze et al. 2021 Fig. 3.")
+          .def(py::init<>())
+          .def_property(
+              "A", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.A; },
+              [](LimbParams<double>& l, const py::object& v) {
+                l.A = to_vector<2>(v, "Limb.A", "x, y in m");
+              },
+              py::return_value_policy::reference_internal,
+              "proximal clamp [x, y] in W at q = 0 (m)")
+          .def_readwrite("alpha", &LimbParams<double>::alpha,
+                         "rod tangent angle at the proximal clamp, in W (rad)")
+          .def_readwrite("gamma", &LimbParams<double>::gamma,
+                         "actuator misalignment: the clamp moves along alpha + gamma (rad)")
+          .def_property(
+              "B", [](LimbParams<double>& l) -> Eigen::Vector2d& { return l.B; },
+              [](LimbParams<double>& l, const py::object& v) {
+                l.B = to_vector<2>(v, "Limb.B", "x, y in m");
+              },
+              py::return_value_policy::reference_internal, "distal clamp [x, y] in P (m)")
+          .def_readwrite("beta", &LimbParams<double>::beta,
+                         "rod tangent angle at the distal clamp, in P (rad)")
+          .def_readwrite("l", &LimbParams<double>::length, "stress-free rod length (m)")
+          .def_readwrite("d", &LimbParams<double>::diameter, "rod diameter (m)")
+          .def_readwrite("E", &LimbParams<double>::young_modulus,
+                         "Young's modulus of this rod (Pa)")
+          .def_property(
+              "q_range",
+              [](const LimbParams<double>& l) { return std::make_pair(l.q_min, l.q_max); },
+              [](LimbParams<double>& l, const std::pair<double, double>& r) {
+                l.q_min = r.first;
+                l.q_max = r.second;
+              },
+              "actuator stroke (min, max) (m)")
+          .def_property(
+              "home_bow",
+              [](const LimbParams<double>& l) -> py::object {
+                if (l.home_bow == 0) return py::none();
+                return py::str(l.home_bow > 0 ? "left" : "right");
+              },
+              [](LimbParams<double>& l, const py::object& side) {
+                if (side.is_none()) {
+                  l.home_bow = 0;
+                } else if (py::isinstance<py::str>(side) && (side.cast<std::string>() == "left" ||
+                                                             side.cast<std::string>() == "right")) {
+                  l.home_bow = side.cast<std::string>() == "left" ? 1 : -1;
+                } else {
+                  throw py::value_error(
+                      "Limb.home_bow: expected 'left', 'right' or None, "
+                      "got " +
+                      py::repr(side).cast<std::string>());
+                }
+              },
+              "the side of the line between its clamps the rod bows to at home, 'left' "
+              "or 'right' (which home a pre-stressed robot, n >= 4, is in), or None")
+          .def_property_readonly("EI", &LimbParams<double>::bending_stiffness,
+                                 "bending stiffness E pi d^4 / 64 (N m^2)")
+          .def("__repr__", [](const LimbParams<double>& l) {
+            std::ostringstream s;
+            s.precision(9);
+            s << "Limb(A=[" << l.A.x() << ", " << l.A.y() << "], alpha=" << l.alpha
+              << ", gamma=" << l.gamma << ", B=[" << l.B.x() << ", " << l.B.y()
+              << "], beta=" << l.beta << ", l=" << l.length << ", d=" << l.diameter
+              << ", E=" << l.young_modulus << ", q_range=(" << l.q_min << ", " << l.q_max << ")"
+              << (l.home_bow == 0  ? ""
+                  : l.home_bow > 0 ? ", home_bow='left'"
+                                   : ", home_bow='right'")
+              << ")";
+            return s.str();
+          });
   def_value_semantics(limb);
 
   auto extrinsics =

@@ -104,3 +104,46 @@ def test_limbs_assignment_checks_count(robot):
     two = robot.copy()
     two.limbs = robot.limbs[:2]
     assert two.num_limbs == 2
+
+
+def _pre_stressed_robot(n=4):
+    """The default limb design n times, 360/n degrees apart (tests/random_robots.hpp's
+    regular_robot), rods 1 and n - 1 300 um and 200 um longer: bowed, pre-stressed, at home."""
+    base = pcr.Robot.default()
+    design = base.limbs[0]
+    r_a = float(np.hypot(*design.A))
+    turn = design.alpha - math.atan2(design.A[1], design.A[0])
+    limbs = []
+    for i in range(n):
+        phi = -math.pi / 2 + 2 * math.pi * i / n
+        limb = design.replace()
+        limb.A = (r_a * math.cos(phi), r_a * math.sin(phi))
+        limb.alpha = phi + turn
+        limb.B = limb.A + design.l * np.array([math.cos(limb.alpha), math.sin(limb.alpha)])
+        limb.beta = limb.alpha
+        limbs.append(limb)
+    limbs[1].l += 300e-6
+    limbs[n - 1].l += 200e-6
+    robot = base.copy()
+    robot.uncertainty = None
+    robot.limbs = limbs
+    return robot
+
+
+def test_home_bow_says_which_home_a_pre_stressed_robot_is_in(tmp_path):
+    robot = _pre_stressed_robot()
+    assert all(limb.home_bow is None for limb in robot.limbs)
+    unsaid = robot.home().pose.to_array()
+    left = robot.copy()
+    left.limbs = [limb.replace(home_bow="left") for limb in robot.limbs]
+    home = left.home().pose.to_array()
+    assert np.hypot(*(home[:2] - unsaid[:2])) > 1e-6  # another home
+    for pose in (unsaid, home):
+        homed = robot.with_home_at(pcr.Pose(*pose))
+        assert homed.home().pose.to_array() == pytest.approx(pose, abs=1e-12)
+    # Kept by the file, copies and pickles; anything but 'left', 'right' or None is refused.
+    left.save(tmp_path / "left.json")
+    assert [limb.home_bow for limb in pcr.Robot.load(tmp_path / "left.json").limbs] == ["left"] * 4
+    assert [limb.home_bow for limb in pickle.loads(pickle.dumps(left)).limbs] == ["left"] * 4
+    with pytest.raises(ValueError, match="home_bow.*'up'"):
+        left.limbs[0].home_bow = "up"

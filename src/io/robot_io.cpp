@@ -244,7 +244,8 @@ class Reader {
     for (std::size_t i = 0; i < limbs.size(); ++i) {
       const std::string path = index("limbs", i);
       const Json& l = limbs[i];
-      check_object(l, path, {"A", "alpha", "gamma", "B", "beta", "l", "d", "q_range", "E"});
+      check_object(l, path,
+                   {"A", "alpha", "gamma", "B", "beta", "l", "d", "q_range", "E", "home_bow"});
       LimbParams<double>& limb = out.params.limb(static_cast<int>(i));
       limb.A = position(required(l, path, "A"), join(path, "A"));
       limb.alpha = angle(required(l, path, "alpha"), join(path, "alpha"));
@@ -264,6 +265,13 @@ class Reader {
       if (q(0) > q(1)) fail(join(path, "q_range"), "min > max", range);
       limb.q_min = q(0);
       limb.q_max = q(1);
+      if (l.contains("home_bow")) {
+        const Json& bow = l["home_bow"];
+        if (bow != "left" && bow != "right") {
+          fail(join(path, "home_bow"), "expected \"left\" or \"right\"", bow);
+        }
+        limb.home_bow = bow == "left" ? 1 : -1;
+      }
     }
 
     if (root.contains("extrinsics")) {
@@ -495,6 +503,7 @@ std::string robot_to_json(const RobotDescription& robot) {
     l["d"] = limb.diameter;
     l["q_range"] = Ordered::array({limb.q_min, limb.q_max});
     if (!same_bits(limb.young_modulus, robot.young_modulus)) l["E"] = limb.young_modulus;
+    if (limb.home_bow != 0) l["home_bow"] = limb.home_bow > 0 ? "left" : "right";
     limbs.push_back(l);
   }
   root["limbs"] = limbs;

@@ -319,6 +319,31 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot, const Sol
   return home;
 }
 
+inline bool choose_home(const RobotParams<double>& robot, const Pose2<double>& measured,
+                        RobotParams<double>& out, const SolverOptions& options,
+                        const PlatformLoad<double>& load) {
+  const int n = robot.num_limbs;
+  double mean_length = 0;
+  for (int i = 0; i < n; ++i) mean_length += robot.limb(i).length / n;
+  double best = HUGE_VAL;
+  RobotParams<double> trial = robot;
+  // The robot saying nothing first (a tie keeps it), then every pattern of sides (n >= 4).
+  for (int pattern = -1; pattern < (n >= 4 ? (1 << n) : 0); ++pattern) {
+    for (int i = 0; i < n; ++i) {
+      trial.limb(i).home_bow = pattern < 0 ? 0 : ((pattern >> i) & 1 ? 1 : -1);
+    }
+    const ForwardSolution home = home_solution(trial, options, load);
+    if (!home.summary.converged()) continue;
+    const double distance = std::hypot(home.pose.x - measured.x, home.pose.y - measured.y) +
+                            mean_length * std::abs(wrap_angle(home.pose.theta - measured.theta));
+    if (distance < best - 1e-9) {
+      best = distance;
+      out = trial;
+    }
+  }
+  return best < HUGE_VAL;
+}
+
 namespace internal {
 
 /// A cold solve: the home solution (no IK factorisation, and a stability the solution checks for

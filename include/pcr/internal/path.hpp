@@ -340,9 +340,10 @@ inline constexpr double kVariantBow = 0.2;
 /// that balance on the platform and deform nothing), so the Jacobian there is singular and the
 /// robot's configurations branch off: each rod bows to one side or the other. The branch taken is
 /// the one connected to a variant of the robot whose solution is known: every rod i a circular arc
-/// turning by bow (1 + i / 10) (bow > 0: to its left, counterclockwise, seen from its proximal
-/// clamp; unequal, so that the variant has none of the robot's symmetry, whose symmetric
-/// bifurcations the path would otherwise meet),
+/// turning by bow (1 + i / 10) s_i (bow > 0: to its left, counterclockwise, seen from its proximal
+/// clamp, which puts the arc's middle to the right of its chord; s_i = -1 for a rod said to bow
+/// to its left at home, LimbParams::home_bow, else 1; unequal, so that the variant has none of
+/// the robot's symmetry, whose symmetric bifurcations the path would otherwise meet),
 /// the platform at the rigid fit of the straight rods' tips onto the distal clamps, the variant's
 /// distal clamps where the arcs end, and a platform moment balancing the rods' moments. From that
 /// exact solution (n = 0, m = EI kappa) the distal clamps, their angles and the load move to the
@@ -378,7 +379,8 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
   start.pose = Pose2<double>{origin.x(), origin.y(), theta};
   for (int i = 0; i < n; ++i) {
     LimbParams<double>& limb = variant.limb(i);
-    const double turn = bow * (1.0 + 0.1 * i), kappa = turn / limb.length;
+    const double side = limb.home_bow > 0 ? -1.0 : 1.0;  // an arc turning left bulges right
+    const double turn = side * bow * (1.0 + 0.1 * i), kappa = turn / limb.length;
     const Vector2<double> a = limb.proximal_position(u(i));
     const Vector2<double> end =
         a + Vector2<double>(std::sin(limb.alpha + turn) - std::sin(limb.alpha),
@@ -504,17 +506,28 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
   return SolveStatus::kMaxIterations;
 }
 
+/// Whether the robot says which home it is in (LimbParams::home_bow on some rod).
+inline bool home_bows_said(const RobotParams<double>& robot) {
+  for (int i = 0; i < robot.num_limbs; ++i) {
+    if (robot.limb(i).home_bow != 0) return true;
+  }
+  return false;
+}
+
 /// bowed_variant_homotopy with the rods bowed to their left, then, if that path fails, to their
 /// right; then the same with twice and half the bow (the documented order of the branches tried).
-/// Next to a bifurcation (rods that are straight at home, moved a few um) the path from one bow
-/// can wander off where another reaches the robot.
+/// A robot that says which home it is in (home_bows_said) keeps its rods' sides, with the three
+/// bows. Next to a bifurcation (rods that are straight at home, moved a few um) the path from one
+/// bow can wander off where another reaches the robot.
 inline SolveStatus solve_from_bowed_variant(const RobotParams<double>& robot,
                                             const PlatformLoad<double>& load,
                                             const ShootingVector& u, const SolverOptions& options,
                                             SolverSummary& summary, ShootingVector& z) {
   SolveStatus status = SolveStatus::kMaxIterations;
+  const bool said = home_bows_said(robot);
   for (const double bow : {kVariantBow, -kVariantBow, 2 * kVariantBow, -2 * kVariantBow,
                            kVariantBow / 2, -kVariantBow / 2}) {
+    if (said && bow < 0) continue;
     status = bowed_variant_homotopy(robot, load, u, bow, options, summary, z);
     if (status == SolveStatus::kConverged) break;
   }
