@@ -8,7 +8,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iterator>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -445,9 +444,9 @@ ParameterCovariance parse_parameter_covariance(const std::string& json_text,
 }
 
 ParameterCovariance read_parameter_covariance(const std::string& report_path, int num_limbs) {
-  std::ifstream in = open_input_file(report_path);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return parse_parameter_covariance(text, report_path, num_limbs);
+  return parse_parameter_covariance(
+      read_input_file(report_path, kMaxJsonFileBytes, "a calibration report"), report_path,
+      num_limbs);
 }
 
 }  // namespace pcr

@@ -1,7 +1,5 @@
 // The calibration stages file (documented in the README): {"stages": [...]} or the bare list.
 
-#include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -15,8 +13,7 @@ namespace pcr {
 using nlohmann::json;
 
 std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
-  std::ifstream in = open_input_file(path);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string text = read_input_file(path, kMaxJsonFileBytes, "a calibration stages file");
   check_json_nesting(text, path);
   json j;
   try {
