@@ -82,11 +82,13 @@ std::optional<ForwardSolution> nearest_other_equilibrium(
 /// kMismatchFactor times nearer another equilibrium at the same joints (nearest_other_equilibrium,
 /// with the rows' readings, solved once a row needs them), was measured on that one: the robot
 /// came to it another way than the one predicted. Per row, that equilibrium or none (also for a
-/// row without a converged prediction, or a null one).
+/// row without a converged prediction, or a null one). `predicted_reading`: the mode in which
+/// `predicted` is itself the reading of `fk` (that reading is not solved again: it gives each row
+/// its prediction, which is not another equilibrium), or none.
 std::vector<std::optional<ForwardSolution>> equilibria_measured_instead(
     const RobotParams<double>& robot, const std::vector<CalibrationSample>& data,
     const std::vector<const ForwardSolution*>& predicted, const SolverOptions& fk,
-    const PlatformLoad<double>& load) {
+    const PlatformLoad<double>& load, std::optional<SequenceMode> predicted_reading) {
   std::vector<std::optional<ForwardSolution>> out(data.size());
   std::vector<double> errors(data.size(), kNaN), finite;
   for (std::size_t j = 0; j < data.size(); ++j) {
@@ -103,6 +105,7 @@ std::vector<std::optional<ForwardSolution>> equilibria_measured_instead(
     if (!(errors[j] > kMismatchFactor * median)) continue;
     if (readings.empty()) {
       for (const auto& [options, mode] : dataset_readings(fk)) {
+        if (mode == predicted_reading && options.through_folds == fk.through_folds) continue;
         readings.push_back(solve_rows(robot, data, options, mode, load));
       }
     }
@@ -654,7 +657,7 @@ class Identification {
       if (caches_[j].valid && !lost_[j]) predicted[j] = &caches_[j].solution;
     }
     const std::vector<std::optional<ForwardSolution>> measured =
-        equilibria_measured_instead(robot(), data_, predicted, options_.fk, load());
+        equilibria_measured_instead(robot(), data_, predicted, options_.fk, load(), std::nullopt);
     std::vector<std::string> moved;
     for (std::size_t j = 0; j < data_.size(); ++j) {
       if (!measured[j]) continue;
@@ -1632,7 +1635,7 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
   std::vector<const ForwardSolution*> predicted;
   for (const ForwardSolution& s : solutions) predicted.push_back(&s);
   const std::vector<std::optional<ForwardSolution>> other =
-      equilibria_measured_instead(robot, data, predicted, fk, load);
+      equilibria_measured_instead(robot, data, predicted, fk, load, order);
   for (std::size_t j = 0; j < data.size(); ++j) {
     if (!other[j]) continue;
     errors.branch_mismatch[j] = true;
