@@ -58,10 +58,23 @@ def test_virtual_robot_measures_fk_of_its_truth(robot):
 
 
 def test_measure_dataset_starts_from_home():
-    # A tour after which the truth of seed 6 holds the last row on another equilibrium than the
-    # one connected to home (tests/test_calibration.cpp, ARowTheRobotReachedOnAnotherBranch...).
-    v = pcr.VirtualRobot(pcr.Robot.default(), seed=6, noise_position=0.0, noise_angle=0.0)
+    # A tour after which the truth of seed 6 reaches the last row on another equilibrium than the
+    # one connected to home (tests/test_calibration.cpp, ARowTheRobotReachedOnAnotherBranch...),
+    # past the point where it stops being stable: the virtual robot does not measure it, and
+    # measures the next row from home.
     tour = np.array([[3.6e-3, 1.5e-3, -10.2e-3], [6.0e-3, 1.5e-3, -1.6e-3]])
+    v = pcr.VirtualRobot(pcr.Robot.default(), seed=6, noise_position=0.0, noise_angle=0.0)
+    m = v.measure(tour)
+    assert m["ok"].tolist() == [True, False] and m["status"][1] == "unstable"
+    home_again = v.measure(tour[1])
+    assert home_again["ok"]
+    assert home_again["platform"].to_array() == pytest.approx(
+        v.truth.forward(tour[1]).pose.to_array(), abs=1e-12)
+    # Held there (the stability check off, as a guided robot would be):
+    unchecked = pcr.SolverOptions()
+    unchecked.check_stability = False
+    v = pcr.VirtualRobot(pcr.Robot.default(), seed=6, noise_position=0.0, noise_angle=0.0,
+                         options=unchecked)
     moved = v.measure(tour)["platform"]
     cold = v.truth.forward(tour[1]).pose.to_array()
     assert np.hypot(*(moved[1][:2] - cold[:2])) > 1e-3  # the setting: the tour snapped
