@@ -306,7 +306,7 @@ def test_the_summary_gives_the_tables_headline(small):
     assert float(cells[2]) == pytest.approx(column.median() * 1e6, rel=1e-3)
     assert float(cells[3]) == pytest.approx(column.max() * 1e6, rel=1e-3)
     unmeasured = int(table["configurations.unreachable"].sum())
-    assert f"did not measure (no equilibrium there): {unmeasured} in" in r.stdout
+    assert f"did not measure (no stable equilibrium there): {unmeasured} in" in r.stdout
 
 
 def test_a_study_without_finished_trials_is_not_plotted(tmp_path):

@@ -45,8 +45,8 @@ def summary(directory):
                      f"{r['branch_mismatches']} ({r['trials_with_mismatches']}) |")
     ok = table[table["failure"].isna()]
     unreachable = ok["configurations.unreachable"]
-    lines += ["", f"configurations the virtual robots did not measure (no equilibrium there): "
-              f"{int(unreachable.sum())} in {int((unreachable > 0).sum())} trials"]
+    lines += ["", "configurations the virtual robots did not measure (no stable equilibrium "
+              f"there): {int(unreachable.sum())} in {int((unreachable > 0).sum())} trials"]
     if "calibration.load_identified" in ok and ok["calibration.load_identified"].notna().any():
         lines.append(f"load identified in {int((ok['calibration.load_identified'] > 0).sum())} "
                      f"of {len(ok)} trials")
