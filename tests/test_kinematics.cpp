@@ -231,6 +231,40 @@ TEST(Kinematics, InverseReportsJointsOutsideTheStroke) {
   EXPECT_NEAR(ik.q(0), 0.002, 1e-12);
 }
 
+// The stroke is decided by the solver: every way of solving FK at joints outside it says
+// kOutOfRange and still gives the equilibrium, the one a robot with a wider stroke reaches there.
+TEST(Kinematics, ForwardReportsJointsOutsideTheStroke) {
+  const RobotParams<double> wide = femto_3pf();
+  RobotParams<double> robot = wide;
+  for (int i = 0; i < 3; ++i) robot.limb(i).q_max = 0.001;
+  const JointVector inside = joints({0.0005, -0.002, 0.001});
+  const JointVector outside = joints({0.002, -0.002, 0.001});
+  ASSERT_TRUE(within_stroke(robot, inside));
+  ASSERT_FALSE(within_stroke(robot, outside));
+  const ForwardSolution reference = forward_kinematics(wide, outside);
+  ASSERT_TRUE(reference.summary.converged()) << to_string(reference.summary.status);
+
+  const ForwardSolution cold = forward_kinematics(robot, outside);
+  const ForwardSolution from_inside = forward_kinematics(robot, inside);
+  ASSERT_TRUE(from_inside.summary.converged()) << to_string(from_inside.summary.status);
+  const ForwardSolution warm = forward_kinematics(robot, outside, from_inside);
+  const ForwardSolution folds = forward_kinematics_through_folds(robot, outside, from_inside);
+  ForwardSequence path(robot, SolverOptions(), PlatformLoad<double>(), SequenceMode::kPath);
+  path.solve(inside);
+  const ForwardSolution in_path = path.solve(outside);
+  ForwardSequence rows(robot);
+  const ForwardSolution in_rows = rows.solve(outside);
+  for (const ForwardSolution* s : {&cold, &warm, &folds, &in_path, &in_rows}) {
+    EXPECT_EQ(s->summary.status, SolveStatus::kOutOfRange) << to_string(s->summary.status);
+    EXPECT_TRUE(is_equilibrium(s->summary));
+    EXPECT_NEAR(s->pose.x, reference.pose.x, 1e-9);
+    EXPECT_NEAR(s->pose.y, reference.pose.y, 1e-9);
+    EXPECT_NEAR(s->pose.theta, reference.pose.theta, 1e-6);
+  }
+  // It warm-starts the next solve, back inside the stroke.
+  EXPECT_TRUE(path.solve(inside).summary.converged());
+}
+
 RobotParams<double> two_limb_robot() {
   RobotParams<double> robot = femto_3pf();
   robot.num_limbs = 2;

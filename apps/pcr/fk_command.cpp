@@ -36,12 +36,7 @@ void run_fk(const FkArguments& args) {
     JointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
     const ForwardSolution& solution = sequence.solve(q);
-    SolverSummary s = solution.summary;
-    // As IK does: an equilibrium outside the stroke is reported, not passed as converged.
-    for (int i = 0; i < n && s.converged(); ++i) {
-      const LimbParams<double>& limb = robot.params.limb(i);
-      if (q(i) < limb.q_min || q(i) > limb.q_max) s.status = SolveStatus::kOutOfRange;
-    }
+    const SolverSummary& s = solution.summary;
     const bool valid = usable_as_warm_start(s);  // a valid equilibrium, maybe out of range
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (int i = 0; i < n; ++i) out.add(q(i));

@@ -53,18 +53,6 @@ void run_sample(const SampleArguments& args) {
                        std::to_string(2 * n) + " (min1,max1,...), got " +
                        std::to_string(args.box.size()));
     }
-    for (int i = 0; i < n; ++i) {
-      const LimbParams<double>& limb = robot.params.limb(i);
-      if (!(options.box_min(i) < options.box_max(i)) || options.box_min(i) < limb.q_min ||
-          options.box_max(i) > limb.q_max) {
-        throw InputError("--box: joint " + std::to_string(i + 1) + ": [" +
-                         format_double(options.box_min(i)) + ", " +
-                         format_double(options.box_max(i)) +
-                         "] m is not a sub-interval of its "
-                         "stroke [" +
-                         format_double(limb.q_min) + ", " + format_double(limb.q_max) + "] m");
-      }
-    }
   }
   const ConfigurationSets sets = sample_configurations(
       robot, options, args.validation_output.empty() ? 0 : args.validation_count);

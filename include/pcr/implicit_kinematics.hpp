@@ -22,7 +22,7 @@ struct LinearisedForward {
   LinearisedForward(const RobotParams<double>& robot, const PlatformLoad<double>& load,
                     const ForwardSolution& solution, const SolverOptions& options)
       : problem(ShootingProblem::Kind::kForward, robot, load, options) {
-    if (!solution.summary.converged()) return;
+    if (!is_equilibrium(solution.summary)) return;
     problem.set_input(solution.q);
     problem.set_rod_steps(solution.summary.rod_steps);
     point.pose = solution.pose;

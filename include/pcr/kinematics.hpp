@@ -64,9 +64,9 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot,
 /// `robot` saying which of its homes it is in (LimbParams::home_bow), from its home pose
 /// `measured` (^W T_P at q = 0): of the homes the robot reaches saying nothing and saying each
 /// pattern of sides (2^n of them for n >= 4; a pre-stressed robot has several homes), the one
-/// whose pose lies nearest, in |dp| + l_mean |dtheta| (1 nm ties keep the earlier: a robot in
-/// the home it reaches unsaid comes back as it is). The home solve of `out` reaches that home.
-/// False when no home solves.
+/// whose pose lies nearest, in pose_distance with weight l_mean (1 nm ties keep the earlier: a
+/// robot in the home it reaches unsaid comes back as it is). The home solve of `out` reaches that
+/// home. False when no home solves.
 inline bool choose_home(const RobotParams<double>& robot, const Pose2<double>& measured,
                         RobotParams<double>& out, const SolverOptions& options = SolverOptions(),
                         const PlatformLoad<double>& load = PlatformLoad<double>());
@@ -120,12 +120,17 @@ inline InverseSolution as_inverse_warm_start(const ForwardSolution& fk);
 /// a forward warm start or pcr::predicted_accuracy. The IK factorisation is left behind.
 inline ForwardSolution as_forward_solution(const InverseSolution& ik);
 
-/// Whether a solution can warm-start the next solve: a converged one, or (IK) a valid equilibrium
+/// Whether every joint of q lies within its actuator's stroke (LimbParams::within_stroke). FK and
+/// IK report a converged solution outside it as SolveStatus::kOutOfRange, so every caller (the
+/// CLI, Python, the calibration, the sampler) gives the same verdict.
+inline bool within_stroke(const RobotParams<double>& robot, const JointVector& q);
+
+/// Whether a solution can warm-start the next solve: a converged one, or a valid equilibrium
 /// whose joints lie outside their stroke.
 inline bool usable_as_warm_start(const SolverSummary& summary);
 
-/// Whether a solution is an equilibrium of the robot: usable as a warm start, or IK's kUnstable
-/// (an equilibrium that would not hold).
+/// Whether a solution is an equilibrium of the robot, within the stroke or not: usable as a warm
+/// start, or IK's kUnstable (an equilibrium that would not hold).
 inline bool is_equilibrium(const SolverSummary& summary);
 
 /// One input of a sequence (see SequenceSolver): warm-started from `warm` when there is one (may

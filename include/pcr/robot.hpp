@@ -34,6 +34,10 @@ struct LimbParams {
   /// choose_home sets them from a measured home pose. A robot whose home is unique ignores it.
   int home_bow{0};
 
+  /// Whether the actuator reaches joint value q: q_min <= q <= q_max. The one stroke test of pcr:
+  /// the solvers report a solution outside it as SolveStatus::kOutOfRange.
+  bool within_stroke(double q) const { return q >= q_min && q <= q_max; }
+
   T bending_stiffness() const { return pcr::bending_stiffness(young_modulus, diameter); }
   /// EA of the circular section (N): the kinematics takes the rods as inextensible, the stability
   /// check (pcr/stability.hpp) needs their axial compliance.

@@ -58,4 +58,12 @@ T wrap_angle(const T& angle) {
   return atan2(sin(angle), cos(angle));
 }
 
+/// The distance between two poses of Eq. 6: |p_a - p_b| + w |theta_a - theta_b| (m; the angle
+/// wrapped), with w the orientation weight (m/rad).
+inline double pose_distance(const Pose2<double>& a, const Pose2<double>& b,
+                            double orientation_weight) {
+  return std::hypot(a.x - b.x, a.y - b.y) +
+         orientation_weight * std::abs(wrap_angle(a.theta - b.theta));
+}
+
 }  // namespace pcr

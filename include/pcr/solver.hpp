@@ -12,7 +12,9 @@ enum class SolveStatus {
   kBifurcation,    ///< the path starts on, or meets, a bifurcation: solutions exist on other
                    ///< branches (kSingular: a fold, no solution ahead on this branch)
   kNonFinite,      ///< the residual became NaN or infinite
-  kOutOfRange,     ///< IK converged, but a joint value lies outside its stroke
+  kOutOfRange,     ///< converged, but a joint value lies outside its stroke (within_stroke):
+                   ///< an equilibrium of the model the actuators cannot reach, still given
+                   ///< (is_equilibrium) for what needs it (a warm start, a fit of its data)
   kUnstable,       ///< IK converged on an unstable equilibrium, and found no stable one at the
                    ///< pose (SolverOptions::stable_inverse)
   kUnsupported,    ///< the request is not a square problem (IK with n > 3 limbs)

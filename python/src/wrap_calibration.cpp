@@ -364,18 +364,8 @@ JointVector sensitivity_centre(const RobotParams<double>& robot, double step,
                                const py::object& centre) {
   checked_number(step, "step", "m", kMinSensitivityStep, kMaxSensitivityStep);
   if (centre.is_none()) return JointVector();
-  const int n = robot.num_limbs;
-  const JointVector c = to_vector<Eigen::Dynamic>(centre, "centre", "joint values in m", n);
-  for (int i = 0; i < n; ++i) {
-    const LimbParams<double>& limb = robot.limb(i);
-    if (c(i) < limb.q_min || c(i) > limb.q_max) {
-      std::ostringstream s;
-      s << "centre: joint " << i << " at " << c(i) << " m is outside its stroke q_range ["
-        << limb.q_min << ", " << limb.q_max << "] m";
-      throw std::invalid_argument(s.str());
-    }
-  }
-  return c;
+  // The stroke is checked by the library (sensitivity_configurations).
+  return to_vector<Eigen::Dynamic>(centre, "centre", "joint values in m", robot.num_limbs);
 }
 
 }  // namespace

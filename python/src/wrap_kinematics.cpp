@@ -456,8 +456,9 @@ void wrap_kinematics(py::module_& m) {
            "BatchResult, as `pcr fk` solves rows: each on its own, in any order, on the branch "
            "connected to home; with path=True, a path the robot follows in this order, each row "
            "continued from the previous converged one (a failed one retried from home; through "
-           "folds with options.through_folds). force (fx, fy) in N and moment in N m act on the "
-           "platform at P's origin, in W. Releases the GIL.")
+           "folds with options.through_folds). Joints outside q_range give status out_of_range "
+           "(converged False, the pose of that equilibrium given). force (fx, fy) in N and moment "
+           "in N m act on the platform at P's origin, in W. Releases the GIL.")
       .def("inverse", &inverse, py::arg("pose"), py::kw_only(), py::arg("warm_start") = py::none(),
            py::arg("shapes") = false, py::arg("force") = no_force(), py::arg("moment") = 0.0,
            py::arg("options") = py::none(), py::arg("path") = false,

@@ -183,8 +183,8 @@ def test_sensitivity_arguments_are_checked_up_front(robot):
            pcr.sensitivity, robot, centre=[NAN, 0, 0])
     raises(ValueError, "centre: expected 3 finite numbers (joint values in m), got 2 numbers "
            "(0, 0)", pcr.sensitivity, robot, centre=[0, 0])
-    raises(ValueError, "centre: joint 1 at 0.02 m is outside its stroke q_range [-0.0105, "
-           "0.0105] m", pcr.sensitivity, robot, centre=[0, 0.02, 0])
+    raises(ValueError, "sensitivity: centre: joint q2 at 0.02 m is outside its stroke q_range "
+           "[-0.0105, 0.0105] m", pcr.sensitivity, robot, centre=[0, 0.02, 0])
     raises(ValueError, "step: expected a number from 1e-06 to 0.01 (m), got nan",
            pcr.sensitivity, robot, step=NAN)
     raises(ValueError, "step: expected a number from 1e-06 to 0.01 (m), got 1e-300",

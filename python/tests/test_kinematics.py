@@ -136,3 +136,47 @@ def test_bad_inputs_raise(robot):
     six.limbs = list(robot.limbs) * 2
     with pytest.raises(ValueError, match="more than 3 limbs"):
         six.inverse([0, 0, 0])
+
+
+def test_one_stroke_verdict_for_every_caller(cli, robot):
+    """The solver decides the stroke: `pcr fk`, Robot.forward (rows and single), the sampler's
+    admissible_configuration and the calibration's warning give the same verdict, row by row, on
+    rows drawn at random inside and just outside the strokes, in no order."""
+    rng = np.random.default_rng(29)
+    lo = np.array([limb.q_range[0] for limb in robot.limbs])
+    hi = np.array([limb.q_range[1] for limb in robot.limbs])
+    q = rng.uniform(lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo), size=(60, 3))
+    outside = ((q < lo) | (q > hi)).any(axis=1)
+
+    rows = run_cli(cli, "fk", q, ["q1", "q2", "q3"])
+    cli_status = np.array([row["status"] for row in rows])
+    batch = robot.forward(q)
+    assert list(batch.status) == list(cli_status)
+    assert [row["converged"] for row in rows] == ["1" if c else "0" for c in batch.converged]
+    # Where the robot has an equilibrium (not everywhere in the box: some rows lie past a fold),
+    # its status is the stroke's verdict.
+    equilibrium = np.isin(cli_status, ["converged", "out_of_range"])
+    assert (equilibrium & outside).sum() >= 5 and (equilibrium & ~outside).sum() >= 10
+    expected = np.where(outside, "out_of_range", "converged")
+    assert list(cli_status[equilibrium]) == list(expected[equilibrium])
+    assert list(batch.converged) == list(equilibrium & ~outside)
+    for k in rng.permutation(len(q))[:8]:
+        single = robot.forward(q[k])
+        assert single.status == cli_status[k]
+        if equilibrium[k]:
+            assert single.pose.to_array() == pytest.approx(batch.pose[k], abs=1e-12)
+    for k in np.flatnonzero(equilibrium & outside):  # the sampler never admits them
+        assert not pcr.admissible_configuration(robot, q[k])
+
+    # The calibration fits every row with an equilibrium and warns of those outside the stroke.
+    fit = np.flatnonzero(equilibrium)
+    measured = pcr.VirtualRobot(robot, seed=3, noise_position=0.0,
+                                noise_angle=0.0).measure_dataset(q[fit])
+    fit = fit[measured["ok"]]
+    _, result = pcr.calibrate(robot, q[fit], measured["measured"][measured["ok"]],
+                              stages=[{"name": "ext", "free": ["extrinsics"]}],
+                              compute_covariance=False)
+    warning = [w for w in result.warnings if "outside the stroke" in w]
+    assert len(warning) == 1
+    assert warning[0].startswith(f"{outside[fit].sum()} rows have joints outside the stroke")
+    assert result.dropped == []

@@ -59,10 +59,8 @@ std::optional<ForwardSolution> nearest_other_equilibrium(
   std::optional<ForwardSolution> best;
   double best_distance = HUGE_VAL;
   const auto consider = [&](const ForwardSolution& s) {
-    if (!s.summary.converged()) return;
-    const double from_at =
-        std::hypot(s.pose.x - at.pose.x, s.pose.y - at.pose.y) +
-        kDefaultOrientationWeight * std::abs(wrap_angle(s.pose.theta - at.pose.theta));
+    if (!is_equilibrium(s.summary)) return;
+    const double from_at = pose_distance(s.pose, at.pose, kDefaultOrientationWeight);
     if (!(from_at > kDistinctEquilibrium)) return;  // `at` again
     const double distance = std::hypot(s.pose.x - target.x, s.pose.y - target.y);
     if (distance < best_distance) {
@@ -92,7 +90,7 @@ std::vector<std::optional<ForwardSolution>> equilibria_measured_instead(
   std::vector<std::optional<ForwardSolution>> out(data.size());
   std::vector<double> errors(data.size(), kNaN), finite;
   for (std::size_t j = 0; j < data.size(); ++j) {
-    if (predicted[j] == nullptr || !predicted[j]->summary.converged()) continue;
+    if (predicted[j] == nullptr || !is_equilibrium(predicted[j]->summary)) continue;
     const Pose2<double> measured = robot.extrinsics.platform_from_measurement(data[j].measured);
     errors[j] = std::hypot(predicted[j]->pose.x - measured.x, predicted[j]->pose.y - measured.y);
     if (std::isfinite(errors[j])) finite.push_back(errors[j]);
@@ -166,7 +164,7 @@ std::array<double, kLoadParameters> load_scales(const RobotParams<double>& robot
   for (const CalibrationSample& row : rows) {
     const ForwardSolution& solution = sequence.solve(row.q);
     double dpose[3 * kMaxParameters], dload[3 * kLoadParameters];
-    if (!solution.summary.converged() ||
+    if (!is_equilibrium(solution.summary) ||
         !platform_pose_jacobian(robot, PlatformLoad<double>(), solution, options.fk, dpose,
                                 dload)) {
       continue;
@@ -369,20 +367,20 @@ std::vector<CalibrationSample> reachable_rows(const RobotParams<double>& nominal
   ForwardSequence sequence(nominal, options.fk);
   for (std::size_t j = 0; j < data.size(); ++j) {
     const JointVector& q = data[j].q;
-    bool in_stroke = true;
-    for (int i = 0; i < nominal.num_limbs; ++i) {
+    const bool in_stroke = within_stroke(nominal, q);
+    std::string joints_outside;  // one entry per row
+    for (int i = 0; i < nominal.num_limbs && !in_stroke; ++i) {
       const auto& limb = nominal.limb(i);
-      if (limb.q_min < limb.q_max && (q[i] < limb.q_min || q[i] > limb.q_max)) {
-        in_stroke = false;
-        outside.push_back(origin_of(data, j) + ": q" + std::to_string(i + 1) + " = " +
-                          format_number(q[i]) + " m outside [" + format_number(limb.q_min) + ", " +
-                          format_number(limb.q_max) + "]");
-      }
+      if (limb.within_stroke(q[i])) continue;
+      joints_outside += (joints_outside.empty() ? "" : ", ") + std::string("q") +
+                        std::to_string(i + 1) + " = " + format_number(q[i]) + " m outside [" +
+                        format_number(limb.q_min) + ", " + format_number(limb.q_max) + "]";
     }
+    if (!in_stroke) outside.push_back(origin_of(data, j) + ": " + joints_outside);
     const ForwardSolution& solution = sequence.solve(q);
     const SolveStatus status = solution.summary.status;
     const std::string row = origin_of(data, j) + " (" + joints_text(q) + "): " + to_string(status);
-    if (status == SolveStatus::kConverged) {
+    if (is_equilibrium(solution.summary)) {
       reachable.push_back(data[j]);
       reachable.back().origin = origin_of(data, j);  // its place in `data`, not in `reachable`
       poses->push_back(solution.pose);
@@ -629,13 +627,11 @@ class Identification {
       const std::vector<ForwardSolution> reached =
           solve_rows(robot_now, data_, options, mode, load());
       for (std::size_t j = 0; j < data_.size(); ++j) {
-        if (!reached[j].summary.converged()) continue;
+        if (!is_equilibrium(reached[j].summary)) continue;
         const Pose2<double> measured =
             robot_now.extrinsics.platform_from_measurement(data_[j].measured);
         const double distance =
-            std::hypot(reached[j].pose.x - measured.x, reached[j].pose.y - measured.y) +
-            options_.orientation_weight *
-                std::abs(wrap_angle(reached[j].pose.theta - measured.theta));
+            pose_distance(reached[j].pose, measured, options_.orientation_weight);
         if (!(distance < nearest[j])) continue;  // a tie keeps the equilibrium connected to home
         nearest[j] = distance;
         FkCache& c = caches_[j];
@@ -1623,7 +1619,7 @@ ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
   const std::vector<ForwardSolution> solutions = solve_rows(robot, data, fk, order, load);
   for (std::size_t j = 0; j < data.size(); ++j) {
     const ForwardSolution& s = solutions[j];
-    if (!s.summary.converged()) {
+    if (!is_equilibrium(s.summary)) {
       errors.e_p.push_back(kNaN);
       errors.e_theta.push_back(kNaN);
       continue;
@@ -1782,7 +1778,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
     for (std::size_t j : set_aside) {
       const ForwardSolution& s = sequence.solve(data[j].q);
       const std::string row = origin_of(data, j) + " (" + joints_text(data[j].q) + ")";
-      if (s.summary.converged()) {
+      if (is_equilibrium(s.summary)) {
         used.push_back(j);
         back.push_back(row);
       } else {

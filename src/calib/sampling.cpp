@@ -56,6 +56,14 @@ Box sampling_box(const RobotParams<double>& robot, const SamplingOptions& option
           << "] is empty or not finite";
       throw InputError(msg.str());
     }
+    const LimbParams<double>& limb = robot.limb(i);
+    if (!limb.within_stroke(box.lo(i)) || !limb.within_stroke(box.hi(i))) {
+      std::ostringstream msg;
+      msg << "sampling box: joint q" << i + 1 << " range [" << box.lo(i) << ", " << box.hi(i)
+          << "] m is not a sub-interval of its stroke q_range [" << limb.q_min << ", " << limb.q_max
+          << "] m";
+      throw InputError(msg.str());
+    }
   }
   return box;
 }

@@ -81,6 +81,15 @@ std::vector<JointVector> sensitivity_configurations(const RobotParams<double>& r
   } else {
     c = centre;
   }
+  for (int i = 0; i < n; ++i) {
+    const LimbParams<double>& limb = robot.limb(i);
+    if (!limb.within_stroke(c(i))) {
+      std::ostringstream msg;
+      msg << "sensitivity: centre: joint q" << i + 1 << " at " << c(i)
+          << " m is outside its stroke q_range [" << limb.q_min << ", " << limb.q_max << "] m";
+      throw InputError(msg.str());
+    }
+  }
   std::vector<JointVector> out;
   int total = 1;
   for (int i = 0; i < n; ++i) total *= 3;
@@ -120,7 +129,7 @@ bool platform_parameter_jacobian(const RobotParams<double>& robot, const JointVe
                                  Eigen::MatrixXd* jacobian, const PlatformLoad<double>& load,
                                  const SolverOptions& solver) {
   const ForwardSolution fk = forward_kinematics(robot, q, solver, load);
-  if (!fk.summary.converged()) return false;
+  if (!is_equilibrium(fk.summary)) return false;
   PoseParameterJacobian J;
   if (!pose_parameter_jacobian(robot, fk, &J, load, solver)) return false;
   *jacobian = J.leftCols(kLimbParameters * robot.num_limbs);

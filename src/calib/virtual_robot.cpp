@@ -127,7 +127,7 @@ VirtualMeasurement VirtualRobot::measure(const JointVector& q) {
   const RobotParams<double>& robot = truth_.params;
   const ForwardSolution& fk = sequence_.solve(q);
   m.summary = fk.summary;
-  if (!fk.summary.converged()) return m;
+  if (!is_equilibrium(fk.summary)) return m;
   if (fk.summary.stability == Stability::kUnstable) {
     // A real robot does not hold an unstable equilibrium: it snaps to another one, which no
     // statics model can say. Not measured; the robot is homed again, as a lab does after a snap.

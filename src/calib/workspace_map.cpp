@@ -14,8 +14,6 @@
 namespace pcr {
 namespace {
 
-using internal::within_stroke;
-
 /// IK at a pose from up to two warm starts (null or not usable: skipped), from home when there is
 /// none. Returns a usable solution when one of them gives it, else an equilibrium (IK's
 /// kUnstable), else the last failure.
@@ -60,7 +58,7 @@ std::array<double, 4> stroke_pose_box(const RobotParams<double>& robot, int leve
              (limb.q_max - limb.q_min) * index[static_cast<std::size_t>(i)] / (levels - 1);
     }
     const ForwardSolution& fk = sequence.solve(q);
-    if (fk.summary.converged()) {
+    if (is_equilibrium(fk.summary)) {
       box[0] = std::min(box[0], fk.pose.x);
       box[1] = std::max(box[1], fk.pose.x);
       box[2] = std::min(box[2], fk.pose.y);

@@ -352,7 +352,7 @@ class PoseMeasurementError {
     if (cache_->valid && cache_->anchored) {  // an emptied cache (valid false) solves cold
       ForwardSolution s = forward_kinematics(robot, q_, cache_->anchor, options_, load);
       cache_->newton_iterations += s.summary.iterations;
-      if (!s.summary.converged()) {
+      if (!is_equilibrium(s.summary)) {
         ++cache_->warm_start_failures;
         if (!continue_in_parameters(params, s)) {
           ++cache_->failures;
@@ -365,7 +365,7 @@ class PoseMeasurementError {
     }
     ForwardSolution s = forward_kinematics(robot, q_, options_, load);
     cache_->newton_iterations += s.summary.iterations;
-    if (!s.summary.converged()) {
+    if (!is_equilibrium(s.summary)) {
       ++cache_->failures;
       return nullptr;
     }
@@ -397,7 +397,7 @@ class PoseMeasurementError {
       const ForwardSolution s =
           forward_kinematics(with_parameters(base_, values), q_, at, step_options, load_of(values));
       cache_->newton_iterations += s.summary.iterations;
-      if (s.summary.converged()) {
+      if (is_equilibrium(s.summary)) {
         at = s;
         t = t_next;
         dt = std::min(2.0 * dt, 0.5);

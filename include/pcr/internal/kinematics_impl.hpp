@@ -16,13 +16,6 @@ inline bool valid_robot(const RobotParams<double>& robot) {
   return robot.num_limbs >= 2 && robot.num_limbs <= kMaxLimbs;
 }
 
-inline bool within_stroke(const RobotParams<double>& robot, const JointVector& q) {
-  for (int i = 0; i < robot.num_limbs; ++i) {
-    if (!(q(i) >= robot.limb(i).q_min && q(i) <= robot.limb(i).q_max)) return false;
-  }
-  return true;
-}
-
 /// The configuration at z, in a solution's fields.
 template <class Solution>
 void store_configuration(const ShootingProblem& problem, const ShootingVector& z,
@@ -83,8 +76,9 @@ inline InverseSolution refused(const Pose2<double>& pose, SolveStatus status) {
   return solution;
 }
 
-/// IK's converged joints outside the stroke: kOutOfRange.
-inline void mark_out_of_range(const RobotParams<double>& robot, InverseSolution& solution) {
+/// Converged joints outside the stroke: kOutOfRange.
+template <class Solution>
+void mark_out_of_range(const RobotParams<double>& robot, Solution& solution) {
   if (solution.summary.converged() && !within_stroke(robot, solution.q)) {
     solution.summary.status = SolveStatus::kOutOfRange;
   }
@@ -272,6 +266,7 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
   if (input != SolveStatus::kConverged) return internal::refused(q, input);
   ForwardSolution solution = internal::solve_from_warm_start(
       internal::ShootingProblem::Kind::kForward, robot, u0, u1, warm_start, options, load);
+  internal::mark_out_of_range(robot, solution);
   internal::check_stability(robot, options, solution);
   return solution;
 }
@@ -283,8 +278,10 @@ ForwardSolution forward_kinematics_through_folds(
   ShootingVector u0, u1;
   const SolveStatus input = internal::forward_path(robot, q, warm_start, u0, u1);
   if (input != SolveStatus::kConverged) return internal::refused(q, input);
-  return internal::solve_through_folds(internal::ShootingProblem::Kind::kForward, robot, u0, u1,
-                                       warm_start, options, load, visit);
+  ForwardSolution solution = internal::solve_through_folds(
+      internal::ShootingProblem::Kind::kForward, robot, u0, u1, warm_start, options, load, visit);
+  internal::mark_out_of_range(robot, solution);
+  return solution;
 }
 
 template <class Visitor>
@@ -334,8 +331,7 @@ inline bool choose_home(const RobotParams<double>& robot, const Pose2<double>& m
     }
     const ForwardSolution home = home_solution(trial, options, load);
     if (!home.summary.converged()) continue;
-    const double distance = std::hypot(home.pose.x - measured.x, home.pose.y - measured.y) +
-                            mean_length * std::abs(wrap_angle(home.pose.theta - measured.theta));
+    const double distance = pose_distance(home.pose, measured, mean_length);
     if (distance < best - 1e-9) {
       best = distance;
       out = trial;
@@ -398,6 +394,7 @@ inline ForwardSolution forward_kinematics_from_home(const RobotParams<double>& r
     }
     // Not found from the variant either: the path's own verdict stands.
     solution.summary.status = status == SolveStatus::kConverged ? status : path_status;
+    internal::mark_out_of_range(robot, solution);
     internal::check_stability(robot, options, solution);
   }
   return solution;
@@ -459,6 +456,13 @@ inline ForwardSolution as_forward_solution(const InverseSolution& ik) {
   fk.summary = ik.summary;
   if (is_equilibrium(ik.summary)) fk.summary.status = SolveStatus::kConverged;
   return fk;
+}
+
+inline bool within_stroke(const RobotParams<double>& robot, const JointVector& q) {
+  for (int i = 0; i < robot.num_limbs; ++i) {
+    if (!robot.limb(i).within_stroke(q(i))) return false;
+  }
+  return true;
 }
 
 inline bool usable_as_warm_start(const SolverSummary& summary) {
