@@ -56,7 +56,7 @@ inline ForwardSolution forward_kinematics(
 
 /// The home solution, q = 0: from the straight, unloaded guess, or for a robot whose straight
 /// guess fails (a pre-stressed robot with n >= 4 limbs) from a bowed variant of the robot (see
-/// the README, "Accuracy and branches").
+/// docs/kinematics.md, "Accuracy and branches").
 inline ForwardSolution home_solution(const RobotParams<double>& robot,
                                      const SolverOptions& options = SolverOptions(),
                                      const PlatformLoad<double>& load = PlatformLoad<double>());

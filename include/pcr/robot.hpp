@@ -27,11 +27,12 @@ struct LimbParams {
   T young_modulus{0};        ///< E (Pa)
   double q_min{0};           ///< actuator stroke, lower end (m)
   double q_max{0};           ///< actuator stroke, upper end (m)
-  /// Which home a pre-stressed robot (n >= 4, README "Accuracy and branches") is in: the side of
-  /// the line from its proximal to its distal clamp the rod bows to in the bowed variant the home
-  /// solve starts from, +1 left, -1 right, 0 not said (the solve's documented order). Two
-  /// patterns can reach the same home, and a rod nearly straight at home bows to no clear side:
-  /// choose_home sets them from a measured home pose. A robot whose home is unique ignores it.
+  /// Which home a pre-stressed robot (n >= 4, docs/kinematics.md, "Accuracy and branches") is in:
+  /// the side of the line from its proximal to its distal clamp the rod bows to in the bowed
+  /// variant the home solve starts from, +1 left, -1 right, 0 not said (the solve's documented
+  /// order). Two patterns can reach the same home, and a rod nearly straight at home bows to no
+  /// clear side: choose_home sets them from a measured home pose. A robot whose home is unique
+  /// ignores it.
   int home_bow{0};
 
   /// Whether the actuator reaches joint value q: q_min <= q <= q_max. The one stroke test of pcr:
@@ -111,9 +112,10 @@ struct RobotParams {
   }
 };
 
-/// The paper's 3-PF robot as inferred from its figures (see README, "The default robot").
-/// Limb i sits at phi_i = -90 + 120 i degrees; the rods point inwards, 20 degrees clockwise from
-/// the radial, and are straight and stress-free at q = 0, so the home pose is (0, 0, 0).
+/// The paper's 3-PF robot as inferred from its figures (see docs/kinematics.md, "The default
+/// robot"). Limb i sits at phi_i = -90 + 120 i degrees; the rods point inwards, 20 degrees
+/// clockwise from the radial, and are straight and stress-free at q = 0, so the home pose is
+/// (0, 0, 0).
 inline RobotParams<double> femto_3pf() {
   constexpr double kDeg = M_PI / 180.0;
   constexpr double kLength = 0.030;

@@ -1,6 +1,6 @@
 #pragma once
 // The `pcr-robot` JSON file format: a robot description with its uncertainty intervals.
-// Compiled in pcr::io (nlohmann_json stays private). Format documented in README.md.
+// Compiled in pcr::io (nlohmann_json stays private). Format documented in docs/formats.md.
 
 #include <Eigen/Core>
 #include <array>

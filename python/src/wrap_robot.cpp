@@ -358,7 +358,7 @@ void wrap_robot(py::module_& m) {
 
   py::class_<RobotDescription>(m, "Robot",
                                "A planar parallel continuum robot: the pcr-robot JSON description "
-                               "(README, 'File formats'). SI units.")
+                               "(docs/formats.md). SI units.")
       .def(py::init([] { return default_robot(); }), "The default robot (same as Robot.default()).")
       .def_static("default", &default_robot,
                   "The paper's 3-PF robot (femto-3pf) with the paper's uncertainty intervals.")

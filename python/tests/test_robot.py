@@ -20,7 +20,8 @@ def test_package_is_the_expected_one():
 
 
 def test_default_robot_matches_readme(robot):
-    # README "The default robot": A_i on a circle of 60 mm cos 20 deg, l = 30 mm, d = 125 um.
+    # docs/kinematics.md, "The default robot": A_i on a circle of 60 mm cos 20 deg, l = 30 mm,
+    # d = 125 um.
     assert robot.name == "femto-3pf"
     assert robot.num_limbs == 3
     for i, limb in enumerate(robot.limbs):

@@ -1,4 +1,4 @@
-// The calibration stages file (documented in the README): {"stages": [...]} or the bare list.
+// The calibration stages file (docs/formats.md): {"stages": [...]} or the bare list.
 
 #include <nlohmann/json.hpp>
 #include <string>

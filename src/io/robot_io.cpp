@@ -40,8 +40,8 @@ bool is_overflow(const Json& value) {
   return value.is_string() && value.get_ref<const std::string&>().rfind(kOverflowMarker, 0) == 0;
 }
 
-// Physical ranges of the fields (the README's format table): a lab robot fits in a 10 m room, an
-// angle needs no more than two turns, E spans soft polymers (1 MPa) to diamond (1.2 TPa), and
+// Physical ranges of the fields (docs/formats.md's field table): a lab robot fits in a 10 m room,
+// an angle needs no more than two turns, E spans soft polymers (1 MPa) to diamond (1.2 TPa), and
 // every EI = E pi d^4 / 64 they allow is a finite, normal double.
 constexpr double kMaxCoordinate = 10.0;    // m
 constexpr double kMaxAngle = 4.0 * M_PI;   // rad
@@ -98,7 +98,7 @@ class Reader {
     if (!std::isfinite(x)) fail(path, "expected a finite number", value);
     return x;
   }
-  /// A number in the field's physical range [lo, hi] (the README's format table).
+  /// A number in the field's physical range [lo, hi] (docs/formats.md's field table).
   double in_range(const Json& value, const std::string& path, double lo, double hi,
                   const char* unit) const {
     const double x = number(value, path);

@@ -319,9 +319,9 @@ CalibrationResult calibrate(const RobotDescription& nominal,
 /// Per-configuration errors of one model on one set (the paper's Figures 8 and 9): e_p (Eq. 8,
 /// m) and e_theta (Eq. 9, rad), NaN where FK failed. The rows are solved as `order` says: by
 /// default the path the experiment followed, from home in the rows' order (a dataset's row order
-/// is its measurement order, each dataset an experiment from home: see the README, "File
-/// formats"), as the robot moved; SequenceMode::kIndependent solves each from home, as the
-/// calibration's residuals do.
+/// is its measurement order, each dataset an experiment from home: see docs/calibration.md, "Row
+/// order is measurement order"), as the robot moved; SequenceMode::kIndependent solves each from
+/// home, as the calibration's residuals do.
 ///
 /// A row whose error is kMismatchFactor times the set's median or more, and whose measurement
 /// lies kMismatchFactor times nearer another equilibrium of the model at the same joints, is a
