@@ -1,5 +1,5 @@
 // pcr_calibrate: staged, bounded identification of a robot description from measured poses
-// (issue 3, section 5). Thin: parse arguments, call pcr::calibrate, print and write the report.
+// (the paper's Section 5). Thin: parse arguments, call pcr::calibrate, print and write the report.
 
 #include <CLI/CLI.hpp>
 #include <cmath>

@@ -1,4 +1,4 @@
-// pcr_controller: the embedded controller example (issue 6, section 4). Links only the header-only
+// pcr_controller: the embedded controller example (docs/accuracy.md). Links only the header-only
 // core (Eigen): a fixed-rate 1 kHz loop follows the paper's circle (diameter 3 mm, theta = 0) by
 // warm-started inverse kinematics at every tick, and reports the IK time per tick.
 //

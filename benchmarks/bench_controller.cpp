@@ -1,4 +1,4 @@
-// The embedded controller (issue 6, section 4): IK time per tick of the 1 kHz circle follower over
+// The embedded controller (pcr_controller): IK time per tick of the 1 kHz circle follower over
 // 1e5 ticks (50 turns of the paper's 3 mm circle), reported as worst-case and median counters in
 // seconds. Wall-clock times include preemption by other processes; the thread's CPU time
 // (CLOCK_THREAD_CPUTIME_ID) does not, so its worst case is the solver's own.

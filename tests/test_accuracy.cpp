@@ -1,4 +1,4 @@
-// Trajectories and ISO 9283 accuracy (issue 6, sections 1-2): path geometry against closed forms,
+// Trajectories and ISO 9283 accuracy (the paper's Section 6): path geometry against closed forms,
 // the ISO 9283 formulas against a hand-computed example, AP ~ 0 when the model is the truth,
 // errors naming the pose, and the repeatability against the known camera noise.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Identification (issue 3, section 4): the cost functor's exact derivatives against central
+// Identification (the paper's Section 5): the cost functor's exact derivatives against central
 // differences, the gauge fix against the predictions it must not change, and the whole staged
 // identification on a virtual robot against its truth (the paper's 99 + 56 configurations).
 

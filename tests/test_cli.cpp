@@ -192,7 +192,7 @@ TEST_F(Cli, ForwardThenInverseThenForwardReturnsThePose) {
 }
 
 TEST_F(Cli, FailedRowsAreReportedAndTheToolGoesOn) {
-  // Pulling all three rods by 9 mm lies beyond the singularity (issue 2: 6 mm already is).
+  // Pulling all three rods by 9 mm lies beyond the singularity (6 mm already does).
   const Result r = run("fk", "0.001,0,0\n-0.009,-0.009,-0.009\n0.001,0.001,0\n");
   EXPECT_EQ(r.status, 1) << r.err;
   const pcr::CsvTable t = parse(r.out, {"q1", "q2", "q3", "converged"});  // x is nan when failed

@@ -1,4 +1,4 @@
-// The embedded controller (issue 6, section 4): a 1 kHz loop following the circle by warm-started
+// The embedded controller (pcr/controller.hpp): a 1 kHz loop following the circle by warm-started
 // IK never allocates, never throws, and its joints put the platform on the commanded poses (checked
 // by forward kinematics, an independent solve).
 #include <gtest/gtest.h>

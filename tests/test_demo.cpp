@@ -1,5 +1,5 @@
-// pcr demo end to end (issue 6, section 3), small: the report's numbers against the noise floor
-// and the truth, and the output directory's safety rules.
+// pcr demo end to end (README.md, "The main job"), small: the report's numbers against the noise
+// floor and the truth, and the output directory's safety rules.
 
 #include <gtest/gtest.h>
 

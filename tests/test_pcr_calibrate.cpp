@@ -1,4 +1,4 @@
-// pcr_calibrate end to end (issue 3, section 5): a simulated dataset in, an identified pcr-robot
+// pcr_calibrate end to end (the paper's Section 5): a simulated dataset in, an identified pcr-robot
 // file out, checked with the core's FK against the noise-free measurements of the truth.
 // Kept fast: the nominal description is uncertain only in the rod lengths and the extrinsics.
 

@@ -1,7 +1,7 @@
 // `pcr render`, `pcr measure` and `pcr camera` run as programs: one rendered robot measured end to
-// end against the render's ground truth, every bad input of issue 4 (Sec. 4) exiting non-zero with
-// a message naming the mount, the file or the id and writing no output, and a camera calibrated
-// from rendered chessboards.
+// end against the render's ground truth, every bad input docs/vision.md lists ("Command-line
+// checks") exiting non-zero with a message naming the mount, the file or the id and writing no
+// output, and a camera calibrated from rendered chessboards.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 

@@ -1,5 +1,5 @@
-// pcr accuracy: ISO 9283 accuracy of a path commanded through inverse kinematics (issue 6,
-// sections 1-2; the paper's Table 4). Runs against a virtual robot (truth from a file, or drawn
+// pcr accuracy: ISO 9283 accuracy of a path commanded through inverse kinematics (the paper's
+// Section 6 and Table 4). Runs against a virtual robot (truth from a file, or drawn
 // with a seed), or computes the table from poses measured on a real robot (--measured).
 #include <iostream>
 #include <memory>

@@ -1,6 +1,7 @@
-// pcr demo: the paper's whole method on the built-in virtual robot, in one seeded command
-// (issue 6, section 3): measure -> sensitivity -> sampling and simulated measurements ->
-// three-stage calibration -> trajectories and ISO 9283 accuracy -> report.
+// pcr demo: the paper's whole method on the built-in virtual robot, in one seeded command (the
+// paper's Sections 2.3 to 6; README.md, "The main job"): measure -> sensitivity -> sampling and
+// simulated measurements -> three-stage calibration -> trajectories and ISO 9283 accuracy ->
+// report.
 #ifdef PCR_HAS_CALIB
 #include <chrono>
 #include <cmath>

@@ -15,7 +15,7 @@ namespace pcr {
 
 inline constexpr double kPaperSquareSide = 2e-3;      ///< m
 inline constexpr double kPaperCircleDiameter = 3e-3;  ///< m
-/// Bending strain a pose may reach (|kappa| d / 2): the same default as the sampling of issue 3.
+/// Bending strain a pose may reach (|kappa| d / 2): the same default as pcr/calib/sampling.hpp.
 inline constexpr double kDefaultStrainLimit = 0.01;
 
 /// A square traversed counter-clockwise from its corner (-side/2, -side/2) (before `rotation`),

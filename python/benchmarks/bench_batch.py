@@ -1,4 +1,4 @@
-"""Batched FK through Python vs the same loop in C++ (issue 5's benchmark; target: within 1.2x).
+"""Batched FK through Python vs the same loop in C++ (target: within 1.2x).
 
     python python/benchmarks/bench_batch.py --cpp build/python/bench_batch_cpp [--rows 100000]
 

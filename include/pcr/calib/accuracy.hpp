@@ -1,6 +1,6 @@
 #pragma once
-// Trajectories through inverse kinematics and their ISO 9283 accuracy (issue 6, sections 1-2;
-// Mauze et al. 2021, Section 6). The allocating side of pcr/trajectory.hpp: paths as vectors,
+// Trajectories through inverse kinematics and their ISO 9283 accuracy (Mauze et al. 2021,
+// Section 6). The allocating side of pcr/trajectory.hpp: paths as vectors,
 // paths and measurements from CSV, IK along a whole path with errors naming the pose, the ISO 9283
 // statistics, and runs against the virtual robot.
 //

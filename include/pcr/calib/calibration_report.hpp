@@ -1,5 +1,5 @@
 #pragma once
-// The calibration report (issue 3, section 5): the paper's Table 3 for the nominal and the
+// The calibration report (the paper's Section 5): the paper's Table 3 for the nominal and the
 // identified model on the calibration and validation sets, the stages, the identified values with
 // their standard deviations, the parameters at a bound and the gauge directions. One writer for
 // pcr_calibrate, pcr demo and the Python bindings.

@@ -1,5 +1,5 @@
 #pragma once
-// Calibration datasets and joint-configuration lists as CSV (issue 3, section 1).
+// Calibration datasets and joint-configuration lists as CSV (docs/formats.md).
 //
 // Dataset: header `q1,...,qn,x,y,theta`, one row per configuration: joint values (m) and the
 // measured pattern pose in the camera frame ^Se T_M (m, m, rad). Configurations: header

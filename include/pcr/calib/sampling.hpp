@@ -1,6 +1,6 @@
 #pragma once
 // Joint configurations by Poisson-disc sampling (Bridson 2007) in the n-dimensional joint box,
-// restricted to the reachable, safe part of it (issue 3, section 2):
+// restricted to the reachable, safe part of it (the calibration's configurations):
 // - FK converges on the home branch: the first point is solved from home (q = 0), every later one
 //   by continuation from the accepted point that spawned it (a chain of straight paths from home);
 // - the maximal bending strain over the rods stays below a limit (default 1 %).

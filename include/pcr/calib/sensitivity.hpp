@@ -1,5 +1,5 @@
 #pragma once
-// Sensitivity analysis: the paper's Table 2 for any robot (Section 2.3, issue 3 section 3).
+// Sensitivity analysis: the paper's Table 2 for any robot (Section 2.3).
 //
 // Configurations: a 3^n grid of joint values around the centre of the strokes with a step of
 // `step` (default 1 mm), minus its centre: 26 configurations for 3 limbs.

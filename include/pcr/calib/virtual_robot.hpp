@@ -1,7 +1,8 @@
 #pragma once
-// A simulated stand-in for the real robot (issue 3, section 1): a "true" robot drawn from a nominal
-// description inside its uncertainty intervals, true extrinsics, and a camera that measures the
-// pattern pose ^Se T_M = (^W T_Se)^-1 . ^W T_P(q) . (^M T_P)^-1 (Eq. 5) with Gaussian noise.
+// A simulated stand-in for the real robot (pcr simulate, the demo, the studies): a "true" robot
+// drawn from a nominal description inside its uncertainty intervals, true extrinsics, and a camera
+// that measures the pattern pose ^Se T_M = (^W T_Se)^-1 . ^W T_P(q) . (^M T_P)^-1 (Eq. 5) with
+// Gaussian noise.
 //
 // How the truth is drawn (seeded, std::mt19937_64, reproducible across runs of the same build):
 // - every limb parameter and every extrinsic parameter = nominal + U(-h, h), h its half-width in
