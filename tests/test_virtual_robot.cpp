@@ -13,6 +13,7 @@
 
 #include "pcr/calib/dataset.hpp"
 #include "pcr/calib/virtual_robot.hpp"
+#include "pcr/robot_io.hpp"
 
 namespace pcr {
 namespace {

@@ -20,7 +20,8 @@
 #include <vector>
 
 #include "pcr/files.hpp"  // OutputFile, open_input_file
-#include "pcr/robot_io.hpp"
+#include "pcr/input_error.hpp"
+#include "pcr/robot_description.hpp"
 
 namespace pcr {
 

@@ -544,28 +544,6 @@ void save_robot(const RobotDescription& robot, const std::string& path) {
   write_file_atomically(path, text);
 }
 
-RobotDescription default_robot() {
-  RobotDescription robot;
-  robot.name = "femto-3pf";
-  robot.params = femto_3pf();
-  robot.young_modulus = robot.params.limb(0).young_modulus;
-  RobotUncertainty u;
-  // Mauze et al. 2021, Section 4: the intervals of the calibrated parameters.
-  u.global.length = 126e-6;
-  u.global.A = Eigen::Vector2d(160e-6, 160e-6);
-  u.global.B = Eigen::Vector2d(160e-6, 160e-6);
-  u.global.alpha = 5e-3;
-  u.global.beta = 5e-3;
-  u.global.gamma = 5e-3;
-  u.global.diameter = 20e-6;
-  u.global.young_modulus = 0.0;
-  u.limbs.assign(static_cast<std::size_t>(robot.params.num_limbs), u.global);
-  u.camera = Eigen::Vector3d(1e-3, 1e-3, 50e-3);
-  u.pattern = Eigen::Vector3d(1e-3, 1e-3, 50e-3);
-  robot.uncertainty = u;
-  return robot;
-}
-
 RobotDescription load_robot_or_default(const std::string& path) {
   return path.empty() ? default_robot() : load_robot(path);
 }

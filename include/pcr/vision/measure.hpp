@@ -25,7 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "pcr/robot_io.hpp"
+#include "pcr/input_error.hpp"
+#include "pcr/robot_description.hpp"
 #include "pcr/se2.hpp"
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/mounts.hpp"
