@@ -53,11 +53,11 @@ int main(int argc, char** argv) {
   app.add_option("--stages", stages_path,
                  "stages JSON: [{\"name\", \"free\": [kinds], \"bounds_scale\"}]");
   app.add_option("--weight", weight, "orientation weight w of Eq. 6 (m/rad)")
-      ->check(pcr::cli::within(0.0, 10.0, "m/rad"));
+      ->check(pcr::cli::within(pcr::CalibrationOptions::kOrientationWeight));
   app.add_option("--robust-scale", robust_scale,
                  "Huber loss beyond this many times the declared noise on a row's residual "
                  "(0: plain least squares)")
-      ->check(pcr::cli::within(0.0, 1e6))
+      ->check(pcr::cli::within(pcr::CalibrationOptions::kRobustScale))
       ->capture_default_str();
   app.add_option("--output", output_path, "identified pcr-robot description")
       ->required()

@@ -421,7 +421,7 @@ TEST(ConfigurationErrors, AMeasurementOnAnotherEquilibriumIsABranchMismatch) {
   // Another equilibrium at row 5's joints: its rod 1 bent one turn further, solved there.
   const std::size_t row = 5;
   ForwardSolution seed = forward_kinematics(robot, data[row].q);
-  seed.jacobian = internal::ChordMatrix();
+  seed.jacobian.clear();
   const LimbParams<double>& limb = robot.limb(1);
   seed.wrenches[1].m += 2.0 * M_PI * limb.bending_stiffness() / limb.length;
   const ForwardSolution other = forward_kinematics(robot, data[row].q, seed);
@@ -565,8 +565,8 @@ TEST(Calibrator, ARowMeasuredOnABuckledShapeIsFittedThere) {
   ForwardSolution buckled;
   const auto buckles = [&](std::size_t j) {
     const ForwardSolution home_branch = forward_kinematics(truth, data[j].q);
-    for (int k = 0; k < internal::kBuckledSeedsPerRod * 3; ++k) {
-      buckled = forward_kinematics(truth, data[j].q, internal::buckled_seed(truth, home_branch, k));
+    for (int k = 0; k < kBuckledSeedsPerRod * 3; ++k) {
+      buckled = forward_kinematics(truth, data[j].q, buckled_seed(truth, home_branch, k));
       if (buckled.summary.converged() && std::hypot(buckled.pose.x - home_branch.pose.x,
                                                     buckled.pose.y - home_branch.pose.y) > 1e-3) {
         return true;

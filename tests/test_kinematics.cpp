@@ -455,7 +455,7 @@ TEST(Kinematics, SequenceSolveRetriesAFailedWarmStartCold) {
   // failed attempt's work counted.
   ForwardSolution broken = cold;
   broken.wrenches[1].nx = std::nan("");
-  broken.jacobian = internal::ChordMatrix();
+  broken.jacobian.clear();
   EXPECT_EQ(forward_kinematics(robot, q, broken).summary.status, SolveStatus::kNonFinite);
   const ForwardSolution retried = forward_kinematics_or_cold(robot, q, &broken);
   ASSERT_TRUE(retried.summary.converged());

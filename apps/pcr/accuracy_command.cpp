@@ -170,10 +170,10 @@ void register_accuracy_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "seed of the truth draw and of the noise")
       ->capture_default_str();
   cmd->add_option("--noise-position", args->noise_position, "camera noise std on x and y (m)")
-      ->check(within(0.0, 0.01, "m"))
+      ->check(within(pcr::VirtualRobotOptions::kNoisePosition))
       ->capture_default_str();
   cmd->add_option("--noise-angle", args->noise_angle, "camera noise std on theta (rad)")
-      ->check(within(0.0, 0.1, "rad"))
+      ->check(within(pcr::VirtualRobotOptions::kNoiseAngle))
       ->capture_default_str();
   cmd->add_option("--effects", args->effects,
                   "unmodelled effects of the virtual robot: misalignments, diameters, load")
@@ -184,7 +184,7 @@ void register_accuracy_command(CLI::App& app) {
                   "of a nominal model's robot parameters alone)")
       ->capture_default_str();
   cmd->add_option("--strain-limit", args->strain_limit, "max bending strain of a commanded pose")
-      ->check(within(1e-6, 0.1))
+      ->check(within(pcr::kStrainLimitRange))
       ->capture_default_str();
   cmd->add_option("--poses", args->poses,
                   "write the commanded and attained poses (the --measured CSV format)");

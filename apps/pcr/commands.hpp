@@ -59,6 +59,11 @@ inline CLI::Validator within(double lo, double hi, const std::string& unit = "")
       "in " + range);
 }
 
+/// The library's range of an option (pcr/option_range.hpp): the same bounds, the same unit.
+inline CLI::Validator within(const OptionRange& range) {
+  return within(range.lo, range.hi, range.unit);
+}
+
 /// Adds the common `--robot FILE` option (empty: the built-in default robot).
 inline CLI::Option* add_robot_option(CLI::App& command, std::string& path) {
   return command.add_option("--robot", path,
@@ -149,7 +154,7 @@ struct SolveArguments {
         .add_option(
             "--steps", steps,
             "RK4 steps per rod (0: chosen from the solution's error estimate, 1 nm / 1 urad)")
-        ->check(CLI::Range(0, 100000))
+        ->check(within(SolverOptions::kRodSteps))
         ->capture_default_str();
   }
 

@@ -124,7 +124,7 @@ void register_map_command(CLI::App& app) {
       "reachable (stable, within the stroke) at one position instead.");
   pcr::cli::add_robot_option(*map, args->robot);
   map->add_option("--theta", args->theta, "platform orientation (rad)")
-      ->check(pcr::cli::within(-2 * M_PI, 2 * M_PI, "rad"));
+      ->check(pcr::cli::within(pcr::WorkspaceMapOptions::kTheta));
   map->add_option("--grid", args->grid, "points per side")
       ->check(CLI::Range(2, 4000))
       ->capture_default_str();

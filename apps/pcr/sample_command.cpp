@@ -20,7 +20,7 @@ struct SampleArguments {
   int candidates = 0;
   std::uint64_t seed = 1;
   double min_distance = 0;
-  double strain_limit = 0.01;
+  double strain_limit = pcr::kDefaultStrainLimit;
   std::vector<double> box;
 };
 
@@ -89,14 +89,14 @@ void register_sample_command(CLI::App& app) {
   pcr::cli::add_robot_option(*cmd, args->robot);
   using pcr::cli::within;
   cmd->add_option("--count", args->count, "calibration configurations")
-      ->check(within(1, 1000000))
+      ->check(within(pcr::SamplingOptions::kCount))
       ->capture_default_str();
   cmd->add_option("--seed", args->seed, "sampling seed")->capture_default_str();
   cmd->add_option("--output", args->output, "configurations CSV to write (q1,...,qn)")->required();
   cmd->add_option("--validation-output", args->validation_output,
                   "also write a disjoint validation set (drawn together, then split)");
   cmd->add_option("--validation-count", args->validation_count, "validation configurations")
-      ->check(within(1, 1000000))
+      ->check(within(pcr::SamplingOptions::kCount))
       ->capture_default_str();
   cmd->add_option("--design", args->design,
                   "calibration configurations: poisson-disc (spread) or d-optimal (greedy max "
@@ -106,16 +106,16 @@ void register_sample_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--candidates", args->candidates,
                   "d-optimal: Poisson-disc candidates to choose from (default: 10 x count)")
-      ->check(within(1, 10000000));
+      ->check(within(pcr::SamplingOptions::kCandidates));
   cmd->add_option("--min-distance", args->min_distance,
                   "Poisson-disc radius in joint space (m; default: chosen from the count)")
-      ->check(within(0.0, 0.1, "m"));
+      ->check(within(pcr::SamplingOptions::kMinDistance));
   cmd->add_option("--box", args->box,
                   "joint sub-box: min,max for all joints, or min1,max1,...,minn,maxn (m)")
       ->delimiter(',')
       ->check(within(-1.0, 1.0, "m"));
   cmd->add_option("--strain-limit", args->strain_limit, "max bending strain")
-      ->check(within(1e-6, 0.1))
+      ->check(within(pcr::kStrainLimitRange))
       ->capture_default_str();
   cmd->callback([args] { run_sample(*args); });
 }

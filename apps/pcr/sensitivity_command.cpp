@@ -40,7 +40,7 @@ void register_sensitivity_command(CLI::App& app) {
   cmd->add_option("--csv", args->csv, "also write the table as CSV");
   cmd->add_option("--json", args->json, "also write the table as JSON");
   cmd->add_option("--step", args->step, "grid step around the centre of the strokes (m)")
-      ->check(pcr::cli::within(1e-6, 0.01, "m"))
+      ->check(pcr::cli::within(pcr::SensitivityOptions::kStep))
       ->capture_default_str();
   args->solve.add_to(*cmd);
   cmd->callback([args] { run_sensitivity(*args); });

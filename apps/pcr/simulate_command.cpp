@@ -91,21 +91,21 @@ void register_simulate_command(CLI::App& app) {
   cmd->add_option("--truth", args->truth, "also write the true robot description (JSON)");
   using pcr::cli::within;
   cmd->add_option("--noise-position", args->noise_position, "std of x and y (m)")
-      ->check(within(0.0, 0.01, "m"))
+      ->check(within(pcr::VirtualRobotOptions::kNoisePosition))
       ->capture_default_str();
   cmd->add_option("--noise-angle", args->noise_angle, "std of theta (rad)")
-      ->check(within(0.0, 0.1, "rad"))
+      ->check(within(pcr::VirtualRobotOptions::kNoiseAngle))
       ->capture_default_str();
   cmd->add_option("--effects", args->effects,
                   "unmodelled effects to switch on: misalignments, diameters, load")
       ->delimiter(',');
   cmd->add_option("--misalignment", args->misalignment,
                   "extra half-width on beta_i and gamma_i with 'misalignments' (rad)")
-      ->check(within(0.0, 0.1, "rad"))
+      ->check(within(pcr::UnmodelledEffects::kMisalignmentHalfWidth))
       ->capture_default_str();
   cmd->add_option("--diameter-spread", args->diameter_spread,
                   "independent half-width on each d_i with 'diameters' (m)")
-      ->check(within(0.0, 1e-3, "m"))
+      ->check(within(pcr::UnmodelledEffects::kDiameterHalfWidth))
       ->capture_default_str();
   args->solve.add_to(*cmd);
   cmd->callback([args] { run_simulate(*args); });

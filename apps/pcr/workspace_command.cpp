@@ -145,7 +145,7 @@ void register_workspace_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "random seed")->capture_default_str();
   cmd->add_option("--steps", args->steps,
                   "RK4 steps per rod (0: chosen from the solution's error estimate, 1 nm / 1 urad)")
-      ->check(CLI::Range(0, 100000))
+      ->check(pcr::cli::within(pcr::SolverOptions::kRodSteps))
       ->capture_default_str();
   cmd->add_option("--output", args->output, "output CSV (default: stdout)");
   cmd->callback([args] { run_workspace(*args); });

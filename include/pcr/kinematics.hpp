@@ -23,6 +23,34 @@
 
 namespace pcr {
 
+namespace internal {
+struct WarmStartAccess;
+}
+
+/// What a solve leaves for the next one warm-started from it: the solver's chord matrix at the
+/// end of the solve (the last Jacobian it evaluated, with the secant corrections of the chord
+/// steps since), opaque. A warm start from a solution that holds one predicts its first point
+/// along the tangent and takes its first, chord, steps with it instead of evaluating a new
+/// Jacobian; an empty one (cleared: the solution was moved to another point) makes the next solve
+/// evaluate its own.
+class WarmStartJacobian {
+ public:
+  bool empty() const { return chord_.rows() == 0; }
+  void clear() { chord_ = internal::ChordMatrix(); }
+
+ private:
+  friend struct internal::WarmStartAccess;
+  internal::ChordMatrix chord_;
+};
+
+namespace internal {
+/// The solvers' access to a WarmStartJacobian's chord matrix.
+struct WarmStartAccess {
+  static ChordMatrix& chord(WarmStartJacobian& w) { return w.chord_; }
+  static const ChordMatrix& chord(const WarmStartJacobian& w) { return w.chord_; }
+};
+}  // namespace internal
+
 struct ForwardSolution {
   /// The joints of the returned configuration (m): the requested ones when converged; on a
   /// failure, those of the last point solved on the way (summary.path_fraction says where).
@@ -30,11 +58,8 @@ struct ForwardSolution {
   Pose2<double> pose;                                ///< platform pose ^W T_P
   std::array<Wrench<double>, kMaxLimbs> wrenches{};  ///< proximal wrench (n, m)(0) of each rod
   SolverSummary summary;
-  /// The solver's chord matrix at the end of the solve (scaled units; empty if none): the last
-  /// Jacobian it evaluated, with the secant corrections of the chord steps since. A warm start
-  /// from this solution predicts its first point along the tangent and takes its first, chord,
-  /// steps with it instead of evaluating a new Jacobian.
-  internal::ChordMatrix jacobian;
+  /// For a warm start from this solution (see WarmStartJacobian).
+  WarmStartJacobian jacobian;
 };
 
 struct InverseSolution {
@@ -45,7 +70,7 @@ struct InverseSolution {
   std::array<Wrench<double>, kMaxLimbs> wrenches{};  ///< proximal wrench (n, m)(0) of each rod
   SolverSummary summary;
   /// As ForwardSolution::jacobian, for the inverse problem.
-  internal::ChordMatrix jacobian;
+  WarmStartJacobian jacobian;
 };
 
 /// Forward kinematics warm-started from a previous solution (the normal case in a control loop).
@@ -124,6 +149,17 @@ inline ForwardSolution as_forward_solution(const InverseSolution& ik);
 /// IK report a converged solution outside it as SolveStatus::kOutOfRange, so every caller (the
 /// CLI, Python, the calibration, the sampler) gives the same verdict.
 inline bool within_stroke(const RobotParams<double>& robot, const JointVector& q);
+
+/// Seeds of a solution's other equilibria at the same input (joints or pose), per rod.
+inline constexpr int kBuckledSeedsPerRod = 4;
+
+/// Seed k (0 <= k < kBuckledSeedsPerRod n) of the other equilibria at `at`'s input: one rod bent
+/// further one way or the other, its proximal moment moved by 1 and 2 times 2 pi EI / l (a
+/// clamped-clamped rod's buckled shapes); the rods in turn from `first_rod`. A warm solve from it
+/// at the same input (forward_kinematics(robot, at.q, seed)) finds the equilibrium it leads to.
+template <class Solution>
+Solution buckled_seed(const RobotParams<double>& robot, const Solution& at, int k,
+                      int first_rod = 0);
 
 /// Whether a solution can warm-start the next solve: a converged one, or a valid equilibrium
 /// whose joints lie outside their stroke.

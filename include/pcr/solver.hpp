@@ -2,6 +2,9 @@
 // What a kinematics solve reports and the settings it takes (pcr/kinematics.hpp).
 
 #include <limits>
+#include <string>
+
+#include "pcr/option_range.hpp"
 
 namespace pcr {
 
@@ -18,8 +21,9 @@ enum class SolveStatus {
   kUnstable,       ///< IK converged on an unstable equilibrium, and found no stable one at the
                    ///< pose (SolverOptions::stable_inverse)
   kUnsupported,    ///< the request is not a square problem (IK with n > 3 limbs)
-  kInvalidInput,   ///< wrong sizes, NaN inputs, or a robot with fewer than 2 / more than kMaxLimbs
-                   ///< limbs
+  kInvalidInput,   ///< wrong sizes, NaN inputs, options outside their ranges
+                   ///< (SolverOptions::is_valid), or a robot with fewer than 2 / more than
+                   ///< kMaxLimbs limbs
 };
 
 inline const char* to_string(SolveStatus status) {
@@ -105,6 +109,47 @@ struct SolverOptions {
   bool through_folds = false;
   /// Points a pseudo-arclength trace may solve.
   int max_arclength_steps = 400;
+
+  // The documented ranges of the fields (is_valid).
+  static constexpr OptionRange kRodSteps{"rod_steps", 0, 100000};  ///< 0: chosen
+  static constexpr OptionRange kPositionAccuracy{"position_accuracy", 1e-15, 1e-3, "m"};
+  static constexpr OptionRange kAngleAccuracy{"angle_accuracy", 1e-15, 1e-1, "rad"};
+  static constexpr OptionRange kMinRodSteps{"min_rod_steps", 1, 100000};
+  static constexpr OptionRange kMaxRodSteps{"max_rod_steps", 1, 100000};
+  static constexpr OptionRange kMaxIterations{"max_iterations", 1, 10000};
+  static constexpr OptionRange kTolerance{"tolerance", 1e-16, 1e-3};
+  static constexpr OptionRange kChordOutputShare{"chord_output_share", 0, 1};
+  static constexpr OptionRange kMaxLineSearch{"max_line_search", 0, 64};
+  static constexpr OptionRange kMaxContinuationSteps{"max_continuation_steps", 1, 100000};
+  static constexpr OptionRange kMaxContinuationIterations{"max_continuation_iterations", 1, 10000};
+  static constexpr OptionRange kMinContinuationStep{"min_continuation_step", 1e-12, 1};
+  static constexpr OptionRange kMaxArclengthSteps{"max_arclength_steps", 1, 1000000};
+
+  /// Whether every field lies in its range (and min_rod_steps <= max_rod_steps); if not, *error
+  /// (when given) names the field and its value. No heap unless it writes *error: the solvers
+  /// call it and refuse invalid options with SolveStatus::kInvalidInput.
+  bool is_valid(std::string* error = nullptr) const {
+    if (!(kRodSteps.check(rod_steps, error) && kPositionAccuracy.check(position_accuracy, error) &&
+          kAngleAccuracy.check(angle_accuracy, error) && kMinRodSteps.check(min_rod_steps, error) &&
+          kMaxRodSteps.check(max_rod_steps, error) && kMaxIterations.check(max_iterations, error) &&
+          kTolerance.check(tolerance, error) &&
+          kChordOutputShare.check(chord_output_share, error) &&
+          kMaxLineSearch.check(max_line_search, error) &&
+          kMaxContinuationSteps.check(max_continuation_steps, error) &&
+          kMaxContinuationIterations.check(max_continuation_iterations, error) &&
+          kMinContinuationStep.check(min_continuation_step, error) &&
+          kMaxArclengthSteps.check(max_arclength_steps, error))) {
+      return false;
+    }
+    if (min_rod_steps > max_rod_steps) {
+      if (error != nullptr) {
+        *error = "min_rod_steps: " + std::to_string(min_rod_steps) + " is above max_rod_steps " +
+                 std::to_string(max_rod_steps);
+      }
+      return false;
+    }
+    return true;
+  }
 };
 
 struct SolverSummary {

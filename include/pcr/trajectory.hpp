@@ -15,8 +15,10 @@ namespace pcr {
 
 inline constexpr double kPaperSquareSide = 2e-3;      ///< m
 inline constexpr double kPaperCircleDiameter = 3e-3;  ///< m
-/// Bending strain a pose may reach (|kappa| d / 2): the same default as pcr/calib/sampling.hpp.
+/// Bending strain a commanded pose (PathStepOptions) and a sampled configuration
+/// (SamplingOptions) may reach, |kappa| d / 2: its default and its range.
 inline constexpr double kDefaultStrainLimit = 0.01;
+inline constexpr OptionRange kStrainLimitRange{"strain_limit", 1e-6, 0.1};
 
 /// A square traversed counter-clockwise from its corner (-side/2, -side/2) (before `rotation`),
 /// at the constant platform orientation `theta`. With num_poses a multiple of 4 the corners are
@@ -104,6 +106,11 @@ struct PathStepOptions {
   PlatformLoad<double> load;
   /// When the warm-started solve fails, try a cold start from home (the reference branch).
   bool cold_start_fallback = true;
+
+  /// As SolverOptions::is_valid, for these fields and the solver's.
+  bool is_valid(std::string* error = nullptr) const {
+    return kStrainLimitRange.check(strain_limit, error) && solver.is_valid(error);
+  }
 };
 
 struct PathStep {

@@ -2,7 +2,7 @@
 
 All quantities are SI: metres, radians, newtons, pascals. The C++ library does the work
 (``pcr._pcr``); this package re-exports it and adds small pure-Python conveniences
-(``Robot.replace``, ``Robot.with_limb``, ``workspace``, ``pose_errors_per_configuration``).
+(``Robot.replace``, ``Robot.with_limb``, ``workspace``).
 Plots live in ``pcr.plot`` (matplotlib, imported on demand).
 """
 from __future__ import annotations
@@ -23,6 +23,7 @@ from ._pcr import (  # noqa: F401
     SolveStatus,
     Uncertainty,
     __version__,
+    compose_poses,
     has_calibration,
 )
 
@@ -48,6 +49,7 @@ if has_calibration:
         platform_parameter_jacobian,
         poisson_disc_sample,
         pose_errors,
+        pose_errors_per_configuration,
         read_configurations,
         read_dataset,
         rotation_range,
@@ -155,40 +157,6 @@ def _batch(solve, rows_are):
 
 Robot.forward_batch = _batch(Robot.forward, "n")
 Robot.inverse_batch = _batch(Robot.inverse, "3")
-
-
-def compose_poses(a, b):
-    """Row-wise SE(2) product ^A T_B * ^B T_C of (N, 3) or (3,) arrays (x m, y m, theta rad)."""
-    a = _np.asarray(a, dtype=float)
-    b = _np.asarray(b, dtype=float)
-    c, s = _np.cos(a[..., 2]), _np.sin(a[..., 2])
-    x = a[..., 0] + c * b[..., 0] - s * b[..., 1]
-    y = a[..., 1] + s * b[..., 0] + c * b[..., 1]
-    return _np.stack([x, y, a[..., 2] + b[..., 2]], axis=-1)
-
-
-def _wrap(angle):
-    return _np.arctan2(_np.sin(angle), _np.cos(angle))
-
-
-def pose_errors_per_configuration(robot, q, measured, **solve_args):
-    """Per-configuration errors of ``robot`` (with its extrinsics) on a dataset.
-
-    q: (N, n) joints (m); measured: (N, 3) pattern poses ^Se T_M. The platform pose follows
-    from the measurement by Eq. 5 and is compared with FK along the rows in their order from
-    home (path=True: the path the experiment followed, as Table 3 predicts it).
-    Returns (e_p (N,) m, Eq. 8; e_theta (N,) rad, Eq. 9); NaN where FK failed.
-    """
-    measured = _np.atleast_2d(_np.asarray(measured, dtype=float))
-    ext = robot.extrinsics
-    camera = ext.camera.to_array()
-    pattern = ext.pattern.to_array()
-    platform = compose_poses(compose_poses(camera, measured), pattern)
-    solve_args.setdefault("path", True)
-    fk = robot.forward(_np.atleast_2d(_np.asarray(q, dtype=float)), **solve_args)
-    e_p = _np.hypot(fk.pose[:, 0] - platform[:, 0], fk.pose[:, 1] - platform[:, 1])
-    e_t = _np.abs(_wrap(fk.pose[:, 2] - platform[:, 2]))
-    return e_p, e_t
 
 
 def workspace(robot, theta=0.0, half_width=None, resolution=41, centre=(0.0, 0.0), **solve_args):

@@ -32,6 +32,8 @@ class Pose:
     def __getitem__(self, index: int) -> float: ...
     def __array__(self, dtype: Any = None, copy: Any = None) -> FloatArray: ...  # [x, y, theta]
 
+def compose_poses(a: ArrayLike, b: ArrayLike) -> FloatArray: ...  # rows of (x m, y m, theta rad)
+
 class Limb:
     @property
     def A(self) -> FloatArray: ...  # (2,) m, in W at q = 0 (a view: limb.A[0] = x edits it)
@@ -296,6 +298,10 @@ def load_calibration_stages(path: StrPath) -> list[dict[str, Any]]: ...
 def with_load_stage(stages: Union[Sequence[dict[str, Any]], StrPath]) -> list[dict[str, Any]]: ...
 def pose_errors(robot: Robot, q: ArrayLike, measured: ArrayLike, *, force: Vector = (0.0, 0.0),
                 moment: float = 0.0) -> dict[str, float]: ...
+def pose_errors_per_configuration(
+        robot: Robot, q: ArrayLike, measured: ArrayLike, *, force: Vector = (0.0, 0.0),
+        moment: float = 0.0, options: Optional[SolverOptions] = None,
+        path: bool = True) -> tuple[FloatArray, FloatArray]: ...  # e_p m, e_theta rad
 
 # Defaults: the C++ CalibrationOptions' (a new one holds them). A bad value: ValueError naming
 # the field and the value.

@@ -13,6 +13,7 @@
 #include <array>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <type_traits>
@@ -43,7 +44,7 @@ struct Solution {
   py::object shapes = py::none();
   /// The solver's factorised last Jacobian, so that a warm start from Python costs what it costs
   /// in C++; only for a warm start of the same problem (FK or IK) it was solved by.
-  internal::ChordMatrix jacobian;
+  WarmStartJacobian jacobian;
   bool inverse = false;
 };
 
@@ -181,12 +182,33 @@ Eigen::Matrix<double, N, 1> to_vector(const py::handle& object, const char* name
   return v;
 }
 
-/// A scalar argument: finite, and within [lo, hi] when they are given; otherwise ValueError
-/// "moment: expected a finite number (N m), got nan" or "step: expected a number from 1e-06 to
-/// 0.01 (m), got 0" (`unit` "" for a dimensionless one).
-double checked_number(double value, const char* name, const char* unit,
-                      double lo = -std::numeric_limits<double>::infinity(),
-                      double hi = std::numeric_limits<double>::infinity());
+/// `value` when it lies in the library's range of that option (pcr/option_range.hpp), else
+/// ValueError with the library's message: "step: expected a number from 1e-06 to 0.01 (m), got 0".
+double in_range(double value, const OptionRange& range);
+
+/// A scalar argument the library has no range for (a pose, a load): finite, and within [lo, hi]
+/// when they are given; else ValueError "moment: expected a finite number (N m), got nan"
+/// (`unit` "" for a dimensionless one), as in_range words it.
+inline double checked_number(double value, const char* name, const char* unit,
+                             double lo = -std::numeric_limits<double>::infinity(),
+                             double hi = std::numeric_limits<double>::infinity()) {
+  return in_range(value, OptionRange{name, lo, hi, unit});
+}
+
+/// `options` when the library accepts them (is_valid), else ValueError with its message naming
+/// the field and the value.
+template <class Options>
+const Options& checked_options(const Options& options) {
+  std::string error;
+  if (!options.is_valid(&error)) throw std::invalid_argument(error);
+  return options;
+}
+
+/// The solver options of a Python call (None: `fallback`), checked.
+inline SolverOptions options_or_default(const std::optional<SolverOptions>& options,
+                                        const SolverOptions& fallback = SolverOptions()) {
+  return checked_options(options ? *options : fallback);
+}
 
 /// Array-like -> float64 C-contiguous array of 1 or 2 dimensions with `columns` columns and finite
 /// values; ValueError naming `what` otherwise (the row and column of a non-finite value).

@@ -122,11 +122,11 @@ PathCommandOptions command_options(double strain_limit, const py::object& force,
                                    const std::optional<SolverOptions>& solver,
                                    bool cold_start_fallback) {
   PathCommandOptions o;
-  o.step.strain_limit = checked_number(strain_limit, "strain_limit", "", 0.0);
+  o.step.strain_limit = strain_limit;
   o.step.load = make_load(force, moment);
-  if (solver) o.step.solver = *solver;
+  o.step.solver = options_or_default(solver);
   o.step.cold_start_fallback = cold_start_fallback;
-  return o;
+  return checked_options(o);
 }
 
 py::dict command_dict(const PathCommand& c, int n) {
@@ -398,6 +398,7 @@ void wrap_accuracy(py::module_& m) {
         o.repeat = repeat;
         o.frame = attained_frame(frame);
         o.command = command_options(strain_limit, force, moment, solver, true);
+        checked_options(o);
         const std::vector<Pose2<double>> poses = pose_rows(path, "path");
         py::gil_scoped_release release;
         return evaluate_on_virtual_robot(model.params, robot, poses, o);

@@ -40,13 +40,13 @@ SamplingOptions sampling_options(int count, std::uint64_t seed, double min_dista
   SamplingOptions o;
   o.count = count;
   o.seed = seed;
-  o.min_distance = checked_number(min_distance, "min_distance", "m", 0.0);
+  o.min_distance = min_distance;
   if (box_min) o.box_min = JointVector(*box_min);
   if (box_max) o.box_max = JointVector(*box_max);
-  o.strain_limit = checked_number(strain_limit, "strain_limit", "", 0.0);
+  o.strain_limit = strain_limit;
   o.attempts = attempts;
   o.load = make_load(force, moment);
-  return o;
+  return checked_options(o);
 }
 
 py::dict sampling_dict(const SamplingResult& r, int n) {
@@ -216,14 +216,6 @@ StageGauge stage_gauge(const std::string& name) {
   throw std::invalid_argument("stage_gauge: expected 'subspace' or 'prior', got '" + name + "'");
 }
 
-/// A number that must be > 0 (checked_number takes closed intervals).
-double positive_number(double value, const char* name, const char* unit) {
-  if (std::isfinite(value) && value > 0) return value;
-  std::ostringstream s;
-  s << name << ": expected a finite number > 0 (" << unit << "), got " << value;
-  throw std::invalid_argument(s.str());
-}
-
 /// pcr.CalibrationResult: the C++ result, with the nominal description (identified and
 /// extrinsics_only as pcr.Robot) and the calibration set (Table 3 of a report given no table).
 struct Calibration {
@@ -348,21 +340,12 @@ py::object virtual_measure(VirtualRobot& robot, const py::object& q_in, bool dat
   return d;
 }
 
-SolverOptions options_or_default(const std::optional<SolverOptions>& o, const SolverOptions& d) {
-  return o ? *o : d;
-}
-
-// The grid steps `pcr sensitivity --step` accepts (m): below, the configurations collapse onto
-// the centre (a table of zeros); above, they leave the strokes of a robot of the paper's size.
-constexpr double kMinSensitivityStep = 1e-6;
-constexpr double kMaxSensitivityStep = 0.01;
-
-/// The sensitivity grid's arguments, checked before any solve: `step` (m) in the range above,
+/// The sensitivity grid's arguments, checked before any solve: `step` (m) in its range,
 /// `centre` None (the middle of the strokes: an empty JointVector, the library's default) or n
 /// finite joint values (m) within the strokes q_range.
 JointVector sensitivity_centre(const RobotParams<double>& robot, double step,
                                const py::object& centre) {
-  checked_number(step, "step", "m", kMinSensitivityStep, kMaxSensitivityStep);
+  in_range(step, SensitivityOptions::kStep);
   if (centre.is_none()) return JointVector();
   // The stroke is checked by the library (sensitivity_configurations).
   return to_vector<Eigen::Dynamic>(centre, "centre", "joint values in m", robot.num_limbs);
@@ -433,31 +416,19 @@ void wrap_calibration(py::module_& m) {
           py::gil_scoped_release release;
           report = sensitivity_analysis(robot, options);
         }
-        py::list rows;
-        for (const SensitivityRow& r : report.rows) {
-          py::dict d;
-          d["kind"] = r.kind;
-          d["dx"] = r.dx;
-          d["dy"] = r.dy;
-          d["dtheta"] = r.dtheta;
-          d["half_width"] = r.half_width;
-          d["position_error"] = r.position_error;
-          d["orientation_error"] = r.orientation_error;
-          rows.append(d);
-        }
-        py::dict d;
-        d["step"] = report.step;
+        // The report `pcr sensitivity --json` writes, one serialiser; the configurations as an
+        // array, and the text table.
+        py::dict d = py::module_::import("json").attr("loads")(sensitivity_json(report));
         d["configurations"] = joints_matrix(report.configurations, robot.params.num_limbs);
-        d["rows"] = rows;
-        d["ranking"] = report.ranking;
-        d["table"] = sensitivity_table_text(report);
+        d["text"] = sensitivity_table_text(report);
         return d;
       },
       py::arg("robot"), py::kw_only(), py::arg("step") = 1e-3, py::arg("centre") = py::none(),
       py::arg("force") = no_force(), py::arg("moment") = 0.0, py::arg("options") = py::none(),
-      "The paper's Table 2 for `robot`: a dict with 'rows' (kind, dx, dy, dtheta: max |d pose / "
-      "d p| in SI units; half_width; position_error m; orientation_error rad), 'ranking' "
-      "(indices into rows, most influential first), 'configurations' and 'table' (text). "
+      "The paper's Table 2 for `robot`, the report `pcr sensitivity --json` writes: a dict with "
+      "'step_m', 'table' (rows: param, dx_dp, dy_dp, dtheta_dp: max |d pose / d p| in SI units; "
+      "half_width; position_error_m; orientation_error_rad), 'ranking' (the params, most "
+      "influential first), 'configurations' ((N, n) array, m) and 'text' (the table as text). "
       "The grid: `step` (m, 1e-6 to 0.01) around `centre` (n joint values in m within the "
       "strokes; None: the middle of the strokes). ValueError naming the argument for a bad "
       "one; RuntimeError when FK fails at a configuration.");
@@ -481,14 +452,15 @@ void wrap_calibration(py::module_& m) {
              o.effects.load = make_load(force.is_none() ? no_force() : force, moment);
              o.effects.external_load = !force.is_none() || moment != 0.0;
              o.solver = options_or_default(solver, SolverOptions());
-             return VirtualRobot(nominal, o);
+             return VirtualRobot(nominal, checked_options(o));
            }),
            py::arg("nominal"), py::kw_only(), py::arg("seed") = 1,
            py::arg("noise_position") = kDefaultNoisePosition,
            py::arg("noise_angle") = kDefaultNoiseAngle, py::arg("misalignments") = false,
-           py::arg("misalignment_half_width") = 5e-3, py::arg("unequal_diameters") = false,
-           py::arg("diameter_half_width") = 2e-6, py::arg("force") = py::none(),
-           py::arg("moment") = 0.0, py::arg("options") = py::none(),
+           py::arg("misalignment_half_width") = UnmodelledEffects().misalignment_half_width,
+           py::arg("unequal_diameters") = false,
+           py::arg("diameter_half_width") = UnmodelledEffects().diameter_half_width,
+           py::arg("force") = py::none(), py::arg("moment") = 0.0, py::arg("options") = py::none(),
            "noise_position (m) and noise_angle (rad) are standard deviations; misalignments adds "
            "U(-h, h) (rad) to beta and gamma; unequal_diameters U(-h, h) (m) to each d; force "
            "(fx, fy) in N and/or moment (N m) apply a constant external load on the platform.")
@@ -563,11 +535,12 @@ void wrap_calibration(py::module_& m) {
          const std::optional<std::array<double, 4>>& range, const py::object& force, double moment,
          const std::optional<SolverOptions>& solver) {
         WorkspaceMapOptions o;
-        o.theta = checked_number(theta, "theta", "rad");
+        o.theta = theta;
         o.grid = grid;
         o.range = range;
         o.load = make_load(force, moment);
-        if (solver) o.solver = *solver;
+        o.solver = options_or_default(solver);
+        checked_options(o);
         WorkspaceMap map;
         {
           py::gil_scoped_release release;
@@ -632,8 +605,8 @@ void wrap_calibration(py::module_& m) {
         {
           py::gil_scoped_release release;
           r = rotation_range(robot.params, checked_number(x, "x", "m"), checked_number(y, "y", "m"),
-                             checked_number(theta, "theta", "rad"),
-                             solver ? *solver : SolverOptions(), load);
+                             checked_number(theta, "theta", "rad"), options_or_default(solver),
+                             load);
         }
         return py::make_tuple(r.reachable, r.theta_min, r.theta_max);
       },
@@ -650,12 +623,12 @@ void wrap_calibration(py::module_& m) {
           throw std::invalid_argument("q: expected " + std::to_string(robot.params.num_limbs) +
                                       " joint values (m)");
         }
-        checked_number(strain_limit, "strain_limit", "", 0.0);
+        in_range(strain_limit, kStrainLimitRange);
         py::gil_scoped_release release;
         return admissible_configuration(robot.params, JointVector(q), strain_limit,
                                         sampling_solver_options());
       },
-      py::arg("robot"), py::arg("q"), py::arg("strain_limit") = 0.01,
+      py::arg("robot"), py::arg("q"), py::arg("strain_limit") = kDefaultStrainLimit,
       "True when FK from home converges at q (m) with max bending strain <= strain_limit.");
 
   m.def(
@@ -675,8 +648,8 @@ void wrap_calibration(py::module_& m) {
       },
       py::arg("robot"), py::kw_only(), py::arg("count") = kDefaultCalibrationCount,
       py::arg("seed") = 1, py::arg("min_distance") = 0.0, py::arg("box_min") = py::none(),
-      py::arg("box_max") = py::none(), py::arg("strain_limit") = 0.01, py::arg("attempts") = 30,
-      py::arg("force") = no_force(), py::arg("moment") = 0.0,
+      py::arg("box_max") = py::none(), py::arg("strain_limit") = kDefaultStrainLimit,
+      py::arg("attempts") = 30, py::arg("force") = no_force(), py::arg("moment") = 0.0,
       "Poisson-disc sample of `count` reachable joint configurations (Bridson), every pair at "
       "least min_distance apart (m; 0 = chosen from count). Returns a dict: configurations "
       "(count, n), min_distance, box_min, box_max, candidates, rejected_fk, rejected_strain, "
@@ -718,8 +691,8 @@ void wrap_calibration(py::module_& m) {
       py::arg("validation_count") = 0, py::arg("design") = "poisson-disc",
       py::arg("candidates") = 0, py::arg("seed") = 1, py::arg("min_distance") = 0.0,
       py::arg("box_min") = py::none(), py::arg("box_max") = py::none(),
-      py::arg("strain_limit") = 0.01, py::arg("attempts") = 30, py::arg("force") = no_force(),
-      py::arg("moment") = 0.0,
+      py::arg("strain_limit") = kDefaultStrainLimit, py::arg("attempts") = 30,
+      py::arg("force") = no_force(), py::arg("moment") = 0.0,
       "Calibration configurations by design ('poisson-disc': spread; 'd-optimal': greedy max "
       "log det of the scaled information on the identifiable subspace among `candidates` "
       "Poisson-disc candidates, 0 = 10 x count) and a disjoint Poisson-disc validation set of "
@@ -766,6 +739,33 @@ void wrap_calibration(py::module_& m) {
       "Eq. 9), count, failed, branch_mismatches. The rows are predicted in their order from home, "
       "the path the experiment followed (a dataset's row order is its measurement order).");
 
+  m.def(
+      "pose_errors_per_configuration",
+      [](const RobotDescription& robot, const InputMatrix& q, const InputMatrix& measured,
+         const py::object& force, double moment, const std::optional<SolverOptions>& options,
+         bool path) {
+        const std::vector<CalibrationSample> data = samples(q, measured, robot.params.num_limbs);
+        const PlatformLoad<double> load = make_load(force, moment);
+        const SolverOptions fk = options_or_default(options);
+        ConfigurationErrors e;
+        {
+          py::gil_scoped_release release;
+          e = configuration_errors(robot.params, data, fk, load,
+                                   path ? SequenceMode::kPath : SequenceMode::kIndependent);
+        }
+        const auto rows = static_cast<Eigen::Index>(data.size());
+        return py::make_tuple(Eigen::VectorXd(Eigen::VectorXd::Map(e.e_p.data(), rows)),
+                              Eigen::VectorXd(Eigen::VectorXd::Map(e.e_theta.data(), rows)));
+      },
+      py::arg("robot"), py::arg("q"), py::arg("measured"), py::kw_only(),
+      py::arg("force") = no_force(), py::arg("moment") = 0.0, py::arg("options") = py::none(),
+      py::arg("path") = true,
+      "Per-configuration errors of `robot` (with its extrinsics) on (q (N, n) m, measured ^Se "
+      "T_M (N, 3)), the ones pose_errors summarises: (e_p (N,) m, Eq. 8; e_theta (N,) rad, "
+      "Eq. 9), NaN where FK failed. The platform pose follows from the measurement by Eq. 5; FK "
+      "runs under the platform load, along the rows in their order from home (path=False: each "
+      "row on its own). Releases the GIL.");
+
   auto options =
       py::class_<CalibrationOptions>(
           m, "CalibrationOptions",
@@ -782,13 +782,13 @@ void wrap_calibration(py::module_& m) {
               "orientation_weight",
               [](const CalibrationOptions& o) { return o.orientation_weight; },
               [](CalibrationOptions& o, double v) {
-                o.orientation_weight = checked_number(v, "orientation_weight", "m/rad", 0.0);
+                o.orientation_weight = in_range(v, CalibrationOptions::kOrientationWeight);
               },
               "w of Eq. 6 (m/rad), >= 0")
           .def_property(
               "residual_scale", [](const CalibrationOptions& o) { return o.residual_scale; },
               [](CalibrationOptions& o, double v) {
-                o.residual_scale = positive_number(v, "residual_scale", "m");
+                o.residual_scale = in_range(v, CalibrationOptions::kResidualScale);
               },
               "whitening of the residuals, the declared measurement noise (m), > 0")
           .def_property(
@@ -805,11 +805,8 @@ void wrap_calibration(py::module_& m) {
           .def_property(
               "max_iterations", [](const CalibrationOptions& o) { return o.max_iterations; },
               [](CalibrationOptions& o, int v) {
-                if (v < 1) {
-                  throw std::invalid_argument("max_iterations: expected an integer >= 1, got " +
-                                              std::to_string(v));
-                }
-                o.max_iterations = v;
+                o.max_iterations =
+                    static_cast<int>(in_range(v, CalibrationOptions::kMaxIterations));
               },
               "Levenberg-Marquardt iterations per stage, >= 1")
           .def_readwrite("fix_gauge", &CalibrationOptions::fix_gauge,
@@ -819,7 +816,7 @@ void wrap_calibration(py::module_& m) {
               "gauge_prior_weight",
               [](const CalibrationOptions& o) { return o.gauge_prior_weight; },
               [](CalibrationOptions& o, double v) {
-                o.gauge_prior_weight = checked_number(v, "gauge_prior_weight", "", 0.0);
+                o.gauge_prior_weight = in_range(v, CalibrationOptions::kGaugePriorWeight);
               },
               "weight of the weak prior towards the nominal values with stage_gauge 'prior' "
               "(whitened residual per half-width), >= 0")
@@ -835,7 +832,7 @@ void wrap_calibration(py::module_& m) {
               "function_tolerance",
               [](const CalibrationOptions& o) { return o.function_tolerance; },
               [](CalibrationOptions& o, double v) {
-                o.function_tolerance = checked_number(v, "function_tolerance", "", 0.0, 1.0);
+                o.function_tolerance = in_range(v, CalibrationOptions::kFunctionTolerance);
               },
               "the last stage stops when an iteration lowers the cost by less than this "
               "fraction, 0 to 1")
@@ -844,7 +841,7 @@ void wrap_calibration(py::module_& m) {
               [](const CalibrationOptions& o) { return o.intermediate_function_tolerance; },
               [](CalibrationOptions& o, double v) {
                 o.intermediate_function_tolerance =
-                    checked_number(v, "intermediate_function_tolerance", "", 0.0, 1.0);
+                    in_range(v, CalibrationOptions::kIntermediateFunctionTolerance);
               },
               "the same for the stages before the last, 0 to 1")
           .def_readwrite("compute_covariance", &CalibrationOptions::compute_covariance,
@@ -852,7 +849,7 @@ void wrap_calibration(py::module_& m) {
           .def_property(
               "robust_scale", [](const CalibrationOptions& o) { return o.robust_scale; },
               [](CalibrationOptions& o, double v) {
-                o.robust_scale = checked_number(v, "robust_scale", "", 0.0);
+                o.robust_scale = in_range(v, CalibrationOptions::kRobustScale);
               },
               "Huber loss on a row's whitened residual beyond this many declared noise units "
               "(0: plain least squares), >= 0")

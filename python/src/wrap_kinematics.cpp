@@ -91,10 +91,6 @@ InverseSolution as_inverse(const Solution& s) {
   return out;
 }
 
-SolverOptions options_or_default(const std::optional<SolverOptions>& options) {
-  return options ? *options : SolverOptions();
-}
-
 py::object status_names(const py::array_t<int>& codes) {
   py::list names;
   const int* c = codes.data();

@@ -82,7 +82,7 @@ py::dict predict(const RobotDescription& robot, const py::object& q_in,
   const int n = params.num_limbs;
   PredictedAccuracyOptions options;
   options.load = make_load(force, moment);
-  if (options_in) options.solver = *options_in;
+  options.solver = options_or_default(options_in);
   if (frame == "measurement") {
     options.frame = PoseFrame::kMeasurement;
   } else if (frame != "platform") {

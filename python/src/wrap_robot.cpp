@@ -86,19 +86,10 @@ void read_numbers(const py::handle& object, const char* name, const std::string&
   std::copy(a.data(), a.data() + size, out);
 }
 
-double checked_number(double value, const char* name, const char* unit, double lo, double hi) {
-  if (std::isfinite(value) && value >= lo && value <= hi) return value;
-  std::string expected = "a finite number";
-  if (std::isfinite(lo) && std::isfinite(hi)) {
-    expected = "a number from " + number_text(lo) + " to " + number_text(hi);
-  } else if (std::isfinite(lo)) {
-    expected = "a finite number >= " + number_text(lo);
-  } else if (std::isfinite(hi)) {
-    expected = "a finite number <= " + number_text(hi);
-  }
-  if (*unit != '\0') expected += std::string(" (") + unit + ")";
-  throw std::invalid_argument(std::string(name) + ": expected " + expected + ", got " +
-                              number_text(value));
+double in_range(double value, const OptionRange& range) {
+  std::string error;
+  if (!range.check(value, &error)) throw std::invalid_argument(error);
+  return value;
 }
 
 InputArray input_array(const py::handle& object, int columns, const char* what, const char* unit) {
@@ -208,6 +199,36 @@ void wrap_robot(py::module_& m) {
           },
           py::arg("dtype") = py::none(), py::arg("copy") = py::none(),
           "numpy.asarray(pose): [x, y, theta] (m, m, rad)");
+
+  m.def(
+      "compose_poses",
+      [](const py::object& a_in, const py::object& b_in) -> py::object {
+        const InputArray a = input_array(a_in, 3, "a", "x m, y m, theta rad");
+        const InputArray b = input_array(b_in, 3, "b", "x m, y m, theta rad");
+        const py::ssize_t na = a.ndim() == 1 ? 1 : a.shape(0);
+        const py::ssize_t nb = b.ndim() == 1 ? 1 : b.shape(0);
+        if (na != nb && na != 1 && nb != 1) {
+          throw std::invalid_argument("compose_poses: " + std::to_string(na) + " and " +
+                                      std::to_string(nb) + " rows do not broadcast");
+        }
+        const py::ssize_t n = std::max(na, nb);
+        py::array_t<double> out(a.ndim() == 1 && b.ndim() == 1 ? std::vector<py::ssize_t>{3}
+                                                               : std::vector<py::ssize_t>{n, 3});
+        double* o = out.mutable_data();
+        for (py::ssize_t r = 0; r < n; ++r) {
+          const double* pa = a.data() + (na == 1 ? 0 : 3 * r);
+          const double* pb = b.data() + (nb == 1 ? 0 : 3 * r);
+          const Pose2<double> c =
+              Pose2<double>{pa[0], pa[1], pa[2]} * Pose2<double>{pb[0], pb[1], pb[2]};
+          o[3 * r] = c.x;
+          o[3 * r + 1] = c.y;
+          o[3 * r + 2] = c.theta;
+        }
+        return std::move(out);
+      },
+      py::arg("a"), py::arg("b"),
+      "Row-wise SE(2) product ^A T_B * ^B T_C (Pose's product) of (N, 3) or (3,) arrays (x m, y "
+      "m, theta rad); a single pose broadcasts over the other's rows.");
 
   auto limb =
       py::class_<LimbParams<double>>(

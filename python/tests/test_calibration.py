@@ -1,6 +1,8 @@
 """Calibration bindings: sensitivity, Jacobian vs finite differences, virtual robot vs FK of its
 truth, datasets, Poisson-disc sampling and D-optimal design, a small identification."""
+import json
 import math
+import subprocess
 
 import numpy as np
 import pytest
@@ -13,11 +15,24 @@ pytestmark = pytest.mark.skipif(not pcr.has_calibration, reason="pcr::calib not 
 def test_sensitivity_table_shape(robot):
     report = pcr.sensitivity(robot)
     assert report["configurations"].shape == (26, 3)  # 3^3 grid minus its centre
-    assert [r["kind"] for r in report["rows"]][:2] == ["E", "D"]
-    assert sorted(report["ranking"]) == list(range(len(report["rows"])))
-    first = report["rows"][report["ranking"][0]]
-    assert all(first["position_error"] >= r["position_error"] for r in report["rows"])
-    assert "alpha" in report["table"]
+    assert [r["param"] for r in report["table"]][:2] == ["E", "D"]
+    assert sorted(report["ranking"]) == sorted(r["param"] for r in report["table"])
+    first = next(r for r in report["table"] if r["param"] == report["ranking"][0])
+    assert all(first["position_error_m"] >= r["position_error_m"] for r in report["table"])
+    assert "alpha" in report["text"]
+
+
+def test_sensitivity_report_is_the_one_the_cli_writes(cli, robot, tmp_path):
+    """One serialiser: Python's report and `pcr sensitivity --json` have the same fields and
+    values."""
+    subprocess.run([cli, "sensitivity", "--step", "2e-3", "--json", str(tmp_path / "s.json")],
+                   check=True, capture_output=True, timeout=120)
+    written = json.loads((tmp_path / "s.json").read_text())
+    report = pcr.sensitivity(robot, step=2e-3)
+    assert set(report) == set(written) | {"text"}
+    assert report["configurations"].tolist() == written["configurations"]
+    assert report["table"] == written["table"] and report["ranking"] == written["ranking"]
+    assert report["step_m"] == written["step_m"] == 2e-3
 
 
 def test_parameter_jacobian_matches_finite_differences(robot):
@@ -225,3 +240,27 @@ def test_calibration_identifies_a_platform_load(robot):
     loaded = pcr.pose_errors(identified, q_validation, exact, force=(fx, fy), moment=mz)
     unloaded = pcr.pose_errors(identified, q_validation, exact)
     assert loaded["mean_p"] < 0.05e-6 < unloaded["mean_p"]
+
+
+def test_pose_errors_per_configuration_follow_eqs_5_8_9(robot):
+    """e_p and e_theta against Eq. 5 written with homogeneous matrices, on FK along the rows."""
+    def matrix(pose):
+        x, y, theta = pose
+        c, s = math.cos(theta), math.sin(theta)
+        return np.array([[c, -s, x], [s, c, y], [0.0, 0.0, 1.0]])
+
+    q = pcr.sensitivity_configurations(robot, 2e-3)[::3]
+    v = pcr.VirtualRobot(robot, seed=8, noise_position=1e-6, noise_angle=1e-5)
+    measured = v.measure_dataset(q)["measured"]
+    e_p, e_t = pcr.pose_errors_per_configuration(robot, q, measured)
+    fk = robot.forward(q, path=True)
+    camera = robot.extrinsics.camera.to_array()
+    pattern = robot.extrinsics.pattern.to_array()
+    for k in range(len(q)):
+        w = matrix(camera) @ matrix(measured[k]) @ matrix(pattern)
+        assert e_p[k] == pytest.approx(np.hypot(*(fk.pose[k, :2] - w[:2, 2])), rel=1e-9,
+                                       abs=1e-15)
+        d = fk.pose[k, 2] - math.atan2(w[1, 0], w[0, 0])
+        assert e_t[k] == pytest.approx(abs(math.atan2(math.sin(d), math.cos(d))), rel=1e-9,
+                                       abs=1e-15)
+    assert e_p.max() > 1e-6  # the truth differs from the nominal robot

@@ -107,13 +107,13 @@ def test_an_unknown_option_is_a_type_error_naming_it(data):
 
 
 @pytest.mark.parametrize("field, value, message", [
-    ("orientation_weight", -1.0, r"orientation_weight: expected a finite number >= 0 \(m/rad\), "
+    ("orientation_weight", -1.0, r"orientation_weight: expected a number from 0 to 10 \(m/rad\), "
                                  r"got -1"),
-    ("residual_scale", 0.0, r"residual_scale: expected a finite number > 0 \(m\), got 0"),
+    ("residual_scale", 0.0, r"residual_scale: expected a number from 1e-15 to 1 \(m\), got 0"),
     ("residual_scale", math.nan, r"residual_scale: .* got nan"),
     ("derivatives", "exact", r"derivatives: expected 'implicit', 'numeric' or 'autodiff', "
                              r"got 'exact'"),
-    ("max_iterations", 0, r"max_iterations: expected an integer >= 1, got 0"),
+    ("max_iterations", 0, r"max_iterations: expected a number from 1 to 100000, got 0"),
     ("gauge_prior_weight", -0.5, r"gauge_prior_weight: .* got -0.5"),
     ("stage_gauge", "weak", r"stage_gauge: expected 'subspace' or 'prior', got 'weak'"),
     ("function_tolerance", 2.0, r"function_tolerance: expected a number from 0 to 1, got 2"),

@@ -7,6 +7,7 @@ import math
 import os
 import pathlib
 import re
+import subprocess
 
 import numpy as np
 import pytest
@@ -210,11 +211,11 @@ def test_calibration_numbers_are_checked(robot):
     raises(ValueError, "side: expected a finite number (m), got nan", pcr.square_path, NAN)
     raises(ValueError, "start_angle: expected a finite number (rad), got nan",
            pcr.circle_path, start_angle=NAN)
-    raises(ValueError, "strain_limit: expected a finite number >= 0, got nan",
+    raises(ValueError, "strain_limit: expected a number from 1e-06 to 0.1, got nan",
            pcr.command_path, robot, path, strain_limit=NAN)
     raises(ValueError, "force: expected 2 finite numbers (fx, fy in N), got 3 numbers (0, 0, 0)",
            pcr.command_path, robot, path, force=(0, 0, 0))
-    raises(ValueError, "min_distance: expected a finite number >= 0 (m), got nan",
+    raises(ValueError, "min_distance: expected a number from 0 to 0.1 (m), got nan",
            pcr.poisson_disc_sample, robot, count=3, min_distance=NAN)
     raises(ValueError, "force: expected 2 finite numbers (fx, fy in N), got 3 numbers (0, 0, 0)",
            pcr.VirtualRobot, robot, force=(0, 0, 0))
@@ -241,3 +242,33 @@ def test_vision_vectors_and_numbers_are_checked(robot):
     raises(ValueError, "point_camera: expected 3 finite numbers (x, y, z in m), got 2 numbers "
            "(1, 2)", cam.project, (1, 2))
     assert len(pcr.mount_tags(robot, layout, platform=pcr.Pose(0, 0, 0))) == len(layout)
+
+
+@pytest.mark.parametrize("command, option, value, call, message", [
+    (["sample", "--output", "s.csv"], "--strain-limit", 0.5,
+     lambda robot: pcr.poisson_disc_sample(robot, count=3, strain_limit=0.5),
+     "strain_limit: expected a number from 1e-06 to 0.1, got 0.5"),
+    (["sample", "--output", "s.csv"], "--min-distance", 0.2,
+     lambda robot: pcr.poisson_disc_sample(robot, count=3, min_distance=0.2),
+     "min_distance: expected a number from 0 to 0.1 (m), got 0.2"),
+    (["simulate", "--input", "q.csv", "--output", "d.csv"], "--noise-angle", 0.2,
+     lambda robot: pcr.VirtualRobot(robot, noise_angle=0.2),
+     "noise_angle: expected a number from 0 to 0.1 (rad), got 0.2"),
+    (["sensitivity"], "--step", 0.02, lambda robot: pcr.sensitivity(robot, step=0.02),
+     "step: expected a number from 1e-06 to 0.01 (m), got 0.02"),
+    (["accuracy"], "--strain-limit", 0.0,
+     lambda robot: pcr.command_path(robot, pcr.square_path(), strain_limit=0.0),
+     "strain_limit: expected a number from 1e-06 to 0.1, got 0"),
+])
+def test_the_cli_and_python_refuse_what_the_library_refuses(cli, robot, tmp_path, command,
+                                                            option, value, call, message):
+    """The range of an option lives in the library: Python reports its message, the CLI names
+    its option with the same range."""
+    raises(ValueError, message, call, robot)
+    out = subprocess.run([cli, *command, option, repr(value)], capture_output=True, text=True,
+                         cwd=tmp_path, check=False, timeout=60)
+    assert out.returncode != 0
+    bounds = message.split("expected a number from ")[1].split(", got")[0]
+    lo, hi = bounds.split(" (")[0].split(" to ")
+    assert f"{option}: '{value!r}' is outside [{lo}, {hi}]" in out.stderr, out.stderr
+    assert os.listdir(tmp_path) == []

@@ -148,3 +148,32 @@ def test_home_bow_says_which_home_a_pre_stressed_robot_is_in(tmp_path):
     assert [limb.home_bow for limb in pickle.loads(pickle.dumps(left)).limbs] == ["left"] * 4
     with pytest.raises(ValueError, match="home_bow.*'up'"):
         left.limbs[0].home_bow = "up"
+
+
+def _matrix(pose):
+    x, y, theta = pose
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s, x], [s, c, y], [0.0, 0.0, 1.0]])
+
+
+def test_compose_poses_is_the_product_of_homogeneous_matrices():
+    rng = np.random.default_rng(5)
+    a = rng.uniform(-1, 1, size=(7, 3)) * [0.1, 0.1, np.pi]
+    b = rng.uniform(-1, 1, size=(7, 3)) * [0.1, 0.1, np.pi]
+    for rows, single in ((pcr.compose_poses(a, b), None), (pcr.compose_poses(a[2], b), 2),
+                         (pcr.compose_poses(a, b[4]), 4)):
+        assert rows.shape == (7, 3)
+        for k in range(7):
+            ak = a[single] if single == 2 else a[k]
+            bk = b[single] if single == 4 else b[k]
+            m = _matrix(ak) @ _matrix(bk)
+            assert rows[k, :2] == pytest.approx(m[:2, 2], abs=1e-15)
+            assert np.cos(rows[k, 2]) == pytest.approx(m[0, 0], abs=1e-15)
+            assert np.sin(rows[k, 2]) == pytest.approx(m[1, 0], abs=1e-15)
+    single = pcr.compose_poses(a[0], b[0])
+    assert single.shape == (3,)
+    assert single.tolist() == (pcr.Pose(*a[0]) * pcr.Pose(*b[0])).to_array().tolist()
+    with pytest.raises(ValueError, match="3 and 2 rows do not broadcast"):
+        pcr.compose_poses(a[:3], b[:2])
+    with pytest.raises(ValueError, match="a: "):
+        pcr.compose_poses([0.0, np.nan, 0.0], b[0])

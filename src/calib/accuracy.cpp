@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "pcr/csv_io.hpp"
+#include "pcr/input_error.hpp"
 
 namespace pcr {
 namespace {
@@ -74,6 +75,7 @@ std::vector<Pose2<double>> load_path_csv(const std::string& path) {
 PathCommand command_path(const RobotParams<double>& model, const std::vector<Pose2<double>>& path,
                          const PathCommandOptions& options) {
   if (path.empty()) throw InputError("command_path: the path has no pose");
+  require_valid(options, "command_path");
   if (model.num_limbs < 2 || model.num_limbs > 3) {
     throw InputError("command_path: the robot has " + std::to_string(model.num_limbs) +
                      " limbs; inverse kinematics needs 2 or 3");
@@ -191,10 +193,7 @@ Iso9283Result iso9283(const std::vector<Pose2<double>>& commanded,
 AccuracyEvaluation evaluate_on_virtual_robot(const RobotParams<double>& model, VirtualRobot& robot,
                                              const std::vector<Pose2<double>>& path,
                                              const AccuracyOptions& options) {
-  if (options.repeat < 2) {
-    throw InputError("evaluate_on_virtual_robot: repeat must be >= 2, got " +
-                     std::to_string(options.repeat));
-  }
+  require_valid(options, "evaluate_on_virtual_robot");
   if (robot.truth().params.num_limbs != model.num_limbs) {
     throw InputError("evaluate_on_virtual_robot: the model has " + std::to_string(model.num_limbs) +
                      " limbs, the virtual robot " + std::to_string(robot.truth().params.num_limbs));

@@ -49,7 +49,7 @@ std::vector<ForwardSolution> solve_rows(const RobotParams<double>& robot,
 }
 
 /// The equilibria of `robot` at the joints of `at` other than `at` itself, found from its buckled
-/// seeds (internal::buckled_seed) and `reached` (equilibria at those joints the robot may have
+/// seeds (buckled_seed) and `reached` (equilibria at those joints the robot may have
 /// come to otherwise, dataset_readings): the one whose platform pose lies nearest `target`, if
 /// any.
 std::optional<ForwardSolution> nearest_other_equilibrium(
@@ -69,8 +69,8 @@ std::optional<ForwardSolution> nearest_other_equilibrium(
     }
   };
   for (const ForwardSolution* r : reached) consider(*r);
-  for (int k = 0; k < internal::kBuckledSeedsPerRod * robot.num_limbs; ++k) {
-    consider(forward_kinematics(robot, at.q, internal::buckled_seed(robot, at, k), fk, load));
+  for (int k = 0; k < kBuckledSeedsPerRod * robot.num_limbs; ++k) {
+    consider(forward_kinematics(robot, at.q, buckled_seed(robot, at, k), fk, load));
   }
   return best;
 }
@@ -1538,7 +1538,7 @@ ForwardSolution move_equilibrium_along_gauge(const ForwardSolution& solution,
     const Vector2<double> n = stiffness * G.rotate(Vector2<double>(w.nx, w.ny));
     w = Wrench<double>{n.x(), n.y(), stiffness * w.m};  // m(0), about the rod's start: not turned
   }
-  out.jacobian = internal::ChordMatrix();
+  out.jacobian.clear();
   return out;
 }
 
@@ -1728,11 +1728,7 @@ CalibrationResult calibrate(const RobotDescription& nominal,
                        std::to_string(n) + " limbs");
     }
   }
-  if (!(options.orientation_weight >= 0) || !(options.residual_scale > 0)) {
-    throw InputError(source + ": orientation weight must be >= 0 and residual scale > 0, got " +
-                     format_number(options.orientation_weight) + " and " +
-                     format_number(options.residual_scale));
-  }
+  require_valid(options, "calibration options");
   validate_stages(options.stages, source);
   check_enough_measurements(options.stages, nominal, data.size(), source);
 

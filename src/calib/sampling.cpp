@@ -164,6 +164,10 @@ class Sampler {
 bool admissible_configuration(const RobotParams<double>& robot, const JointVector& q,
                               double strain_limit, const SolverOptions& solver,
                               const PlatformLoad<double>& load, ForwardSolution* solution) {
+  std::string error;
+  if (!kStrainLimitRange.check(strain_limit, &error) || !solver.is_valid(&error)) {
+    throw InputError("admissible_configuration: " + error);
+  }
   ForwardSolution fk = forward_kinematics(robot, q, solver, load);
   const bool ok = fk.summary.converged() && fk.summary.max_strain <= strain_limit;
   if (solution) *solution = fk;
@@ -176,17 +180,7 @@ SamplingResult poisson_disc_sample(const RobotParams<double>& robot,
     throw InputError("poisson_disc_sample: invalid number of limbs " +
                      std::to_string(robot.num_limbs));
   }
-  if (options.count < 1) {
-    throw InputError("poisson_disc_sample: count must be >= 1, got " +
-                     std::to_string(options.count));
-  }
-  if (options.attempts < 1) {
-    throw InputError("poisson_disc_sample: attempts must be >= 1, got " +
-                     std::to_string(options.attempts));
-  }
-  if (!std::isfinite(options.min_distance) || !(options.strain_limit > 0)) {
-    throw InputError("poisson_disc_sample: min_distance must be finite and strain_limit > 0");
-  }
+  require_valid(options, "poisson_disc_sample");
   const Box box = sampling_box(robot, options);
   const int n = box.dim();
   Sampler sampler(robot, options, box);
@@ -257,10 +251,7 @@ DesignResult d_optimal_design(const RobotDescription& robot,
     throw InputError("d-optimal design: robot '" + robot.name +
                      "' has no uncertainty section (the half-widths scale the parameters)");
   }
-  if (!(options.noise_position > 0) || !(options.noise_angle > 0) ||
-      !std::isfinite(options.noise_position) || !std::isfinite(options.noise_angle)) {
-    throw InputError("d-optimal design: the noise must be finite and > 0");
-  }
+  require_valid(options, "d-optimal design");
   const RobotParams<double>& nominal = robot.params;
   const std::vector<double> h = parameter_half_widths(*robot.uncertainty, nominal.num_limbs);
   std::vector<int> free;
@@ -359,6 +350,7 @@ ConfigurationSets sample_configurations(const RobotDescription& robot,
     throw InputError("sample_configurations: validation count must be >= 0, got " +
                      std::to_string(validation_count));
   }
+  require_valid(options, "sample_configurations");
   const bool designed = options.design == SamplingDesign::kDOptimal;
   ConfigurationSets sets;
   if (!designed || validation_count > 0) {
@@ -379,10 +371,6 @@ ConfigurationSets sample_configurations(const RobotDescription& robot,
   }
   if (!designed) return sets;
 
-  if (options.count < 1) {
-    throw InputError("sample_configurations: count must be >= 1, got " +
-                     std::to_string(options.count));
-  }
   SamplingOptions pool = options;
   pool.count = options.candidates > 0 ? options.candidates : kDesignCandidateFactor * options.count;
   pool.min_distance = 0.0;  // from the candidate count

@@ -69,9 +69,8 @@ std::string format_q(const JointVector& q) {
 std::vector<JointVector> sensitivity_configurations(const RobotParams<double>& robot, double step,
                                                     const JointVector& centre) {
   const int n = robot.num_limbs;
-  if (!(step > 0) || !std::isfinite(step)) {
-    throw InputError("sensitivity: the grid step must be > 0, got " + std::to_string(step));
-  }
+  std::string error;
+  if (!SensitivityOptions::kStep.check(step, &error)) throw InputError("sensitivity: " + error);
   JointVector c(n);
   if (centre.size() == 0) {
     for (int i = 0; i < n; ++i) c(i) = 0.5 * (robot.limb(i).q_min + robot.limb(i).q_max);
@@ -140,6 +139,7 @@ SensitivityReport sensitivity_analysis(const RobotDescription& description,
                                        const SensitivityOptions& options) {
   const RobotParams<double>& robot = description.params;
   const int n = robot.num_limbs;
+  require_valid(options, "sensitivity");
   SensitivityReport report;
   report.step = options.step;
   report.configurations = sensitivity_configurations(robot, options.step, options.centre);

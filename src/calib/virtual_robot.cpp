@@ -17,14 +17,6 @@ double draw(std::mt19937_64& rng, double nominal, double half_width, double frac
   return nominal + half_width * x;
 }
 
-void check_non_negative(double value, const char* name) {
-  if (!(value >= 0.0) || !std::isfinite(value)) {
-    std::ostringstream msg;
-    msg << "VirtualRobotOptions: " << name << " must be finite and >= 0, got " << value;
-    throw InputError(msg.str());
-  }
-}
-
 std::string format_q(const JointVector& q) {
   std::ostringstream out;
   out.precision(17);
@@ -43,16 +35,7 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
     throw InputError("VirtualRobot: robot '" + nominal.name + "' has " + std::to_string(n) +
                      " limbs (expected 2 to " + std::to_string(kMaxLimbs) + ")");
   }
-  check_non_negative(options.noise_position, "noise_position");
-  check_non_negative(options.noise_angle, "noise_angle");
-  check_non_negative(options.effects.misalignment_half_width, "effects.misalignment_half_width");
-  check_non_negative(options.effects.diameter_half_width, "effects.diameter_half_width");
-  if (!(options.truth_at_fraction >= 0.0 && options.truth_at_fraction <= 1.0)) {
-    std::ostringstream msg;
-    msg << "VirtualRobotOptions: truth_at_fraction must lie in [0, 1], got "
-        << options.truth_at_fraction;
-    throw InputError(msg.str());
-  }
+  require_valid(options, "VirtualRobotOptions");
   const double f = options.truth_at_fraction;
 
   // Two independent streams from one seed: the truth, and the measurement noise.

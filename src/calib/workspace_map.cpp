@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "pcr/csv_io.hpp"
+#include "pcr/input_error.hpp"
 
 namespace pcr {
 namespace {
@@ -101,10 +102,7 @@ WorkspaceMap workspace_map(const RobotParams<double>& robot, const WorkspaceMapO
         "has " +
         std::to_string(n));
   }
-  if (options.grid < 2 || options.grid > 100000) {
-    throw std::invalid_argument("workspace_map: grid " + std::to_string(options.grid) +
-                                " is outside [2, 100000]");
-  }
+  require_valid(options, "workspace_map");
   std::array<double, 4> range;
   if (options.range) {
     range = *options.range;

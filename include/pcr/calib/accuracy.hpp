@@ -33,6 +33,7 @@ std::vector<Pose2<double>> load_path_csv(const std::string& path);
 /// IK along a path, warm-started pose to pose from the home solution.
 struct PathCommandOptions {
   PathStepOptions step;  ///< strain limit, solver options, platform load, cold-start fallback
+  bool is_valid(std::string* error = nullptr) const { return step.is_valid(error); }
 };
 
 struct PathCommand {
@@ -99,6 +100,12 @@ struct AccuracyOptions {
   int repeat = 30;  ///< ISO 9283 cycles per pose (>= 2; the standard asks for >= 30)
   PathCommandOptions command;
   AttainedFrame frame = AttainedFrame::kModelExtrinsics;
+
+  static constexpr OptionRange kRepeat{"repeat", 2, 100000};
+  /// As SolverOptions::is_valid, for the repeat and the command's options.
+  bool is_valid(std::string* error = nullptr) const {
+    return kRepeat.check(repeat, error) && command.is_valid(error);
+  }
 };
 
 struct AccuracyEvaluation {

@@ -66,7 +66,8 @@
 #include <vector>
 
 #include "pcr/calib/cost.hpp"
-#include "pcr/robot_io.hpp"
+#include "pcr/input_error.hpp"
+#include "pcr/robot_description.hpp"
 
 namespace pcr {
 
@@ -166,6 +167,26 @@ struct CalibrationOptions {
   bool drop_unreachable = false;
   /// Progress lines (stage, iteration, cost); empty: silent.
   std::function<void(const std::string&)> progress;
+
+  static constexpr OptionRange kOrientationWeight{"orientation_weight", 0, 10, "m/rad"};
+  static constexpr OptionRange kResidualScale{"residual_scale", 1e-15, 1, "m"};
+  static constexpr OptionRange kMaxIterations{"max_iterations", 1, 100000};
+  static constexpr OptionRange kGaugePriorWeight{"gauge_prior_weight", 0, 1e6};
+  static constexpr OptionRange kFunctionTolerance{"function_tolerance", 0, 1};
+  static constexpr OptionRange kIntermediateFunctionTolerance{"intermediate_function_tolerance", 0,
+                                                              1};
+  static constexpr OptionRange kRobustScale{"robust_scale", 0, 1e6};  ///< 0: no robust loss
+  /// As SolverOptions::is_valid, for these fields and fk (the stages are checked by calibrate,
+  /// against the robot).
+  bool is_valid(std::string* error = nullptr) const {
+    return kOrientationWeight.check(orientation_weight, error) &&
+           kResidualScale.check(residual_scale, error) &&
+           kMaxIterations.check(max_iterations, error) &&
+           kGaugePriorWeight.check(gauge_prior_weight, error) &&
+           kFunctionTolerance.check(function_tolerance, error) &&
+           kIntermediateFunctionTolerance.check(intermediate_function_tolerance, error) &&
+           kRobustScale.check(robust_scale, error) && fk.is_valid(error);
+  }
 };
 
 /// Table 3 of the paper for one model and one set: e_p (Eq. 8, m) and e_theta (Eq. 9, rad),

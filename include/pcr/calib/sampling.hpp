@@ -41,8 +41,10 @@
 #include <vector>
 
 #include "pcr/calib/virtual_robot.hpp"
+#include "pcr/input_error.hpp"
 #include "pcr/kinematics.hpp"
-#include "pcr/robot_io.hpp"
+#include "pcr/robot_description.hpp"
+#include "pcr/trajectory.hpp"
 
 namespace pcr {
 
@@ -89,8 +91,8 @@ struct SamplingOptions {
   double min_distance = 0.0;
   /// Sub-box of the joint space (m). Empty: the strokes [q_min, q_max] of each limb.
   JointVector box_min, box_max;
-  double strain_limit = 0.01;  ///< max bending strain |kappa| d / 2
-  int attempts = 30;           ///< Bridson's k: candidates per active point
+  double strain_limit = kDefaultStrainLimit;  ///< max bending strain |kappa| d / 2
+  int attempts = 30;                          ///< Bridson's k: candidates per active point
   SolverOptions solver = sampling_solver_options();
   PlatformLoad<double> load;
   /// Calibration configurations: spread or D-optimal (sample_configurations).
@@ -100,6 +102,22 @@ struct SamplingOptions {
   /// D-optimal: measurement noise (standard deviations) that weighs the rows.
   double noise_position = kDefaultNoisePosition;  ///< m
   double noise_angle = kDefaultNoiseAngle;        ///< rad
+
+  static constexpr OptionRange kCount{"count", 1, 1e7};
+  static constexpr OptionRange kMinDistance{"min_distance", 0, 0.1, "m"};  ///< 0: from the count
+  static constexpr OptionRange kAttempts{"attempts", 1, 10000};
+  static constexpr OptionRange kCandidates{"candidates", 0, 1e7};  ///< 0: from the count
+  /// The D-optimal design weighs the rows by the noise: it may not be zero.
+  static constexpr OptionRange kNoisePosition{"noise_position", 1e-12, 0.01, "m"};
+  static constexpr OptionRange kNoiseAngle{"noise_angle", 1e-12, 0.1, "rad"};
+  /// As SolverOptions::is_valid, for these fields and the solver's (the box is checked against
+  /// the robot's strokes by the sampler).
+  bool is_valid(std::string* error = nullptr) const {
+    return kCount.check(count, error) && kMinDistance.check(min_distance, error) &&
+           kStrainLimitRange.check(strain_limit, error) && kAttempts.check(attempts, error) &&
+           kCandidates.check(candidates, error) && kNoisePosition.check(noise_position, error) &&
+           kNoiseAngle.check(noise_angle, error) && solver.is_valid(error);
+  }
 };
 
 struct SamplingResult {

@@ -17,9 +17,10 @@
 #include <string>
 #include <vector>
 
+#include "pcr/input_error.hpp"
 #include "pcr/kinematics.hpp"
 #include "pcr/parameters.hpp"
-#include "pcr/robot_io.hpp"
+#include "pcr/robot_description.hpp"
 
 namespace pcr {
 
@@ -28,6 +29,15 @@ struct SensitivityOptions {
   JointVector centre;  ///< m; empty: the middle of each stroke
   PlatformLoad<double> load;
   SolverOptions solver;
+
+  /// Below, the configurations collapse onto the centre (a table of zeros); above, they leave
+  /// the strokes of a robot of the paper's size.
+  static constexpr OptionRange kStep{"step", 1e-6, 0.01, "m"};
+  /// As SolverOptions::is_valid, for the step and the solver (the centre is checked against the
+  /// robot's strokes by sensitivity_configurations).
+  bool is_valid(std::string* error = nullptr) const {
+    return kStep.check(step, error) && solver.is_valid(error);
+  }
 };
 
 struct SensitivityRow {
@@ -46,7 +56,8 @@ struct SensitivityReport {
   std::vector<int> ranking;  ///< indices into rows, most influential first
 };
 
-/// The 3^n grid minus its centre (throws InputError on a non-positive step).
+/// The 3^n grid minus its centre (throws InputError on a step outside SensitivityOptions::kStep
+/// or a centre outside the strokes).
 std::vector<JointVector> sensitivity_configurations(const RobotParams<double>& robot, double step,
                                                     const JointVector& centre = JointVector());
 

@@ -22,8 +22,9 @@
 #include <string>
 #include <vector>
 
+#include "pcr/input_error.hpp"
 #include "pcr/kinematics.hpp"
-#include "pcr/robot_io.hpp"
+#include "pcr/robot_description.hpp"
 
 namespace pcr {
 
@@ -42,6 +43,21 @@ struct UnmodelledEffects {
   PlatformLoad<double> load{Vector2<double>(5e-3, 0.0), 0.0};
 
   bool any() const { return misalignments || unequal_diameters || external_load; }
+
+  static constexpr OptionRange kMisalignmentHalfWidth{"misalignment_half_width", 0, 0.1, "rad"};
+  static constexpr OptionRange kDiameterHalfWidth{"diameter_half_width", 0, 1e-3, "m"};
+  /// As SolverOptions::is_valid; the load is any finite one.
+  bool is_valid(std::string* error = nullptr) const {
+    if (!kMisalignmentHalfWidth.check(misalignment_half_width, error, "effects.") ||
+        !kDiameterHalfWidth.check(diameter_half_width, error, "effects.")) {
+      return false;
+    }
+    if (!load.force.allFinite() || !std::isfinite(load.moment)) {
+      if (error != nullptr) *error = "effects.load: not finite";
+      return false;
+    }
+    return true;
+  }
 };
 
 struct VirtualRobotOptions {
@@ -53,6 +69,16 @@ struct VirtualRobotOptions {
   double noise_angle = kDefaultNoiseAngle;        ///< rad, std of theta
   UnmodelledEffects effects;
   SolverOptions solver;
+
+  static constexpr OptionRange kTruthAtFraction{"truth_at_fraction", 0, 1};
+  static constexpr OptionRange kNoisePosition{"noise_position", 0, 0.01, "m"};
+  static constexpr OptionRange kNoiseAngle{"noise_angle", 0, 0.1, "rad"};
+  /// As SolverOptions::is_valid, for these fields, the effects' and the solver's.
+  bool is_valid(std::string* error = nullptr) const {
+    return kTruthAtFraction.check(truth_at_fraction, error) &&
+           kNoisePosition.check(noise_position, error) && kNoiseAngle.check(noise_angle, error) &&
+           effects.is_valid(error) && solver.is_valid(error);
+  }
 };
 
 /// One simulated measurement.

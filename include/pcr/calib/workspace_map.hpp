@@ -45,6 +45,14 @@ struct WorkspaceMapOptions {
   /// Fills the accuracy fields of a point from its equilibrium (for example from a calibration's
   /// covariance); called on every point where IK found an equilibrium.
   std::function<void(const InverseSolution&, WorkspaceMapPoint&)> accuracy;
+
+  static constexpr OptionRange kTheta{"theta", -2 * M_PI, 2 * M_PI, "rad"};
+  static constexpr OptionRange kGrid{"grid", 2, 100000};
+  /// As SolverOptions::is_valid, for these fields and the solver's (the range, given or from the
+  /// strokes, is checked by workspace_map).
+  bool is_valid(std::string* error = nullptr) const {
+    return kTheta.check(theta, error) && kGrid.check(grid, error) && solver.is_valid(error);
+  }
 };
 
 struct WorkspaceMap {

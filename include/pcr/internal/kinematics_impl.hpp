@@ -10,6 +10,19 @@
 #include "pcr/stability.hpp"
 
 namespace pcr {
+
+template <class Solution>
+Solution buckled_seed(const RobotParams<double>& robot, const Solution& at, int k, int first_rod) {
+  constexpr double kTurns[kBuckledSeedsPerRod] = {1.0, -1.0, 2.0, -2.0};
+  const int rod = (first_rod + k / kBuckledSeedsPerRod) % robot.num_limbs;
+  const LimbParams<double>& limb = robot.limb(rod);
+  Solution seed = at;
+  seed.jacobian.clear();  // not at the seed
+  seed.wrenches[static_cast<std::size_t>(rod)].m +=
+      kTurns[k % kBuckledSeedsPerRod] * 2.0 * M_PI * limb.bending_stiffness() / limb.length;
+  return seed;
+}
+
 namespace internal {
 
 inline bool valid_robot(const RobotParams<double>& robot) {
@@ -33,9 +46,9 @@ void store_configuration(const ShootingProblem& problem, const ShootingVector& z
 /// A warm FK solve's input path, from the warm start's joints to q: kConverged when the inputs are
 /// valid, else the status that refuses them.
 inline SolveStatus forward_path(const RobotParams<double>& robot, const JointVector& q,
-                                const ForwardSolution& warm, ShootingVector& u0,
-                                ShootingVector& u1) {
-  if (!valid_robot(robot) || q.size() != robot.num_limbs || !q.allFinite() ||
+                                const ForwardSolution& warm, const SolverOptions& options,
+                                ShootingVector& u0, ShootingVector& u1) {
+  if (!valid_robot(robot) || !options.is_valid() || q.size() != robot.num_limbs || !q.allFinite() ||
       warm.q.size() != robot.num_limbs) {
     return SolveStatus::kInvalidInput;
   }
@@ -47,10 +60,10 @@ inline SolveStatus forward_path(const RobotParams<double>& robot, const JointVec
 /// A warm IK solve's input path, from the warm start's pose to `pose` (theta kept when n = 2, where
 /// it is solved for), as forward_path.
 inline SolveStatus inverse_path(const RobotParams<double>& robot, const Pose2<double>& pose,
-                                const InverseSolution& warm, ShootingVector& u0,
-                                ShootingVector& u1) {
+                                const InverseSolution& warm, const SolverOptions& options,
+                                ShootingVector& u0, ShootingVector& u1) {
   const int n = robot.num_limbs;
-  if (!valid_robot(robot) || warm.q.size() != n || !std::isfinite(pose.x) ||
+  if (!valid_robot(robot) || !options.is_valid() || warm.q.size() != n || !std::isfinite(pose.x) ||
       !std::isfinite(pose.y) || !std::isfinite(pose.theta)) {
     return SolveStatus::kInvalidInput;
   }
@@ -131,29 +144,11 @@ Solution solve_from_warm_start(ShootingProblem::Kind kind, const RobotParams<dou
   problem.set_input(u0);
   ShootingVector z = problem.pack(shooting_point(robot, warm));
   solution.jacobian = warm.jacobian;
-  solution.summary.status = solve_along_path(problem, u0, u1, z, options, solution.summary,
-                                             warm.summary.rod_steps, &solution.jacobian);
+  solution.summary.status =
+      solve_along_path(problem, u0, u1, z, options, solution.summary, warm.summary.rod_steps,
+                       &WarmStartAccess::chord(solution.jacobian));
   store_configuration(problem, z, solution);
   return solution;
-}
-
-/// Seeds of a solution's other equilibria at the same input (joints or pose), per rod.
-inline constexpr int kBuckledSeedsPerRod = 4;
-
-/// Seed k of the kBuckledSeedsPerRod n seeds of the other equilibria at `at`'s input: one rod
-/// bent further one way or the other, its proximal moment moved by 1 and 2 times 2 pi EI / l (a
-/// clamped-clamped rod's buckled shapes); the rods in turn from `first_rod`.
-template <class Solution>
-Solution buckled_seed(const RobotParams<double>& robot, const Solution& at, int k,
-                      int first_rod = 0) {
-  constexpr double kTurns[kBuckledSeedsPerRod] = {1.0, -1.0, 2.0, -2.0};
-  const int rod = (first_rod + k / kBuckledSeedsPerRod) % robot.num_limbs;
-  const LimbParams<double>& limb = robot.limb(rod);
-  Solution seed = at;
-  seed.jacobian = ChordMatrix();  // not at the seed
-  seed.wrenches[static_cast<std::size_t>(rod)].m +=
-      kTurns[k % kBuckledSeedsPerRod] * 2.0 * M_PI * limb.bending_stiffness() / limb.length;
-  return seed;
 }
 
 /// IK has converged on an unstable equilibrium at the input u: looks for a stable one at the same
@@ -262,7 +257,7 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
                                           const SolverOptions& options,
                                           const PlatformLoad<double>& load) {
   ShootingVector u0, u1;
-  const SolveStatus input = internal::forward_path(robot, q, warm_start, u0, u1);
+  const SolveStatus input = internal::forward_path(robot, q, warm_start, options, u0, u1);
   if (input != SolveStatus::kConverged) return internal::refused(q, input);
   ForwardSolution solution = internal::solve_from_warm_start(
       internal::ShootingProblem::Kind::kForward, robot, u0, u1, warm_start, options, load);
@@ -276,7 +271,7 @@ ForwardSolution forward_kinematics_through_folds(
     const RobotParams<double>& robot, const JointVector& q, const ForwardSolution& warm_start,
     const SolverOptions& options, const PlatformLoad<double>& load, Visitor&& visit) {
   ShootingVector u0, u1;
-  const SolveStatus input = internal::forward_path(robot, q, warm_start, u0, u1);
+  const SolveStatus input = internal::forward_path(robot, q, warm_start, options, u0, u1);
   if (input != SolveStatus::kConverged) return internal::refused(q, input);
   ForwardSolution solution = internal::solve_through_folds(
       internal::ShootingProblem::Kind::kForward, robot, u0, u1, warm_start, options, load, visit);
@@ -289,7 +284,7 @@ InverseSolution inverse_kinematics_through_folds(
     const RobotParams<double>& robot, const Pose2<double>& pose, const InverseSolution& warm_start,
     const SolverOptions& options, const PlatformLoad<double>& load, Visitor&& visit) {
   ShootingVector u0, u1;
-  const SolveStatus input = internal::inverse_path(robot, pose, warm_start, u0, u1);
+  const SolveStatus input = internal::inverse_path(robot, pose, warm_start, options, u0, u1);
   if (input != SolveStatus::kConverged) return internal::refused(pose, input);
   InverseSolution solution = internal::solve_through_folds(
       internal::ShootingProblem::Kind::kInverse, robot, u0, u1, warm_start, options, load, visit);
@@ -300,15 +295,15 @@ InverseSolution inverse_kinematics_through_folds(
 inline ForwardSolution home_solution(const RobotParams<double>& robot, const SolverOptions& options,
                                      const PlatformLoad<double>& load) {
   ForwardSolution home;
-  if (!internal::valid_robot(robot)) {
+  if (!internal::valid_robot(robot) || !options.is_valid()) {
     home.summary.status = SolveStatus::kInvalidInput;
     return home;
   }
   internal::ShootingProblem problem(internal::ShootingProblem::Kind::kForward, robot, load,
                                     options);
   SolveStatus status;
-  ShootingVector z =
-      internal::home_unknowns(problem, options, home.summary, status, &home.jacobian);
+  ShootingVector z = internal::home_unknowns(problem, options, home.summary, status,
+                                             &internal::WarmStartAccess::chord(home.jacobian));
   home.summary.status = status;
   home.summary.path_fraction = 1.0;
   internal::store_configuration(problem, z, home);
@@ -387,7 +382,8 @@ inline ForwardSolution forward_kinematics_from_home(const RobotParams<double>& r
     ShootingVector z;
     problem.set_input(u);
     const SolveStatus status = internal::solve_from_bowed_variant_at_refined_steps(
-        problem, u, options, solution.summary, z, &solution.jacobian);
+        problem, u, options, solution.summary, z,
+        &internal::WarmStartAccess::chord(solution.jacobian));
     if (status == SolveStatus::kConverged) {
       internal::store_configuration(problem, z, solution);
       solution.summary.path_fraction = 1.0;
@@ -406,7 +402,7 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
                                           const SolverOptions& options,
                                           const PlatformLoad<double>& load) {
   ShootingVector u0, u1;
-  const SolveStatus input = internal::inverse_path(robot, pose, warm_start, u0, u1);
+  const SolveStatus input = internal::inverse_path(robot, pose, warm_start, options, u0, u1);
   if (input != SolveStatus::kConverged) return internal::refused(pose, input);
   InverseSolution solution = internal::solve_from_warm_start(
       internal::ShootingProblem::Kind::kInverse, robot, u0, u1, warm_start, options, load);
