@@ -93,7 +93,7 @@ void register_render_command(CLI::App& app) {
                                       : cli::parse_list(args->q, cli::joint_names(n), "--q");
     for (std::size_t i = 0; i < q.size(); ++i) {
       const LimbParams<double>& limb = robot.params.limb(static_cast<int>(i));
-      if (q[i] < limb.q_min || q[i] > limb.q_max) {
+      if (!limb.within_stroke(q[i])) {
         throw InputError("--q: q" + std::to_string(i + 1) + " = " + format_double(q[i]) +
                          " m is beyond the stroke of limbs[" + std::to_string(i) + "], q_range [" +
                          format_double(limb.q_min) + ", " + format_double(limb.q_max) + "] m");
