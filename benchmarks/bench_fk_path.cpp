@@ -92,8 +92,8 @@ int main(int argc, char** argv) try {
   bench::PlainRod rods[3];
   for (int i = 0; i < 3; ++i) {
     const LimbParams<double>& limb = robot.limb(i);
-    rods[i] = {limb.A.x(), limb.A.y(), limb.alpha,  limb.B.x(),
-               limb.B.y(), limb.beta,  limb.length, limb.bending_stiffness()};
+    rods[i] = {limb.A.x(), limb.A.y(), limb.alpha,      limb.B.x(),
+               limb.B.y(), limb.beta,  limb.rod.length, limb.rod.bending_stiffness()};
   }
   volatile double sink = 0;  // keeps the residuals computed
   const double residual_us = best_us_per_item(repeat, path.size(), [&] {

@@ -22,7 +22,7 @@ inline RobotParams<double> regular_robot(int n) {
     LimbParams<double> limb = base.limb(0);
     limb.A = Vector2<double>(r_a * std::cos(phi), r_a * std::sin(phi));
     limb.alpha = phi + turn;
-    limb.B = limb.A + limb.length * Vector2<double>(std::cos(limb.alpha), std::sin(limb.alpha));
+    limb.B = limb.A + limb.rod.length * Vector2<double>(std::cos(limb.alpha), std::sin(limb.alpha));
     limb.beta = limb.alpha;
     robot.limb(i) = limb;
   }
@@ -52,9 +52,9 @@ inline RobotParams<double> perturbed(const RobotParams<double>& robot, std::mt19
     limb.gamma += intervals.angle * u(rng);
     limb.B += intervals.position * Vector2<double>{u(rng), u(rng)};
     limb.beta += intervals.angle * u(rng);
-    limb.length += intervals.length * u(rng);
-    limb.diameter += intervals.diameter * u(rng);
-    limb.young_modulus *= 1.0 + intervals.young_modulus_fraction * u(rng);
+    limb.rod.length += intervals.length * u(rng);
+    limb.rod.diameter += intervals.diameter * u(rng);
+    limb.rod.young_modulus *= 1.0 + intervals.young_modulus_fraction * u(rng);
   }
   return out;
 }

@@ -53,8 +53,10 @@ std::vector<double> flat(const RobotParams<double>& robot) {
   return v;
 }
 
-TEST(CostFunctor, ExactDerivativesMatchCentralDifferences) {
-  const RobotDescription nominal = default_robot();
+/// The cost's exact derivatives (the default, per-limb implicit assembly) against Richardson-
+/// extrapolated central differences of cold FK solves, at a point drawn inside the half-widths
+/// around `base`.
+void expect_exact_derivatives_match_differences(const RobotDescription& nominal) {
   const RobotParams<double>& base = nominal.params;
   const int count = num_parameters(base.num_limbs);
   const std::vector<double> h = parameter_half_widths(*nominal.uncertainty, base.num_limbs);
@@ -110,6 +112,22 @@ TEST(CostFunctor, ExactDerivativesMatchCentralDifferences) {
           << parameter_name(parameter_id(k, 3)) << " residual " << i;
     }
   }
+}
+
+TEST(CostFunctor, ExactDerivativesMatchCentralDifferences) {
+  expect_exact_derivatives_match_differences(default_robot());
+}
+
+// Pre-curved rods: the length's column takes the intrinsic curvature's own derivatives (a moment's
+// twin for u0, a Jet through the rod for u1).
+TEST(CostFunctor, ExactDerivativesMatchCentralDifferencesWithPrecurvedRods) {
+  RobotDescription nominal = default_robot();
+  const double curvatures[3][2] = {{12.0, 0.0}, {-8.0, 500.0}, {0.0, -700.0}};  // 1/m, 1/m^2
+  for (int i = 0; i < 3; ++i) {
+    nominal.params.limb(i).rod.precurvature = curvatures[i][0];
+    nominal.params.limb(i).rod.precurvature_slope = curvatures[i][1];
+  }
+  expect_exact_derivatives_match_differences(nominal);
 }
 
 // The per-limb analytic assembly (the default) against the auto-diff pass through the whole
@@ -225,7 +243,7 @@ TEST(Gauge, FixKeepsEveryPrediction) {
   EXPECT_NEAR(fixed.limb(0).A.x(), nominal.params.limb(0).A.x(), 1e-15);
   EXPECT_NEAR(fixed.limb(0).alpha, nominal.params.limb(0).alpha, 1e-15);
   EXPECT_NEAR(fixed.limb(0).B.y(), nominal.params.limb(0).B.y(), 1e-15);
-  EXPECT_NEAR(fixed.limb(0).diameter, nominal.params.limb(0).diameter, 1e-18);
+  EXPECT_NEAR(fixed.limb(0).rod.diameter, nominal.params.limb(0).rod.diameter, 1e-18);
   EXPECT_GT(std::abs(fixed.extrinsics.camera.x - s.truth.params.extrinsics.camera.x), 1e-7);
   // ... and the predicted measurements do not move (to the FK tolerance).
   for (const CalibrationSample& sample : s.calibration) {
@@ -319,7 +337,7 @@ TEST(Gauge, LoadMovesAlongAFiniteMotion) {
       const double force = std::hypot(b.wrenches[k].nx, b.wrenches[k].ny);
       EXPECT_NEAR(c.wrenches[k].nx, b.wrenches[k].nx, 1e-8 * force);
       EXPECT_NEAR(c.wrenches[k].ny, b.wrenches[k].ny, 1e-8 * force);
-      EXPECT_NEAR(c.wrenches[k].m, b.wrenches[k].m, 1e-8 * force * robot.limb(i).length);
+      EXPECT_NEAR(c.wrenches[k].m, b.wrenches[k].m, 1e-8 * force * robot.limb(i).rod.length);
     }
   }
 }
@@ -423,7 +441,7 @@ TEST(ConfigurationErrors, AMeasurementOnAnotherEquilibriumIsABranchMismatch) {
   ForwardSolution seed = forward_kinematics(robot, data[row].q);
   seed.jacobian.clear();
   const LimbParams<double>& limb = robot.limb(1);
-  seed.wrenches[1].m += 2.0 * M_PI * limb.bending_stiffness() / limb.length;
+  seed.wrenches[1].m += 2.0 * M_PI * limb.rod.bending_stiffness() / limb.rod.length;
   const ForwardSolution other = forward_kinematics(robot, data[row].q, seed);
   ASSERT_TRUE(other.summary.converged());
   const ForwardSolution home_branch = forward_kinematics(robot, data[row].q);

@@ -264,8 +264,8 @@ TEST_F(Cli, RobotCommandSaysWhichHomeFromItsPose) {
   robot.name = "pre-stressed-4";
   robot.young_modulus = pcr::default_robot().young_modulus;
   robot.params = pcr::testing::regular_robot(4);
-  robot.params.limb(1).length += 300e-6;
-  robot.params.limb(3).length += 200e-6;
+  robot.params.limb(1).rod.length += 300e-6;
+  robot.params.limb(3).rod.length += 200e-6;
   const std::string path = (dir_ / "pre.json").string(), out = (dir_ / "homed.json").string();
   pcr::save_robot(robot, path);
   pcr::RobotParams<double> left = robot.params;

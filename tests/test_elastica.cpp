@@ -170,17 +170,18 @@ double solve_bracketed(const std::function<double(double)>& f, double a, double 
   return best;
 }
 
-constexpr double kLength = 0.030;                         // m
-const double kEi = pcr::bending_stiffness(69e9, 125e-6);  // N m^2
+constexpr double kLength = 0.030;                    // m
+const pcr::Rod<double> kRod{kLength, 125e-6, 69e9};  // straight
+const double kEi = kRod.bending_stiffness();         // N m^2
 constexpr int kFineSteps = 2000;
 
 using Integrator = std::function<pcr::RodState<double>(const pcr::RodState<double>&)>;
 
 pcr::RodState<double> rk4(const pcr::RodState<double>& start) {
-  return pcr::integrate_rod(start, kEi, kLength, kFineSteps);
+  return pcr::integrate_rod(start, kRod, kFineSteps);
 }
 pcr::RodState<double> cvode(const pcr::RodState<double>& start) {
-  return pcr::integrate_rod_reference(start, kEi, kLength);
+  return pcr::integrate_rod_reference(start, kRod);
 }
 
 /// Shoots on m(0) so that the free tip has m(L) = 0 under the tip force (0, P).
@@ -241,7 +242,7 @@ TEST(Elastica, PureTipMomentGivesCircularArc) {
     }
     // Dense output along the arc, at arbitrary arc lengths.
     const std::vector<double> arc = {0.0, 0.1 * kLength, 0.37 * kLength, 0.9 * kLength, kLength};
-    const auto shape = pcr::sample_rod_reference(start, kEi, kLength, arc);
+    const auto shape = pcr::sample_rod_reference(start, kRod, arc);
     ASSERT_EQ(shape.size(), arc.size());
     for (std::size_t i = 0; i < arc.size(); ++i) {
       const double angle = arc[i] / radius;
@@ -254,20 +255,21 @@ TEST(Elastica, PureTipMomentGivesCircularArc) {
 
 TEST(ReferenceRod, RejectsBadInput) {
   const pcr::RodState<double> start{0, 0, 0, 0, 0, 0};
-  EXPECT_THROW(pcr::integrate_rod_reference(start, -1.0, kLength), std::invalid_argument);
-  EXPECT_THROW(pcr::integrate_rod_reference(start, kEi, 0.0), std::invalid_argument);
+  EXPECT_THROW(pcr::integrate_rod_reference(start, pcr::Rod<double>{kLength, 125e-6, -1.0}),
+               std::invalid_argument);
+  EXPECT_THROW(pcr::integrate_rod_reference(start, pcr::Rod<double>{0.0, 125e-6, 69e9}),
+               std::invalid_argument);
   pcr::RodState<double> nan_start = start;
   nan_start.m = std::nan("");
-  EXPECT_THROW(pcr::integrate_rod_reference(nan_start, kEi, kLength), std::invalid_argument);
-  EXPECT_THROW(pcr::sample_rod_reference(start, kEi, kLength, {0.5 * kLength, 0.1 * kLength}),
+  EXPECT_THROW(pcr::integrate_rod_reference(nan_start, kRod), std::invalid_argument);
+  EXPECT_THROW(pcr::sample_rod_reference(start, kRod, {0.5 * kLength, 0.1 * kLength}),
                std::invalid_argument);
-  EXPECT_THROW(pcr::sample_rod_reference(start, kEi, kLength, {2 * kLength}),
-               std::invalid_argument);
+  EXPECT_THROW(pcr::sample_rod_reference(start, kRod, {2 * kLength}), std::invalid_argument);
   // A step budget too small for the tolerance is a CVODE failure, reported as runtime_error.
   pcr::ReferenceOptions tiny;
   tiny.max_steps = 3;
   EXPECT_THROW(pcr::integrate_rod_reference(pcr::RodState<double>{0, 0, 0, 0, 0, 5 * kEi / kLength},
-                                            kEi, kLength, tiny),
+                                            kRod, tiny),
                std::runtime_error);
 }
 

@@ -198,7 +198,7 @@ TEST(Kinematics, YoungModulusHasNoEffectWithoutLoad) {
   RobotParams<double> robot = femto_3pf();
   const JointVector q = joints({0.002, 0.004, -0.001});
   const ForwardSolution a = forward_kinematics(robot, q);
-  for (int i = 0; i < 3; ++i) robot.limb(i).young_modulus *= 2.5;
+  for (int i = 0; i < 3; ++i) robot.limb(i).rod.young_modulus *= 2.5;
   const ForwardSolution b = forward_kinematics(robot, q);
   ASSERT_TRUE(a.summary.converged() && b.summary.converged());
   EXPECT_NEAR(a.pose.x, b.pose.x, 1e-15);
@@ -322,7 +322,7 @@ TEST(Kinematics, PreStressedRedundantRobotsFindTheirBowedHome) {
   std::vector<RobotParams<double>> robots;
   for (int n = 4; n <= 6; ++n) {
     RobotParams<double> longer = testing::regular_robot(n);
-    longer.limb(1).length += 80e-6;
+    longer.limb(1).rod.length += 80e-6;
     longer.limb(1).alpha += 3e-3;
     robots.push_back(longer);
   }
@@ -374,8 +374,8 @@ TEST(Kinematics, PreStressedRedundantRobotsFindTheirBowedHome) {
 // solve and FK near home follow the home said; choose_home names each from its pose.
 TEST(Kinematics, APreStressedRobotFollowsTheHomeItSays) {
   RobotParams<double> robot = testing::regular_robot(4);
-  robot.limb(1).length += 300e-6;
-  robot.limb(3).length += 200e-6;
+  robot.limb(1).rod.length += 300e-6;
+  robot.limb(3).rod.length += 200e-6;
   // The sides of the rods bent at home: the signs of the proximal moments above a tenth of the
   // largest (a nearly straight rod has none).
   const auto sides = [](const ForwardSolution& s) {
@@ -427,7 +427,7 @@ TEST(Kinematics, APreStressedRobotFollowsTheHomeItSays) {
 // budget that ran out.
 TEST(Kinematics, PreStressedRobotPushedIntoAFoldSaysSingular) {
   RobotParams<double> robot = testing::regular_robot(4);
-  robot.limb(1).length += 80e-6;
+  robot.limb(1).rod.length += 80e-6;
   robot.limb(1).alpha += 3e-3;
   const ForwardSolution home = home_solution(robot);
   ASSERT_TRUE(home.summary.converged());

@@ -127,7 +127,7 @@ TEST_F(PcrCalibrate, IdentifiedFileReproducesTheTruthsMeasurements) {
   EXPECT_LT(identified_mean, 0.05e-6);
   // The identified lengths are the truth's (gauge-free parameters), to well below their interval.
   for (int i = 0; i < 3; ++i) {
-    EXPECT_NEAR(identified.params.limb(i).length, truth_.params.limb(i).length, 2e-6) << i;
+    EXPECT_NEAR(identified.params.limb(i).rod.length, truth_.params.limb(i).rod.length, 2e-6) << i;
   }
 }
 

@@ -127,7 +127,7 @@ TEST(PoseParameterJacobian, AtTheGivenSolutionMatchesCentralDifferences) {
   ASSERT_TRUE(pose_parameter_jacobian(robot, solution, &J, load, tight()));
   ASSERT_EQ(J.cols(), num_parameters(3) + kLoadParameters);
   const Eigen::VectorXd p0 = flat_values(robot, load);
-  const double length = robot.limb(0).length;
+  const double length = robot.limb(0).rod.length;
   for (Eigen::Index k = 0; k < p0.size(); ++k) {
     const ParameterId id = parameter_id(static_cast<int>(k), 3);
     // Steps: 1e-4 relative on E and d, 1e-4 rad, 1e-6 m, 1e-5 N, 1e-6 N m (the truncation and

@@ -83,8 +83,10 @@ void expect_same(const pcr::RobotDescription& a, const pcr::RobotDescription& b)
     EXPECT_TRUE(same(x.A.x(), y.A.x()) && same(x.A.y(), y.A.y())) << "limb " << i;
     EXPECT_TRUE(same(x.B.x(), y.B.x()) && same(x.B.y(), y.B.y())) << "limb " << i;
     EXPECT_TRUE(same(x.alpha, y.alpha) && same(x.beta, y.beta) && same(x.gamma, y.gamma));
-    EXPECT_TRUE(same(x.length, y.length) && same(x.diameter, y.diameter));
-    EXPECT_TRUE(same(x.young_modulus, y.young_modulus));
+    EXPECT_TRUE(same(x.rod.length, y.rod.length) && same(x.rod.diameter, y.rod.diameter));
+    EXPECT_TRUE(same(x.rod.young_modulus, y.rod.young_modulus));
+    EXPECT_TRUE(same(x.rod.precurvature, y.rod.precurvature));
+    EXPECT_TRUE(same(x.rod.precurvature_slope, y.rod.precurvature_slope));
     EXPECT_TRUE(same(x.q_min, y.q_min) && same(x.q_max, y.q_max));
     EXPECT_EQ(x.home_bow, y.home_bow);
   }
@@ -113,10 +115,10 @@ TEST(RobotIo, ParsesAValidFile) {
   EXPECT_EQ(r.name, "test-3pf");
   EXPECT_EQ(r.young_modulus, 69e9);
   ASSERT_EQ(r.params.num_limbs, 3);
-  EXPECT_EQ(r.params.limb(0).young_modulus, 69e9);  // global E
-  EXPECT_EQ(r.params.limb(1).young_modulus, 70e9);  // per-limb override
+  EXPECT_EQ(r.params.limb(0).rod.young_modulus, 69e9);  // global E
+  EXPECT_EQ(r.params.limb(1).rod.young_modulus, 70e9);  // per-limb override
   EXPECT_EQ(r.params.limb(1).gamma, 0.001);
-  EXPECT_EQ(r.params.limb(1).length, 0.031);
+  EXPECT_EQ(r.params.limb(1).rod.length, 0.031);
   EXPECT_EQ(r.params.limb(2).q_min, -0.01);
   EXPECT_EQ(r.params.extrinsics.camera.theta, 0.3);
   EXPECT_EQ(r.params.extrinsics.pattern.y, 0.02);
@@ -239,6 +241,14 @@ TEST(RobotIo, ValueRules) {
   j = valid();
   j["limbs"][1]["E"] = -70e9;
   EXPECT_MESSAGE(error_of(j), "limbs[1].E", "physical range", "-70000000000");
+  j = valid();  // a shape-set rod turns by at most one full turn: |u0| <= 2 pi / l
+  j["limbs"][1]["precurvature"] = 250.0;
+  EXPECT_MESSAGE(error_of(j), "limbs[1].precurvature", "physical range", "1/m", "got 250");
+  j["limbs"][1]["precurvature"] = -150.0;
+  j["limbs"][1]["precurvature_slope"] = "steep";
+  EXPECT_MESSAGE(error_of(j), "limbs[1].precurvature_slope", "steep");
+  j["limbs"][1]["precurvature_slope"] = 2e4;
+  EXPECT_MESSAGE(error_of(j), "limbs[1].precurvature_slope", "physical range", "1/m^2");
   j = valid();
   j["limbs"][1]["q_range"] = Json::array({0.01, -0.01});
   EXPECT_MESSAGE(error_of(j), "limbs[1].q_range", "min > max", "[0.01,-0.01]");
@@ -328,9 +338,13 @@ TEST(RobotIo, RoundTripIsBitExact) {
       l.alpha = any();
       l.beta = any();
       l.gamma = any();
-      l.length = length();
-      l.diameter = diameter();
-      l.young_modulus = (i % 2) ? random_double(rng, 6.1, 11.9, true) : r.young_modulus;
+      l.rod.length = length();
+      l.rod.diameter = diameter();
+      l.rod.young_modulus = (i % 2) ? random_double(rng, 6.1, 11.9, true) : r.young_modulus;
+      if (i % 3 == 1) {  // |u0| < 0.63 1/m and |u1| < 0.16 1/m^2: inside 2 pi / l, 4 pi / l^2
+        l.rod.precurvature = random_double(rng, -300, -0.2, false);
+        l.rod.precurvature_slope = random_double(rng, -300, -0.8, false);
+      }
       l.q_min = -std::abs(any());
       l.q_max = std::abs(any());
       l.home_bow = (trial + i) % 3 - 1;  // right, not said, left
@@ -351,7 +365,7 @@ TEST(RobotIo, RoundTripIsBitExact) {
   }
   // save_robot refuses an invalid description and leaves nothing behind.
   pcr::RobotDescription bad = pcr::default_robot();
-  bad.params.limb(1).length = std::nan("");
+  bad.params.limb(1).rod.length = std::nan("");
   const std::string bad_path = (dir / "bad.json").string();
   EXPECT_THROW(pcr::save_robot(bad, bad_path), pcr::InputError);
   EXPECT_FALSE(std::filesystem::exists(bad_path));
@@ -376,8 +390,8 @@ TEST(RobotIo, DefaultRobotIsThePapersRobot) {
     EXPECT_NEAR(l.A.x(), r_a * std::cos(phi), 1e-15);
     EXPECT_NEAR(l.A.y(), r_a * std::sin(phi), 1e-15);
     EXPECT_NEAR(l.B.norm(), 0.030, 1e-12);  // the distal clamps lie on a 30 mm circle
-    EXPECT_NEAR(l.length, 0.030, 0);
-    EXPECT_EQ(l.diameter, 125e-6);
+    EXPECT_NEAR(l.rod.length, 0.030, 0);
+    EXPECT_EQ(l.rod.diameter, 125e-6);
     EXPECT_EQ(l.q_min, -0.0105);
     EXPECT_EQ(l.q_max, 0.0105);
   }

@@ -10,7 +10,8 @@ namespace pcr {
 namespace {
 
 constexpr double kLength = 0.03;
-const double kEI = bending_stiffness(69e9, 125e-6);
+const Rod<double> kRod{kLength, 125e-6, 69e9};  // straight
+const double kEI = kRod.bending_stiffness();
 
 TEST(Rod, BendingStiffnessOfCircularSection) {
   const double expected = 69e9 * M_PI * std::pow(125e-6, 4) / 64.0;
@@ -19,7 +20,7 @@ TEST(Rod, BendingStiffnessOfCircularSection) {
 
 TEST(Rod, UnloadedRodIsStraight) {
   const RodState<double> start{0.01, -0.02, 0.3, 0, 0, 0};
-  const RodState<double> tip = integrate_rod(start, kEI, kLength, 8);
+  const RodState<double> tip = integrate_rod(start, kRod, 8);
   EXPECT_NEAR(tip.x, 0.01 + kLength * std::cos(0.3), 1e-17);
   EXPECT_NEAR(tip.y, -0.02 + kLength * std::sin(0.3), 1e-17);
   EXPECT_NEAR(tip.theta, 0.3, 1e-16);
@@ -31,7 +32,7 @@ TEST(Rod, PureMomentGivesCircularArc) {
   const RodState<double> start{0, 0, 0, 0, 0, kEI * curvature};
   const double angle = curvature * kLength;
   for (int steps : {32, 64}) {
-    const RodState<double> tip = integrate_rod(start, kEI, kLength, steps);
+    const RodState<double> tip = integrate_rod(start, kRod, steps);
     EXPECT_NEAR(tip.theta, angle, 1e-14);
     EXPECT_NEAR(tip.m, kEI * curvature, 1e-20);
     // The carried (cos, sin) pair has an RK4 error of order (kappa h)^4 / 120.
@@ -44,9 +45,9 @@ TEST(Rod, PureMomentGivesCircularArc) {
 
 TEST(Rod, ErrorFallsSixteenfoldPerStepDoubling) {
   const RodState<double> start{0, 0, 0.2, 4e-4, -9e-4, 2e-5};
-  const RodState<double> fine = integrate_rod(start, kEI, kLength, 4096);
+  const RodState<double> fine = integrate_rod(start, kRod, 4096);
   const auto error = [&](int steps) {
-    const RodState<double> tip = integrate_rod(start, kEI, kLength, steps);
+    const RodState<double> tip = integrate_rod(start, kRod, steps);
     return std::hypot(tip.x - fine.x, tip.y - fine.y);
   };
   const double ratio = error(16) / error(32);
@@ -56,7 +57,7 @@ TEST(Rod, ErrorFallsSixteenfoldPerStepDoubling) {
 
 TEST(Rod, SensitivityMatchesCentralDifferences) {
   const RodState<double> start{0.001, 0.002, 1.1, 3e-4, -5e-4, 1.5e-5};
-  const RodTip<double> tip = integrate_rod_with_sensitivity(start, kEI, kLength, 64);
+  const RodTip<double> tip = integrate_rod_with_sensitivity(start, kRod, 64);
   const double steps[3] = {1e-9, 1e-9, 1e-11};
   for (int j = 0; j < 3; ++j) {
     RodState<double> plus = start, minus = start;
@@ -64,8 +65,8 @@ TEST(Rod, SensitivityMatchesCentralDifferences) {
     double* m = j == 0 ? &minus.nx : j == 1 ? &minus.ny : &minus.m;
     *p += steps[j];
     *m -= steps[j];
-    const RodState<double> a = integrate_rod(plus, kEI, kLength, 64);
-    const RodState<double> b = integrate_rod(minus, kEI, kLength, 64);
+    const RodState<double> a = integrate_rod(plus, kRod, 64);
+    const RodState<double> b = integrate_rod(minus, kRod, 64);
     const double fd[4] = {(a.x - b.x) / (2 * steps[j]), (a.y - b.y) / (2 * steps[j]),
                           (a.theta - b.theta) / (2 * steps[j]), (a.m - b.m) / (2 * steps[j])};
     for (int k = 0; k < 4; ++k) {
@@ -73,14 +74,14 @@ TEST(Rod, SensitivityMatchesCentralDifferences) {
           << "row " << k << " column " << j;
     }
   }
-  EXPECT_EQ(tip.state.x, integrate_rod(start, kEI, kLength, 64).x);
+  EXPECT_EQ(tip.state.x, integrate_rod(start, kRod, 64).x);
 }
 
 TEST(Rod, SampledShapeVisitsEveryNode) {
   const RodState<double> start{0, 0, 0, 0, 0, kEI * 50.0};
   int count = 0;
   double last_s = -1;
-  sample_rod(start, kEI, kLength, 16, [&](double s, const RodState<double>& state) {
+  sample_rod(start, kRod, 16, [&](double s, const RodState<double>& state) {
     EXPECT_GT(s, last_s);
     EXPECT_NEAR(state.theta, 50.0 * s, 1e-14);
     last_s = s;
@@ -114,7 +115,11 @@ void expect_lanes_match_rods_alone() {
       const RodState<double> start{0.01 * i,         -0.003 * i,
                                    -2.0 + 1.1 * i,   (i - 2.5) * 4e-4,
                                    (1.5 - i) * 3e-4, (i % 2 ? 1 : -1) * (1e-5 + 4e-5 * i)};
-      lanes[i].init(start, kEI * (0.5 + 0.3 * i), kLength * (0.7 + 0.15 * i), kSteps);
+      // EI (0.5 + 0.3 i), lengths apart, half of them pre-curved
+      const Rod<double> rod{kLength * (0.7 + 0.15 * i), kRod.diameter,
+                            kRod.young_modulus * (0.5 + 0.3 * i), i % 2 ? 40.0 - 9.0 * i : 0.0,
+                            i % 3 ? 0.0 : 1500.0 * (i - 1)};
+      lanes[i].init(start, rod, kSteps);
       alone[i] = lanes[i];
       for (int k = 0; k < kSteps; ++k) alone[i].step();
     }

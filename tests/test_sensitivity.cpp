@@ -37,9 +37,9 @@ Eigen::Vector3d central_difference(const RobotParams<double>& robot, const Joint
 double step_for(const RobotParams<double>& robot, const ParameterId& id) {
   switch (id.kind) {
     case ParameterKind::kYoungModulus:
-      return 1e-4 * robot.limb(id.limb).young_modulus;
+      return 1e-4 * robot.limb(id.limb).rod.young_modulus;
     case ParameterKind::kDiameter:
-      return 1e-4 * robot.limb(id.limb).diameter;
+      return 1e-4 * robot.limb(id.limb).rod.diameter;
     case ParameterKind::kAlpha:
     case ParameterKind::kBeta:
     case ParameterKind::kGamma:
@@ -51,7 +51,7 @@ double step_for(const RobotParams<double>& robot, const ParameterId& id) {
 
 void cross_check(const PlatformLoad<double>& load) {
   const RobotParams<double> robot = femto_3pf();
-  const double length = robot.limb(0).length;
+  const double length = robot.limb(0).rod.length;
   const JointVector q = joints(2e-3, -1e-3, 3e-3);
   Eigen::MatrixXd J;
   ASSERT_TRUE(platform_parameter_jacobian(robot, q, &J, load));

@@ -30,9 +30,9 @@ RobotParams<double> one_rod() {
   RobotParams<double> robot;
   robot.num_limbs = 1;
   LimbParams<double>& limb = robot.limb(0);
-  limb.length = kLength;
-  limb.diameter = kDiameter;
-  limb.young_modulus = kYoung;
+  limb.rod.length = kLength;
+  limb.rod.diameter = kDiameter;
+  limb.rod.young_modulus = kYoung;
   return robot;
 }
 
@@ -46,7 +46,7 @@ std::array<Wrench<double>, kMaxLimbs> wrench(double nx, double ny, double m) {
 Pose2<double> tip_pose(const Wrench<double>& w, int steps) {
   const RobotParams<double> robot = one_rod();
   const RodState<double> tip =
-      integrate_rod(proximal_rod_state(robot.limb(0), 0.0, w), kEi, kLength, steps);
+      integrate_rod(proximal_rod_state(robot.limb(0), 0.0, w), robot.limb(0).rod, steps);
   return Pose2<double>{tip.x, tip.y, tip.theta};
 }
 
@@ -77,7 +77,7 @@ TEST(Stability, ClampedClampedColumnHasItsConjugatePointAtEulersLength) {
 // dy = l^3 / (3 EI) F + l^2 / (2 EI) M, dtheta = l^2 / (2 EI) F + l / EI M, dx = l / EA F.
 TEST(Stability, UnloadedCantileverHasTheClosedFormTipStiffness) {
   const RobotParams<double> robot = one_rod();
-  const double ea = robot.limb(0).axial_stiffness();
+  const double ea = robot.limb(0).rod.axial_stiffness();
   Eigen::Matrix3d compliance;
   compliance << kLength / ea, 0, 0,                                        //
       0, std::pow(kLength, 3) / (3 * kEi), kLength * kLength / (2 * kEi),  //
@@ -114,7 +114,7 @@ TEST(Stability, CantileverUnderADeadTipLoadIsStable) {
       const double nx = load * unit * std::cos(direction), ny = load * unit * std::sin(direction);
       for (int it = 0; it < 30; ++it) {  // m(l) = 0 by Newton on m(0)
         const RodTip<double> tip = integrate_rod_with_sensitivity(
-            proximal_rod_state(robot.limb(0), 0.0, Wrench<double>{nx, ny, m0}), kEi, kLength,
+            proximal_rod_state(robot.limb(0), 0.0, Wrench<double>{nx, ny, m0}), robot.limb(0).rod,
             steps);
         m0 -= tip.state.m / tip.sensitivity(3, 2);
         if (std::abs(tip.state.m) < 1e-14 * unit * kLength) break;

@@ -75,7 +75,7 @@ TEST(VirtualRobot, TruthLiesInsideTheUncertaintyIntervals) {
       const LimbParams<double>& a = t.limb(i);
       const LimbParams<double>& b = nominal.params.limb(i);
       const LimbUncertainty& h = u.limbs[static_cast<std::size_t>(i)];
-      EXPECT_LE(std::abs(a.length - b.length), h.length);
+      EXPECT_LE(std::abs(a.rod.length - b.rod.length), h.length);
       EXPECT_LE(std::abs(a.A.x() - b.A.x()), h.A.x());
       EXPECT_LE(std::abs(a.A.y() - b.A.y()), h.A.y());
       EXPECT_LE(std::abs(a.B.x() - b.B.x()), h.B.x());
@@ -83,12 +83,12 @@ TEST(VirtualRobot, TruthLiesInsideTheUncertaintyIntervals) {
       EXPECT_LE(std::abs(a.alpha - b.alpha), h.alpha);
       EXPECT_LE(std::abs(a.beta - b.beta), h.beta);
       EXPECT_LE(std::abs(a.gamma - b.gamma), h.gamma);
-      EXPECT_LE(std::abs(a.diameter - b.diameter), u.global.diameter);
-      EXPECT_EQ(a.young_modulus, b.young_modulus);  // the default E half-width is 0
+      EXPECT_LE(std::abs(a.rod.diameter - b.rod.diameter), u.global.diameter);
+      EXPECT_EQ(a.rod.young_modulus, b.rod.young_modulus);  // the default E half-width is 0
       // One wire: every limb has the same diameter offset.
-      EXPECT_NEAR(a.diameter - b.diameter, t.limb(0).diameter - nominal.params.limb(0).diameter,
-                  1e-18);
-      max_rel_length = std::max(max_rel_length, std::abs(a.length - b.length) / h.length);
+      EXPECT_NEAR(a.rod.diameter - b.rod.diameter,
+                  t.limb(0).rod.diameter - nominal.params.limb(0).rod.diameter, 1e-18);
+      max_rel_length = std::max(max_rel_length, std::abs(a.rod.length - b.rod.length) / h.length);
     }
     const Pose2<double>& c = t.extrinsics.camera;
     const Pose2<double>& c0 = nominal.params.extrinsics.camera;
@@ -165,8 +165,8 @@ TEST(VirtualRobot, UnmodelledEffectsAreSwitchedOnOneAtATime) {
     EXPECT_LE(std::abs(a.beta - b.beta), 1e-2);
     EXPECT_LE(std::abs(a.gamma - b.gamma), 1e-2);
     max_extra = std::max({max_extra, std::abs(a.beta - b.beta), std::abs(a.gamma - b.gamma)});
-    EXPECT_EQ(a.length, b.length);  // everything else is the base truth
-    EXPECT_EQ(a.diameter, b.diameter);
+    EXPECT_EQ(a.rod.length, b.rod.length);  // everything else is the base truth
+    EXPECT_EQ(a.rod.diameter, b.rod.diameter);
   }
   EXPECT_GT(max_extra, 1e-3);
 
@@ -175,10 +175,10 @@ TEST(VirtualRobot, UnmodelledEffectsAreSwitchedOnOneAtATime) {
   VirtualRobot unequal(nominal, options);
   double spread = 0;
   for (int i = 0; i < n; ++i) {
-    const double d = unequal.truth().params.limb(i).diameter;
-    EXPECT_LE(std::abs(d - base.truth().params.limb(i).diameter),
+    const double d = unequal.truth().params.limb(i).rod.diameter;
+    EXPECT_LE(std::abs(d - base.truth().params.limb(i).rod.diameter),
               options.effects.diameter_half_width);
-    spread = std::max(spread, std::abs(d - unequal.truth().params.limb(0).diameter));
+    spread = std::max(spread, std::abs(d - unequal.truth().params.limb(0).rod.diameter));
     EXPECT_EQ(unequal.truth().params.limb(i).alpha, base.truth().params.limb(i).alpha);
   }
   EXPECT_GT(spread, 1e-8);

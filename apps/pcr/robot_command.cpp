@@ -28,10 +28,10 @@ void run_robot(const RobotArguments& args) {
     save_robot(robot, args.output);
   }
   const RobotParams<double>& p = robot.params;
-  double l_min = p.limb(0).length, l_max = l_min;
+  double l_min = p.limb(0).rod.length, l_max = l_min;
   for (int i = 1; i < p.num_limbs; ++i) {
-    l_min = std::min(l_min, p.limb(i).length);
-    l_max = std::max(l_max, p.limb(i).length);
+    l_min = std::min(l_min, p.limb(i).rod.length);
+    l_max = std::max(l_max, p.limb(i).rod.length);
   }
   std::cerr << (args.robot.empty() ? "<default robot>" : args.robot) << ": '" << robot.name << "', "
             << p.num_limbs << " limbs, E = " << format_double(robot.young_modulus)

@@ -100,11 +100,11 @@ T& parameter_ref(RobotParams<T>& robot, const ParameterId& id) {
     LimbParams<T>& limb = robot.limb(id.limb);
     switch (id.kind) {
       case ParameterKind::kYoungModulus:
-        return limb.young_modulus;
+        return limb.rod.young_modulus;
       case ParameterKind::kDiameter:
-        return limb.diameter;
+        return limb.rod.diameter;
       case ParameterKind::kLength:
-        return limb.length;
+        return limb.rod.length;
       case ParameterKind::kAx:
         return limb.A.x();
       case ParameterKind::kAy:

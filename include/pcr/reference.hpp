@@ -5,7 +5,8 @@
 // The same rod equations as pcr/rod.hpp (Mauze et al. 2021, Eq. 1), with the same sign
 // convention (n(s), m(s) are exerted by the material beyond s on the material before it):
 //
-//   x' = cos(theta), y' = sin(theta), theta' = m / EI, n' = 0, m' = n_x sin(theta) - n_y cos(theta)
+//   x' = cos(theta), y' = sin(theta), theta' = m / EI + u*(s), n' = 0,
+//   m' = n_x sin(theta) - n_y cos(theta)
 //
 // integrated by CVODE's variable-order, variable-step multistep methods at tight tolerances, and
 // the forward kinematics of pcr/kinematics.hpp solved on the residual those integrations give.
@@ -50,18 +51,18 @@ struct ReferenceOptions {
   int jacobian_rod_steps = 256;
 };
 
-/// Integrates one rod over [0, length] (m) from its proximal state with CVODE; EI in N m^2.
+/// Integrates one rod over [0, rod.length] from its proximal state with CVODE.
 /// With max_abs_moment, also returns max |m(s)| (N m) over CVODE's internal steps.
 /// Throws std::invalid_argument on non-finite input or non-positive EI / length, and
 /// std::runtime_error when CVODE fails.
-RodState<double> integrate_rod_reference(const RodState<double>& start, double ei, double length,
+RodState<double> integrate_rod_reference(const RodState<double>& start, const Rod<double>& rod,
                                          const ReferenceOptions& options = ReferenceOptions(),
                                          double* max_abs_moment = nullptr);
 
 /// The rod state at each of the given arc lengths (m), which must be non-decreasing and lie in
-/// [0, length]; computed by CVODE's dense output, as accurate as the integration itself.
+/// [0, rod.length]; computed by CVODE's dense output, as accurate as the integration itself.
 std::vector<RodState<double>> sample_rod_reference(
-    const RodState<double>& start, double ei, double length, const std::vector<double>& arc_lengths,
+    const RodState<double>& start, const Rod<double>& rod, const std::vector<double>& arc_lengths,
     const ReferenceOptions& options = ReferenceOptions());
 
 /// The scaled shooting residual of pcr::shooting_residual (closure of each rod, Eq. 2, then the
@@ -95,7 +96,9 @@ ForwardSolution forward_kinematics_reference(
 // n N + 3: for tests.
 
 /// A rod clamped at A (in W) with tangent angle alpha (in W), its tip attached to the platform at
-/// B (in P) with tangent angle beta (in P). Length l (m), EI (N m^2).
+/// B (in P) with tangent angle beta (in P). Length l (m), EI (N m^2), intrinsic curvature
+/// u*(s) = precurvature + precurvature_slope s (1/m, 1/m^2): bending energy int EI (theta' - u*)^2
+/// / 2.
 struct EnergyRod {
   Vector2<double> A;
   double alpha = 0;
@@ -103,6 +106,8 @@ struct EnergyRod {
   double beta = 0;
   double length = 0;
   double ei = 0;
+  double precurvature = 0;
+  double precurvature_slope = 0;
 };
 
 struct EnergyProblem {

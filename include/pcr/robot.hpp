@@ -22,9 +22,7 @@ struct LimbParams {
   T gamma{0};                ///< actuator misalignment: the clamp moves along alpha + gamma (rad)
   Vector2<T> B{T(0), T(0)};  ///< distal clamp in P (m)
   T beta{0};                 ///< rod tangent angle at the distal clamp, in P (rad)
-  T length{0};               ///< stress-free length l (m)
-  T diameter{0};             ///< circular section diameter d (m)
-  T young_modulus{0};        ///< E (Pa)
+  Rod<T> rod{};              ///< the rod between the clamps: l, d, E and its intrinsic curvature
   double q_min{0};           ///< actuator stroke, lower end (m)
   double q_max{0};           ///< actuator stroke, upper end (m)
   /// Which home a pre-stressed robot (n >= 4, docs/kinematics.md, "Accuracy and branches") is in:
@@ -38,11 +36,6 @@ struct LimbParams {
   /// Whether the actuator reaches joint value q: q_min <= q <= q_max. The one stroke test of pcr:
   /// the solvers report a solution outside it as SolveStatus::kOutOfRange.
   bool within_stroke(double q) const { return q >= q_min && q <= q_max; }
-
-  T bending_stiffness() const { return pcr::bending_stiffness(young_modulus, diameter); }
-  /// EA of the circular section (N): the kinematics takes the rods as inextensible, the stability
-  /// check (pcr/stability.hpp) needs their axial compliance.
-  T axial_stiffness() const { return young_modulus * T(M_PI / 4.0) * diameter * diameter; }
 
   /// Unit vector of the actuator's translation, in W.
   Vector2<T> actuator_direction() const {
@@ -62,9 +55,7 @@ struct LimbParams {
     out.gamma = U(gamma);
     out.B = B.template cast<U>();
     out.beta = U(beta);
-    out.length = U(length);
-    out.diameter = U(diameter);
-    out.young_modulus = U(young_modulus);
+    out.rod = rod.template cast<U>();
     out.q_min = q_min;
     out.q_max = q_max;
     out.home_bow = home_bow;
@@ -130,9 +121,9 @@ inline RobotParams<double> femto_3pf() {
     limb.gamma = 0.0;
     limb.B = limb.A + kLength * Vector2<double>(std::cos(limb.alpha), std::sin(limb.alpha));
     limb.beta = limb.alpha;
-    limb.length = kLength;
-    limb.diameter = 125e-6;
-    limb.young_modulus = 69e9;
+    limb.rod.length = kLength;
+    limb.rod.diameter = 125e-6;
+    limb.rod.young_modulus = 69e9;
     limb.q_min = -0.0105;
     limb.q_max = 0.0105;
   }

@@ -35,7 +35,7 @@ struct RobotUncertainty {
 struct RobotDescription {
   std::string name;
   double young_modulus{
-      0};  ///< the global E (Pa); params.limb(i).young_modulus holds the resolved value
+      0};  ///< the global E (Pa); params.limb(i).rod.young_modulus holds the resolved value
   RobotParams<double> params;
   std::optional<RobotUncertainty> uncertainty;
 };
@@ -45,7 +45,7 @@ inline RobotDescription default_robot() {
   RobotDescription robot;
   robot.name = "femto-3pf";
   robot.params = femto_3pf();
-  robot.young_modulus = robot.params.limb(0).young_modulus;
+  robot.young_modulus = robot.params.limb(0).rod.young_modulus;
   RobotUncertainty u;
   // Mauze et al. 2021, Section 4: the intervals of the calibrated parameters.
   u.global.length = 126e-6;

@@ -1,14 +1,19 @@
 #pragma once
 // Planar Kirchhoff rod (Mauze et al. 2021, Eq. 1), integrated by fixed-step RK4.
 //
-//   x' = cos(theta), y' = sin(theta), theta' = m / EI, n' = 0, m' = n_x sin(theta) - n_y cos(theta)
+//   x' = cos(theta), y' = sin(theta), theta' = m / EI + u*(s), n' = 0,
+//   m' = n_x sin(theta) - n_y cos(theta)
+//
+// u*(s) is the rod's intrinsic curvature (zero for the paper's straight rods): the linear
+// constitutive law m = EI (theta' - u*) of a rod shape-set to a curve (Rod below).
 //
 // Sign convention: n(s) and m(s) are the force and moment exerted by the material beyond s
 // (larger arc length) on the material before it. So n(0), m(0) is what the rod exerts on its
 // proximal clamp, and -n(l), -m(l) is what the rod exerts on whatever holds its tip.
 //
 // To avoid a sin/cos pair per RK4 stage, the integrator carries c = cos(theta) and
-// s = sin(theta) as states (c' = -s m/EI, s' = c m/EI): the right-hand side is then a polynomial.
+// s = sin(theta) as states (c' = -s k, s' = c k, k = theta'): the right-hand side is then a
+// polynomial in the states.
 // theta is integrated alongside, so it stays continuous over full turns.
 
 #include <Eigen/Core>
@@ -36,6 +41,37 @@ T bending_stiffness(const T& young_modulus, const T& diameter) {
   const T d2 = diameter * diameter;
   return young_modulus * T(M_PI / 64.0) * d2 * d2;
 }
+
+/// One rod as the model sees it: its constitutive law, its geometry and the parameters a
+/// calibration may identify. A circular section (EI and EA constant along the rod) and an
+/// intrinsic curvature u*(s) = u0 + u1 s: zero for a straight rod, u0 for a rod shape-set to a
+/// circular arc (superelastic NiTi), u0 + u1 s for a clothoid. The stress-free rod is the curve
+/// whose tangent turns by u*; the bending moment is m = EI (theta' - u*).
+template <class T>
+struct Rod {
+  T length{0};              ///< stress-free length l (m)
+  T diameter{0};            ///< circular section diameter d (m)
+  T young_modulus{0};       ///< E (Pa)
+  T precurvature{0};        ///< u0 = u*(0) (1/m), positive turning counterclockwise
+  T precurvature_slope{0};  ///< u1 = du*/ds (1/m^2)
+
+  T bending_stiffness() const { return pcr::bending_stiffness(young_modulus, diameter); }
+  /// EA of the circular section (N): the kinematics takes the rods as inextensible, the stability
+  /// check (pcr/stability.hpp) needs their axial compliance.
+  T axial_stiffness() const { return young_modulus * T(M_PI / 4.0) * diameter * diameter; }
+  /// u*(s) (1/m).
+  T intrinsic_curvature(const T& s) const { return precurvature + precurvature_slope * s; }
+  /// The angle the stress-free rod's tangent turns through from 0 to s: u0 s + u1 s^2 / 2 (rad).
+  T intrinsic_turn(const T& s) const {
+    return s * (precurvature + T(0.5) * precurvature_slope * s);
+  }
+  bool straight() const { return precurvature == T(0) && precurvature_slope == T(0); }
+
+  template <class U>
+  Rod<U> cast() const {
+    return Rod<U>{U(length), U(diameter), U(young_modulus), U(precurvature), U(precurvature_slope)};
+  }
+};
 
 /// State of the rod at one arc length, in the frame the integration runs in.
 template <class T>
@@ -137,10 +173,13 @@ struct RodStepper {
   static constexpr bool kSens = Sens;
   L nx, ny, x, y, c, s, th, m;
   L inv_ei, h, half_h, sixth_h, max_abs_moment;
+  /// u* at the current node, and its increase over half a step and a whole step (u* is linear in
+  /// s, so the stages' values are exact; all zero for a straight rod, which then steps as before).
+  L u_node, du_half, du_step;
   L tx[3], ty[3], tc[3], ts[3], tth[3], tm[3];  ///< tangents, [j]: d / d wrench_j (with Sens)
 
-  /// One rod (L a scalar): its proximal state, EI (N m^2), length (m) and RK4 step count.
-  void init(const RodState<L>& start, const L& ei, const L& length, int steps) {
+  /// One rod (L a scalar): its proximal state, the rod and the RK4 step count.
+  void init(const RodState<L>& start, const Rod<L>& rod, int steps) {
     using std::abs;
     using std::cos;
     using std::sin;
@@ -158,11 +197,14 @@ struct RodStepper {
       }
       tm[2] = L(1);  // only dm/dm0 starts non-zero
     }
-    inv_ei = L(1) / ei;
-    h = length / L(steps);
+    inv_ei = L(1) / rod.bending_stiffness();
+    h = rod.length / L(steps);
     half_h = h / L(2);
     sixth_h = h / L(6);
     max_abs_moment = abs(m);
+    u_node = rod.precurvature;
+    du_half = rod.precurvature_slope * half_h;
+    du_step = rod.precurvature_slope * h;
   }
 
   PCR_SIMD_CLONES void step() {
@@ -179,7 +221,8 @@ struct RodStepper {
       const L cc = st == 0 ? c : L(c + a * dc[p]);
       const L sv = st == 0 ? s : L(s + a * ds[p]);
       const L mm = st == 0 ? m : L(m + a * dm[p]);
-      const L k = mm * inv_ei;
+      const L u = st == 0 ? u_node : L(u_node + (st == 3 ? du_step : du_half));
+      const L k = mm * inv_ei + u;
       sc[st] = cc;
       ss[st] = sv;
       sk[st] = k;
@@ -224,6 +267,7 @@ struct RodStepper {
       }
     }
     keep_larger(max_abs_moment, L(abs(m)));
+    u_node += du_step;
   }
 
   RodState<L> state() const { return RodState<L>{x, y, th, nx, ny, m}; }
@@ -257,6 +301,9 @@ void zip_lane_fields(Bundle& bundle, Rod& rod, F&& f) {
   f(bundle.half_h, rod.half_h);
   f(bundle.sixth_h, rod.sixth_h);
   f(bundle.max_abs_moment, rod.max_abs_moment);
+  f(bundle.u_node, rod.u_node);
+  f(bundle.du_half, rod.du_half);
+  f(bundle.du_step, rod.du_step);
   if constexpr (std::decay_t<Rod>::kSens) {
     for (int j = 0; j < 3; ++j) {
       f(bundle.tx[j], rod.tx[j]);
@@ -325,16 +372,16 @@ void integrate_rods_in_lanes(RodStepper<double, Sens>* rods, int n, int steps,
 }
 
 template <class T, bool Sens, class Visitor>
-RodStepper<T, Sens> integrate_rod_pass(const RodState<T>& start, const T& ei, const T& length,
-                                       int steps, Visitor&& visit) {
-  RodStepper<T, Sens> rod;
-  rod.init(start, ei, length, steps);
-  visit(T(0), rod.state());
+RodStepper<T, Sens> integrate_rod_pass(const RodState<T>& start, const Rod<T>& rod, int steps,
+                                       Visitor&& visit) {
+  RodStepper<T, Sens> stepper;
+  stepper.init(start, rod, steps);
+  visit(T(0), stepper.state());
   for (int i = 0; i < steps; ++i) {
-    rod.step();
-    visit(T(i + 1) * rod.h, rod.state());
+    stepper.step();
+    visit(T(i + 1) * stepper.h, stepper.state());
   }
-  return rod;
+  return stepper;
 }
 
 /// A one-rod stepper's state as a RodTip: its sensitivities with Sens, else left unset.
@@ -356,29 +403,27 @@ RodTip<T> tip_of(const RodStepper<T, Sens>& rod) {
 
 }  // namespace internal
 
-/// Integrates the rod from its proximal state over [0, length]; EI in N m^2.
+/// Integrates the rod from its proximal state over [0, rod.length].
 template <class T>
-RodState<T> integrate_rod(const RodState<T>& start, const T& ei, const T& length, int steps,
+RodState<T> integrate_rod(const RodState<T>& start, const Rod<T>& rod, int steps,
                           T* max_abs_moment = nullptr) {
   const auto pass =
-      internal::integrate_rod_pass<T, false>(start, ei, length, steps, internal::NoVisitor{});
+      internal::integrate_rod_pass<T, false>(start, rod, steps, internal::NoVisitor{});
   if (max_abs_moment) *max_abs_moment = pass.max_abs_moment;
   return pass.state();
 }
 
 /// Integrates the rod and its sensitivity to the proximal wrench (n_x, n_y, m)(0).
 template <class T>
-RodTip<T> integrate_rod_with_sensitivity(const RodState<T>& start, const T& ei, const T& length,
-                                         int steps) {
+RodTip<T> integrate_rod_with_sensitivity(const RodState<T>& start, const Rod<T>& rod, int steps) {
   return internal::tip_of(
-      internal::integrate_rod_pass<T, true>(start, ei, length, steps, internal::NoVisitor{}));
+      internal::integrate_rod_pass<T, true>(start, rod, steps, internal::NoVisitor{}));
 }
 
 /// Integrates the rod and calls visit(s, RodState) at each of the steps + 1 nodes (the shape).
 template <class T, class Visitor>
-RodState<T> sample_rod(const RodState<T>& start, const T& ei, const T& length, int steps,
-                       Visitor&& visit) {
-  return internal::integrate_rod_pass<T, false>(start, ei, length, steps, visit).state();
+RodState<T> sample_rod(const RodState<T>& start, const Rod<T>& rod, int steps, Visitor&& visit) {
+  return internal::integrate_rod_pass<T, false>(start, rod, steps, visit).state();
 }
 
 }  // namespace pcr

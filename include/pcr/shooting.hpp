@@ -64,8 +64,8 @@ struct ShootingScale {
 inline ShootingScale shooting_scale(const RobotParams<double>& robot) {
   double length = 0, ei = 0;
   for (int i = 0; i < robot.num_limbs; ++i) {
-    length += robot.limb(i).length;
-    ei += robot.limb(i).bending_stiffness();
+    length += robot.limb(i).rod.length;
+    ei += robot.limb(i).rod.bending_stiffness();
   }
   length /= robot.num_limbs;
   ei /= robot.num_limbs;
@@ -141,7 +141,8 @@ T shooting_residual_from_tips(const RobotParams<T>& robot, const ShootingPoint<T
     residual(3 * i + 2) = angle_difference(tip.theta, point.pose.theta + limb.beta);
     force_sum += Vector2<T>(w.nx, w.ny);
     moment_sum += arm.x() * w.ny - arm.y() * w.nx + tip.m;
-    const T strain = tips[i].max_abs_moment * limb.diameter / (T(2) * limb.bending_stiffness());
+    const T strain =
+        tips[i].max_abs_moment * limb.rod.diameter / (T(2) * limb.rod.bending_stiffness());
     if (strain > max_strain) max_strain = strain;
   }
   residual(3 * n + 0) = force_sum.x() * T(1.0 / scale.force);
@@ -238,8 +239,7 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
     constexpr bool kSens = decltype(sens)::value;
     internal::RodStepper<T, kSens> rods[kMaxLimbs];
     for (int i = 0; i < n; ++i) {
-      rods[i].init(proximal_state(i), robot.limb(i).bending_stiffness(), robot.limb(i).length,
-                   rod_steps);
+      rods[i].init(proximal_state(i), robot.limb(i).rod, rod_steps);
     }
     internal::integrate_rods_in_lanes(rods, n, rod_steps);
     for (int i = 0; i < n; ++i) tips[i] = internal::tip_of(rods[i]);
@@ -254,11 +254,10 @@ T shooting_residual(const RobotParams<T>& robot, const ShootingPoint<T>& point,
     for (int i = 0; i < n; ++i) {
       const LimbParams<T>& limb = robot.limb(i);
       if (partials) {
-        tips[i] = integrate_rod_with_sensitivity(proximal_state(i), limb.bending_stiffness(),
-                                                 limb.length, rod_steps);
+        tips[i] = integrate_rod_with_sensitivity(proximal_state(i), limb.rod, rod_steps);
       } else {
-        tips[i].state = integrate_rod(proximal_state(i), limb.bending_stiffness(), limb.length,
-                                      rod_steps, &tips[i].max_abs_moment);
+        tips[i].state =
+            integrate_rod(proximal_state(i), limb.rod, rod_steps, &tips[i].max_abs_moment);
       }
     }
   }

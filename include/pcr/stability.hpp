@@ -221,8 +221,8 @@ EquilibriumStability equilibrium_stability_in_lanes(
     point.q[i] = q(i);
     point.wrenches[i] = wrenches[i];
     const RodState<double> start = proximal_rod_state(limb, q(i), wrenches[i]);
-    rods[i].init(start, limb.bending_stiffness(), limb.length, rod_steps);
-    ea[i] = axial_compliance ? limb.axial_stiffness() : HUGE_VAL;
+    rods[i].init(start, limb.rod, rod_steps);
+    ea[i] = axial_compliance ? limb.rod.axial_stiffness() : HUGE_VAL;
   }
   LaneJacobiMonitor<N> monitor(rods, n, ea);
   internal::integrate_rods_bundled<N>(rods, n, rod_steps,

@@ -49,6 +49,8 @@ class Limb:
     l: float  # m
     d: float  # m
     E: float  # Pa
+    precurvature: float  # 1/m: intrinsic curvature u*(0) of a rod shape-set to a curve
+    precurvature_slope: float  # 1/m^2: u*(s) = precurvature + precurvature_slope s
     q_range: tuple[float, float]  # m
     home_bow: Optional[str]  # 'left', 'right' or None: which home a pre-stressed robot is in
     @property

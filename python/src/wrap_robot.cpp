@@ -151,6 +151,15 @@ void set_limbs(RobotDescription& robot, const std::vector<LimbParams<double>>& l
   }
 }
 
+/// A Limb property's getter and setter that reach one field of its rod (the Limb keeps its flat
+/// Python names l, d, E, precurvature...).
+auto rod_field(double Rod<double>::*field) {
+  return [field](const LimbParams<double>& l) { return l.rod.*field; };
+}
+auto rod_setter(double Rod<double>::*field) {
+  return [field](LimbParams<double>& l, double v) { l.rod.*field = v; };
+}
+
 }  // namespace
 
 void wrap_robot(py::module_& m) {
@@ -253,10 +262,19 @@ void wrap_robot(py::module_& m) {
               py::return_value_policy::reference_internal, "distal clamp [x, y] in P (m)")
           .def_readwrite("beta", &LimbParams<double>::beta,
                          "rod tangent angle at the distal clamp, in P (rad)")
-          .def_readwrite("l", &LimbParams<double>::length, "stress-free rod length (m)")
-          .def_readwrite("d", &LimbParams<double>::diameter, "rod diameter (m)")
-          .def_readwrite("E", &LimbParams<double>::young_modulus,
-                         "Young's modulus of this rod (Pa)")
+          .def_property("l", rod_field(&Rod<double>::length), rod_setter(&Rod<double>::length),
+                        "stress-free rod length (m)")
+          .def_property("d", rod_field(&Rod<double>::diameter), rod_setter(&Rod<double>::diameter),
+                        "rod diameter (m)")
+          .def_property("E", rod_field(&Rod<double>::young_modulus),
+                        rod_setter(&Rod<double>::young_modulus), "Young's modulus of this rod (Pa)")
+          .def_property("precurvature", rod_field(&Rod<double>::precurvature),
+                        rod_setter(&Rod<double>::precurvature),
+                        "intrinsic curvature u*(0) of a rod shape-set to a curve (1/m, positive "
+                        "counterclockwise); 0 for a straight rod")
+          .def_property("precurvature_slope", rod_field(&Rod<double>::precurvature_slope),
+                        rod_setter(&Rod<double>::precurvature_slope),
+                        "du*/ds (1/m^2): u*(s) = precurvature + precurvature_slope s")
           .def_property(
               "q_range",
               [](const LimbParams<double>& l) { return std::make_pair(l.q_min, l.q_max); },
@@ -286,15 +304,21 @@ void wrap_robot(py::module_& m) {
               },
               "the side of the line between its clamps the rod bows to at home, 'left' "
               "or 'right' (which home a pre-stressed robot, n >= 4, is in), or None")
-          .def_property_readonly("EI", &LimbParams<double>::bending_stiffness,
-                                 "bending stiffness E pi d^4 / 64 (N m^2)")
+          .def_property_readonly(
+              "EI", [](const LimbParams<double>& l) { return l.rod.bending_stiffness(); },
+              "bending stiffness E pi d^4 / 64 (N m^2)")
           .def("__repr__", [](const LimbParams<double>& l) {
             std::ostringstream s;
             s.precision(9);
             s << "Limb(A=[" << l.A.x() << ", " << l.A.y() << "], alpha=" << l.alpha
               << ", gamma=" << l.gamma << ", B=[" << l.B.x() << ", " << l.B.y()
-              << "], beta=" << l.beta << ", l=" << l.length << ", d=" << l.diameter
-              << ", E=" << l.young_modulus << ", q_range=(" << l.q_min << ", " << l.q_max << ")"
+              << "], beta=" << l.beta << ", l=" << l.rod.length << ", d=" << l.rod.diameter
+              << ", E=" << l.rod.young_modulus;
+            if (!l.rod.straight()) {
+              s << ", precurvature=" << l.rod.precurvature
+                << ", precurvature_slope=" << l.rod.precurvature_slope;
+            }
+            s << ", q_range=(" << l.q_min << ", " << l.q_max << ")"
               << (l.home_bow == 0  ? ""
                   : l.home_bow > 0 ? ", home_bow='left'"
                                    : ", home_bow='right'")
@@ -420,7 +444,7 @@ void wrap_robot(py::module_& m) {
           "E", [](const RobotDescription& r) { return r.young_modulus; },
           [](RobotDescription& r, double e) {
             r.young_modulus = e;
-            for (int i = 0; i < r.params.num_limbs; ++i) r.params.limb(i).young_modulus = e;
+            for (int i = 0; i < r.params.num_limbs; ++i) r.params.limb(i).rod.young_modulus = e;
           },
           "the global Young's modulus (Pa); setting it sets every limb's E too")
       .def_property_readonly(

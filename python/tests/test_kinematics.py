@@ -180,3 +180,42 @@ def test_one_stroke_verdict_for_every_caller(cli, robot):
     assert len(warning) == 1
     assert warning[0].startswith(f"{outside[fit].sum()} rows have joints outside the stroke")
     assert result.dropped == []
+
+
+def test_precurved_rods_reach_the_cli_and_the_file(cli, robot, tmp_path):
+    # Rods shape-set to arcs and clothoids (Limb.precurvature, 1/m; precurvature_slope, 1/m^2):
+    # Python, the saved file and `pcr fk` on it give one answer.
+    curved = robot.copy()
+    curved.limbs = [limb.replace(precurvature=u0, precurvature_slope=u1)
+                    for limb, (u0, u1) in zip(robot.limbs, [(12.0, 0.0), (-8.0, 500.0), (0.0, -700.0)])]
+    assert "precurvature=-8" in repr(curved.limbs[1]) and "precurvature" not in repr(robot.limbs[0])
+    path = tmp_path / "curved.json"
+    curved.save(path)
+    loaded = pcr.Robot.load(path)
+    assert [(l.precurvature, l.precurvature_slope) for l in loaded.limbs] == \
+        [(12.0, 0.0), (-8.0, 500.0), (0.0, -700.0)]
+    rng = np.random.default_rng(11)
+    q = rng.uniform(-0.006, 0.006, size=(6, 3))
+    rows = run_cli(cli, "fk", q, ["q1", "q2", "q3"], "--robot", str(path))
+    batch = curved.forward(q)
+    for k, row in enumerate(rows):
+        assert row["status"] == batch.status[k] == "converged"
+        assert batch.pose[k] == pytest.approx([float(row[c]) for c in ("x", "y", "theta")],
+                                              abs=1e-12)
+
+
+def test_rods_shape_set_to_arcs_act_as_a_moment_on_the_platform(robot):
+    # theta' = m / EI + u0 is theta' = (m + EI u0) / EI: rods shape-set to arcs and clamped at both
+    # ends are straight rods whose moment carries EI u0 more, so the platform sits where the straight
+    # robot's does under the moment sum EI_i u0_i, at every joint value (to the solver's accuracy).
+    curved = robot.copy()
+    curved.limbs = [limb.replace(precurvature=u0) for limb, u0 in zip(robot.limbs, (12.0, -8.0, 5.0))]
+    moment = sum(limb.EI * limb.precurvature for limb in curved.limbs)
+    q = np.random.default_rng(12).uniform(-0.006, 0.006, size=(12, 3))
+    arcs, loaded, straight = curved.forward(q), robot.forward(q, moment=moment), robot.forward(q)
+    assert list(arcs.status) == list(loaded.status)  # the same folds, too
+    solved = arcs.status == "converged"
+    assert solved.sum() >= 8
+    np.testing.assert_allclose(arcs.pose[solved, :2], loaded.pose[solved, :2], rtol=0, atol=2e-9)
+    np.testing.assert_allclose(arcs.pose[solved, 2], loaded.pose[solved, 2], rtol=0, atol=2e-6)
+    assert np.abs(arcs.pose[solved] - straight.pose[solved]).max() > 1e-7  # the moment moves it

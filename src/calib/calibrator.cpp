@@ -1392,7 +1392,7 @@ std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot) {
   {
     GaugeGenerator g{"bending stiffness: common scale", "d[*] scaled together", blank()};
     for (int i = 0; i < n; ++i)
-      g.direction[idx(ParameterKind::kDiameter, i)] = robot.limb(i).diameter;
+      g.direction[idx(ParameterKind::kDiameter, i)] = robot.limb(i).rod.diameter;
     out.push_back(g);
   }
   return out;
@@ -1509,7 +1509,7 @@ RobotParams<double> move_along_gauge(const RobotParams<double>& params, const Po
     limb.alpha = params.limb(i).alpha + G.theta;
     limb.B = H.transform(params.limb(i).B);
     limb.beta = params.limb(i).beta + H.theta;
-    limb.diameter = params.limb(i).diameter * stiffness_scale;
+    limb.rod.diameter = params.limb(i).rod.diameter * stiffness_scale;
   }
   out.extrinsics.camera = G * params.extrinsics.camera;
   out.extrinsics.pattern = params.extrinsics.pattern * H.inverse();
@@ -1576,7 +1576,7 @@ GaugeMotion gauge_fix_motion(const RobotParams<double>& params,
   return GaugeMotion{
       onto_reference(proximal_translation, proximal_rotation, limb.A, limb.alpha, ref.A, ref.alpha),
       onto_reference(distal_translation, distal_rotation, limb.B, limb.beta, ref.B, ref.beta),
-      stiffness ? ref.diameter / limb.diameter : 1.0};
+      stiffness ? ref.rod.diameter / limb.rod.diameter : 1.0};
 }
 
 GaugeMotion gauge_fix_motion(const RobotParams<double>& params, const PlatformLoad<double>& load,

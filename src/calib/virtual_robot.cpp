@@ -58,9 +58,9 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
   for (int i = 0; i < n; ++i) {
     const LimbUncertainty& h = u.limbs[static_cast<std::size_t>(i)];
     LimbParams<double>& limb = p.limb(i);
-    limb.young_modulus += e_offset;
-    limb.diameter += d_offset;
-    limb.length = draw(rng, limb.length, h.length, f);
+    limb.rod.young_modulus += e_offset;
+    limb.rod.diameter += d_offset;
+    limb.rod.length = draw(rng, limb.rod.length, h.length, f);
     limb.A.x() = draw(rng, limb.A.x(), h.A.x(), f);
     limb.A.y() = draw(rng, limb.A.y(), h.A.y(), f);
     limb.alpha = draw(rng, limb.alpha, h.alpha, f);
@@ -93,8 +93,8 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
     std::seed_seq seq{options.seed, std::uint64_t{0x6469616d}};
     std::mt19937_64 r(seq);
     for (int i = 0; i < n; ++i) {
-      p.limb(i).diameter = draw(r, p.limb(i).diameter, fx.diameter_half_width);
-      if (!(p.limb(i).diameter > 0)) {
+      p.limb(i).rod.diameter = draw(r, p.limb(i).rod.diameter, fx.diameter_half_width);
+      if (!(p.limb(i).rod.diameter > 0)) {
         throw InputError("VirtualRobot: effects.diameter_half_width " +
                          std::to_string(fx.diameter_half_width) + " makes a diameter <= 0");
       }

@@ -245,21 +245,33 @@ class Reader {
       const std::string path = index("limbs", i);
       const Json& l = limbs[i];
       check_object(l, path,
-                   {"A", "alpha", "gamma", "B", "beta", "l", "d", "q_range", "E", "home_bow"});
+                   {"A", "alpha", "gamma", "B", "beta", "l", "d", "q_range", "E", "precurvature",
+                    "precurvature_slope", "home_bow"});
       LimbParams<double>& limb = out.params.limb(static_cast<int>(i));
       limb.A = position(required(l, path, "A"), join(path, "A"));
       limb.alpha = angle(required(l, path, "alpha"), join(path, "alpha"));
       limb.gamma = angle(required(l, path, "gamma"), join(path, "gamma"));
       limb.B = position(required(l, path, "B"), join(path, "B"));
       limb.beta = angle(required(l, path, "beta"), join(path, "beta"));
-      limb.length = in_range(required(l, path, "l"), join(path, "l"), 1e-4, 10.0, "m");
-      limb.diameter = in_range(required(l, path, "d"), join(path, "d"), 1e-6, 0.1, "m");
-      if (!(limb.diameter < limb.length)) {
+      limb.rod.length = in_range(required(l, path, "l"), join(path, "l"), 1e-4, 10.0, "m");
+      limb.rod.diameter = in_range(required(l, path, "d"), join(path, "d"), 1e-6, 0.1, "m");
+      if (!(limb.rod.diameter < limb.rod.length)) {
         fail(join(path, "d"), "a rod's diameter must be smaller than its length (l)", l["d"]);
       }
-      limb.young_modulus = l.contains("E") ? in_range(l["E"], join(path, "E"), kMinYoungModulus,
-                                                      kMaxYoungModulus, "Pa")
-                                           : out.young_modulus;
+      limb.rod.young_modulus = l.contains("E") ? in_range(l["E"], join(path, "E"), kMinYoungModulus,
+                                                          kMaxYoungModulus, "Pa")
+                                               : out.young_modulus;
+      // A shape-set rod turns by at most one full turn over its length, u0 l and u1 l^2 / 2 each.
+      const double turn_per_length = 2.0 * M_PI / limb.rod.length;
+      if (l.contains("precurvature")) {
+        limb.rod.precurvature = in_range(l["precurvature"], join(path, "precurvature"),
+                                         -turn_per_length, turn_per_length, "1/m");
+      }
+      if (l.contains("precurvature_slope")) {
+        const double bound = 2.0 * turn_per_length / limb.rod.length;
+        limb.rod.precurvature_slope = in_range(
+            l["precurvature_slope"], join(path, "precurvature_slope"), -bound, bound, "1/m^2");
+      }
       const Json& range = required(l, path, "q_range");
       const Eigen::Vector2d q = position(range, join(path, "q_range"));
       if (q(0) > q(1)) fail(join(path, "q_range"), "min > max", range);
@@ -499,10 +511,12 @@ std::string robot_to_json(const RobotDescription& robot) {
     l["gamma"] = limb.gamma;
     l["B"] = pair(limb.B);
     l["beta"] = limb.beta;
-    l["l"] = limb.length;
-    l["d"] = limb.diameter;
+    l["l"] = limb.rod.length;
+    l["d"] = limb.rod.diameter;
     l["q_range"] = Ordered::array({limb.q_min, limb.q_max});
-    if (!same_bits(limb.young_modulus, robot.young_modulus)) l["E"] = limb.young_modulus;
+    if (!same_bits(limb.rod.young_modulus, robot.young_modulus)) l["E"] = limb.rod.young_modulus;
+    if (limb.rod.precurvature != 0.0) l["precurvature"] = limb.rod.precurvature;
+    if (limb.rod.precurvature_slope != 0.0) l["precurvature_slope"] = limb.rod.precurvature_slope;
     if (limb.home_bow != 0) l["home_bow"] = limb.home_bow > 0 ? "left" : "right";
     limbs.push_back(l);
   }

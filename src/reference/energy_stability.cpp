@@ -56,9 +56,9 @@ Kkt evaluate(const EnergyProblem& problem, const Layout& layout, const Eigen::Ve
     const EnergyRod& rod = problem.rods[static_cast<std::size_t>(i)];
     const double h = rod.length / N;
     const int first = i * N;
-    // Bending: sum_j w_j (theta_{j+1} - theta_j)^2 / 2 over theta_0 = alpha (clamp), the N
-    // midpoint angles, theta_{N+1} = phi + beta (platform); the half spacing at each end doubles
-    // its weight.
+    // Bending: sum_j w_j (theta_{j+1} - theta_j - int u*)^2 / 2 over theta_0 = alpha (clamp),
+    // the N midpoint angles, theta_{N+1} = phi + beta (platform); the half spacing at each end
+    // doubles its weight. The energy density EI (theta' - u*)^2 / 2, u* the intrinsic curvature.
     const auto angle = [&](int j) {  // j = 0 ... N + 1
       if (j == 0) return rod.alpha;
       if (j == N + 1) return pose.theta + rod.beta;
@@ -69,9 +69,18 @@ Kkt evaluate(const EnergyProblem& problem, const Layout& layout, const Eigen::Ve
       if (j == N + 1) return ith;
       return first + j - 1;
     };
+    // The intervals between the angles' arc lengths, 0, (k + 1/2) h, l: node j sits at
+    // arc_length(j), and the stress-free rod turns by int u* over each interval.
+    const auto arc_length = [&](int j) {
+      return j == 0 ? 0.0 : j == N + 1 ? rod.length : (j - 0.5) * h;
+    };
+    const auto intrinsic_turn = [&](double s) {
+      return s * (rod.precurvature + 0.5 * rod.precurvature_slope * s);
+    };
     for (int j = 0; j <= N; ++j) {
       const double w = (j == 0 || j == N ? 2.0 : 1.0) * rod.ei / h;
-      const double d = angle(j + 1) - angle(j);
+      const double d = angle(j + 1) - angle(j) -
+                       (intrinsic_turn(arc_length(j + 1)) - intrinsic_turn(arc_length(j)));
       const int a = index(j + 1), b = index(j);
       if (a >= 0) kkt.gradient(a) += w * d;
       if (b >= 0) kkt.gradient(b) -= w * d;
@@ -228,7 +237,8 @@ EnergyProblem energy_problem(const RobotParams<double>& robot, const JointVector
   for (int i = 0; i < robot.num_limbs; ++i) {
     const LimbParams<double>& limb = robot.limb(i);
     problem.rods.push_back({limb.proximal_position(q(i)), limb.alpha, limb.B, limb.beta,
-                            limb.length, limb.bending_stiffness()});
+                            limb.rod.length, limb.rod.bending_stiffness(), limb.rod.precurvature,
+                            limb.rod.precurvature_slope});
   }
   return problem;
 }
@@ -242,8 +252,8 @@ EnergyState energy_start(const RobotParams<double>& robot, const JointVector& q,
     const LimbParams<double>& limb = robot.limb(i);
     // The angle at each segment's midpoint: two RK4 steps per segment, so that it is a node.
     std::vector<double> angles;
-    sample_rod(proximal_rod_state(limb, q(i), wrenches[static_cast<std::size_t>(i)]),
-               limb.bending_stiffness(), limb.length, 2 * segments,
+    sample_rod(proximal_rod_state(limb, q(i), wrenches[static_cast<std::size_t>(i)]), limb.rod,
+               2 * segments,
                [&](double, const RodState<double>& state) { angles.push_back(state.theta); });
     std::vector<double> midpoints;
     for (int k = 0; k < segments; ++k)

@@ -25,16 +25,17 @@ constexpr int kStates = 4;
 
 struct RodData {
   double nx, ny, inv_ei;
+  double precurvature, precurvature_slope;  ///< u*(s) = precurvature + precurvature_slope s
 };
 
-int rod_rhs(sunrealtype /*s*/, N_Vector y, N_Vector ydot, void* user_data) {
+int rod_rhs(sunrealtype arc, N_Vector y, N_Vector ydot, void* user_data) {
   const auto* data = static_cast<const RodData*>(user_data);
   const double* Y = N_VGetArrayPointer(y);
   double* D = N_VGetArrayPointer(ydot);
   const double c = std::cos(Y[2]), s = std::sin(Y[2]);
   D[0] = c;
   D[1] = s;
-  D[2] = Y[3] * data->inv_ei;
+  D[2] = Y[3] * data->inv_ei + data->precurvature + data->precurvature_slope * arc;
   D[3] = data->nx * s - data->ny * c;
   return 0;
 }
@@ -84,10 +85,13 @@ std::string describe(const char* what, double value) {
   return text.str();
 }
 
-void check_rod_input(const RodState<double>& start, double ei, double length) {
-  const double values[] = {start.x, start.y, start.theta, start.nx, start.ny, start.m};
-  const char* names[] = {"start.x", "start.y", "start.theta", "start.nx", "start.ny", "start.m"};
-  for (int i = 0; i < 6; ++i) {
+void check_rod_input(const RodState<double>& start, const Rod<double>& rod) {
+  const double ei = rod.bending_stiffness(), length = rod.length;
+  const double values[] = {start.x,  start.y, start.theta,      start.nx,
+                           start.ny, start.m, rod.precurvature, rod.precurvature_slope};
+  const char* names[] = {"start.x",  "start.y", "start.theta",      "start.nx",
+                         "start.ny", "start.m", "rod.precurvature", "rod.precurvature_slope"};
+  for (int i = 0; i < 8; ++i) {
     if (!std::isfinite(values[i])) {
       throw std::invalid_argument("pcr::integrate_rod_reference: non-finite " +
                                   describe(names[i], values[i]));
@@ -105,10 +109,11 @@ void check_rod_input(const RodState<double>& start, double ei, double length) {
 
 // Integrates one rod with CVODE, reporting the state at each requested arc length (sorted, in
 // [0, length]) through `samples` and max |m| at the internal steps.
-RodState<double> integrate(const RodState<double>& start, double ei, double length,
+RodState<double> integrate(const RodState<double>& start, const Rod<double>& rod,
                            const ReferenceOptions& options, const std::vector<double>& arc_lengths,
                            std::vector<RodState<double>>* samples, double* max_abs_moment) {
-  check_rod_input(start, ei, length);
+  check_rod_input(start, rod);
+  const double ei = rod.bending_stiffness(), length = rod.length;
   std::string error;
   const auto fail = [&](const char* call, int flag) {
     std::ostringstream text;
@@ -148,7 +153,7 @@ RodState<double> integrate(const RodState<double>& start, double ei, double leng
   check("CVodeInit", CVodeInit(mem.get(), rod_rhs, 0.0, y.get()));
   check("CVodeSVtolerances",
         CVodeSVtolerances(mem.get(), options.relative_tolerance, abstol.get()));
-  RodData data{start.nx, start.ny, 1.0 / ei};
+  RodData data{start.nx, start.ny, 1.0 / ei, rod.precurvature, rod.precurvature_slope};
   check("CVodeSetUserData", CVodeSetUserData(mem.get(), &data));
   check("CVodeSetStopTime", CVodeSetStopTime(mem.get(), length));
 
@@ -200,15 +205,16 @@ RodState<double> integrate(const RodState<double>& start, double ei, double leng
 
 }  // namespace
 
-RodState<double> integrate_rod_reference(const RodState<double>& start, double ei, double length,
+RodState<double> integrate_rod_reference(const RodState<double>& start, const Rod<double>& rod,
                                          const ReferenceOptions& options, double* max_abs_moment) {
-  return integrate(start, ei, length, options, {}, nullptr, max_abs_moment);
+  return integrate(start, rod, options, {}, nullptr, max_abs_moment);
 }
 
-std::vector<RodState<double>> sample_rod_reference(const RodState<double>& start, double ei,
-                                                   double length,
+std::vector<RodState<double>> sample_rod_reference(const RodState<double>& start,
+                                                   const Rod<double>& rod,
                                                    const std::vector<double>& arc_lengths,
                                                    const ReferenceOptions& options) {
+  const double length = rod.length;
   for (std::size_t i = 0; i < arc_lengths.size(); ++i) {
     const double s = arc_lengths[i];
     const std::string name = "arc_lengths[" + std::to_string(i) + "]";
@@ -223,7 +229,7 @@ std::vector<RodState<double>> sample_rod_reference(const RodState<double>& start
   }
   std::vector<RodState<double>> samples;
   samples.reserve(arc_lengths.size());
-  integrate(start, ei, length, options, arc_lengths, &samples, nullptr);
+  integrate(start, rod, options, arc_lengths, &samples, nullptr);
   return samples;
 }
 
@@ -242,8 +248,7 @@ double shooting_residual_reference(const RobotParams<double>& robot,
   for (int i = 0; i < n; ++i) {
     const LimbParams<double>& limb = robot.limb(i);
     tips[i].state = integrate_rod_reference(proximal_rod_state(limb, point.q[i], point.wrenches[i]),
-                                            limb.bending_stiffness(), limb.length, options,
-                                            &tips[i].max_abs_moment);
+                                            limb.rod, options, &tips[i].max_abs_moment);
   }
   return shooting_residual_from_tips(robot, point, load, scale, tips, residual);
 }

@@ -103,22 +103,40 @@ namespace internal {
 /// planar rod, which RK4 at a fixed step count keeps exactly, turn them into the sensitivities:
 ///   turning the start angle and the force by delta turns the rod about its start by delta;
 ///   (EI, n, m) -> c (EI, n, m) leaves the shape and scales m;
-///   l -> c l with (n, m) -> (c^2 n, c m) scales the shape about its start by c and m by 1/c.
+///   l -> c l with (n, m, u0, u1) -> (n / c^2, m / c, u0 / c, u1 / c^2) scales the shape about its
+///   start by c and m by 1/c (u0, u1: the intrinsic curvature u* = u0 + u1 s, Rod).
+/// A pre-curved rod's length column thus needs d/du0 and d/du1: u0 enters theta' = m / EI + u0
+/// as a moment EI u0 would (d/du0 = EI d/dm(0), less EI on m(l)); u1 has no such twin and is
+/// differentiated by a Jet through the rod's rod_steps RK4 steps (rods with u1 != 0 only).
 inline void limb_residual_partials(const LimbParams<double>& limb, double q,
                                    const Wrench<double>& w, const RodTip<double>& tip,
                                    const Pose2<double>& pose, const ShootingScale& scale,
-                                   Eigen::Matrix<double, 4, kLimbParameters>& out) {
+                                   int rod_steps, Eigen::Matrix<double, 4, kLimbParameters>& out) {
   const double ca = std::cos(limb.alpha + limb.gamma), sa = std::sin(limb.alpha + limb.gamma);
-  const double ei = limb.bending_stiffness();
+  const double ei = limb.rod.bending_stiffness();
   const double dx = tip.state.x - (limb.A.x() + q * ca), dy = tip.state.y - (limb.A.y() + q * sa);
   const Eigen::Matrix<double, 4, 3>& S = tip.sensitivity;  // d (x, y, theta, m)(l) / d (n, m(0))
   const Eigen::Vector4d d_start_angle =
       Eigen::Vector4d(-dy, dx, 1.0, 0.0) + S * Eigen::Vector3d(w.ny, -w.nx, 0.0);
   const Eigen::Vector4d d_ei =
       (Eigen::Vector4d(0.0, 0.0, 0.0, tip.state.m) - S * Eigen::Vector3d(w.nx, w.ny, w.m)) / ei;
-  const Eigen::Vector4d d_length = (Eigen::Vector4d(dx, dy, 0.0, -tip.state.m) +
-                                    S * Eigen::Vector3d(2.0 * w.nx, 2.0 * w.ny, w.m)) /
-                                   limb.length;
+  Eigen::Vector4d d_length =
+      Eigen::Vector4d(dx, dy, 0.0, -tip.state.m) + S * Eigen::Vector3d(2.0 * w.nx, 2.0 * w.ny, w.m);
+  if (limb.rod.precurvature != 0.0) {
+    const Eigen::Vector4d d_u0 = ei * (S.col(2) - Eigen::Vector4d(0.0, 0.0, 0.0, 1.0));
+    d_length += limb.rod.precurvature * d_u0;
+  }
+  if (limb.rod.precurvature_slope != 0.0) {
+    using Dual = ceres::Jet<double, 1>;
+    const LimbParams<Dual> dual = limb.template cast<Dual>();
+    Rod<Dual> rod = dual.rod;
+    rod.precurvature_slope.v[0] = 1.0;
+    const RodState<Dual> end =
+        integrate_rod(proximal_rod_state(dual, Dual(q), w.template cast<Dual>()), rod, rod_steps);
+    const Eigen::Vector4d d_u1(end.x.v[0], end.y.v[0], end.theta.v[0], end.m.v[0]);
+    d_length += 2.0 * limb.rod.precurvature_slope * d_u1;
+  }
+  d_length /= limb.rod.length;
   Eigen::Matrix<double, 4, kLimbParameters> d = Eigen::Matrix<double, 4, kLimbParameters>::Zero();
   const int kE = static_cast<int>(ParameterKind::kYoungModulus);
   const int kD = static_cast<int>(ParameterKind::kDiameter);
@@ -128,8 +146,8 @@ inline void limb_residual_partials(const LimbParams<double>& limb, double q,
   const int kBx = static_cast<int>(ParameterKind::kBx), kBy = static_cast<int>(ParameterKind::kBy);
   const int kBeta = static_cast<int>(ParameterKind::kBeta);
   const int kGamma = static_cast<int>(ParameterKind::kGamma);
-  d.col(kE) = d_ei * ei / limb.young_modulus;  // EI = E pi d^4 / 64
-  d.col(kD) = d_ei * 4.0 * ei / limb.diameter;
+  d.col(kE) = d_ei * ei / limb.rod.young_modulus;  // EI = E pi d^4 / 64
+  d.col(kD) = d_ei * 4.0 * ei / limb.rod.diameter;
   d.col(kL) = d_length;
   d.col(kAlpha) = d_start_angle;
   // The start point A + q (cos, sin)(alpha + gamma) shifts the whole rod.
@@ -200,7 +218,8 @@ inline bool platform_pose_jacobian(const RobotParams<double>& robot,
   Eigen::Matrix<double, 4, kLimbParameters> dr;
   for (int i = 0; i < n; ++i) {
     internal::limb_residual_partials(robot.limb(i), solution.q(i), solution.wrenches[i],
-                                     linear.tips[i], solution.pose, scale, dr);
+                                     linear.tips[i], solution.pose, scale,
+                                     solution.summary.rod_steps, dr);
     const int rows[4] = {3 * i, 3 * i + 1, 3 * i + 2, 3 * n + 2};
     for (int k = 0; k < 3; ++k) {
       for (int j = 0; j < kLimbParameters; ++j) {

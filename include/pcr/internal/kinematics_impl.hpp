@@ -19,7 +19,7 @@ Solution buckled_seed(const RobotParams<double>& robot, const Solution& at, int 
   Solution seed = at;
   seed.jacobian.clear();  // not at the seed
   seed.wrenches[static_cast<std::size_t>(rod)].m +=
-      kTurns[k % kBuckledSeedsPerRod] * 2.0 * M_PI * limb.bending_stiffness() / limb.length;
+      kTurns[k % kBuckledSeedsPerRod] * 2.0 * M_PI * limb.rod.bending_stiffness() / limb.rod.length;
   return seed;
 }
 
@@ -316,7 +316,7 @@ inline bool choose_home(const RobotParams<double>& robot, const Pose2<double>& m
                         const PlatformLoad<double>& load) {
   const int n = robot.num_limbs;
   double mean_length = 0;
-  for (int i = 0; i < n; ++i) mean_length += robot.limb(i).length / n;
+  for (int i = 0; i < n; ++i) mean_length += robot.limb(i).rod.length / n;
   double best = HUGE_VAL;
   RobotParams<double> trial = robot;
   // The robot saying nothing first (a tie keeps it), then every pattern of sides (n >= 4).
@@ -570,8 +570,8 @@ void visit_rod_shapes(const RobotParams<double>& robot, const JointVector& q,
                       Visitor&& visit) {
   for (int i = 0; i < robot.num_limbs; ++i) {
     const LimbParams<double>& limb = robot.limb(i);
-    sample_rod(proximal_rod_state(limb, q(i), wrenches[i]), limb.bending_stiffness(), limb.length,
-               rod_steps, [&](double s, const RodState<double>& state) { visit(i, s, state); });
+    sample_rod(proximal_rod_state(limb, q(i), wrenches[i]), limb.rod, rod_steps,
+               [&](double s, const RodState<double>& state) { visit(i, s, state); });
   }
 }
 

@@ -47,8 +47,10 @@ inline bool self_stressed(const ShootingProblem& problem, const ShootingVector& 
     const LimbParams<double>& limb = problem.robot().limb(i);
     const Wrench<double>& w = p.wrenches[i];
     const double across = -w.nx * std::sin(limb.alpha) + w.ny * std::cos(limb.alpha);
-    const double turn = (std::abs(w.m) + 0.5 * std::abs(across) * limb.length) * limb.length /
-                        limb.bending_stiffness();
+    // A pre-curved rod is not straight even unloaded: its intrinsic turn counts.
+    const double turn = (std::abs(w.m) + 0.5 * std::abs(across) * limb.rod.length) *
+                            limb.rod.length / limb.rod.bending_stiffness() +
+                        std::abs(limb.rod.intrinsic_turn(limb.rod.length));
     straight += turn < kStraightTurn ? 1 : 0;
   }
   return straight >= 4;
@@ -354,12 +356,18 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
                                           double bow, const SolverOptions& options,
                                           SolverSummary& summary, ShootingVector& z) {
   const int n = robot.num_limbs;
-  // Straight rods' tips from the moved proximal clamps, and their rigid fit (2D Procrustes).
+  // Stress-free rods' tips from the moved proximal clamps, and their rigid fit (2D Procrustes).
   Vector2<double> tips[kMaxLimbs], b_mean(0, 0), t_mean(0, 0);
   for (int i = 0; i < n; ++i) {
     const LimbParams<double>& limb = robot.limb(i);
-    tips[i] = limb.proximal_position(u(i)) +
-              limb.length * Vector2<double>(std::cos(limb.alpha), std::sin(limb.alpha));
+    if (limb.rod.straight()) {
+      tips[i] = limb.proximal_position(u(i)) +
+                limb.rod.length * Vector2<double>(std::cos(limb.alpha), std::sin(limb.alpha));
+    } else {
+      const RodState<double> tip = integrate_rod(proximal_rod_state(limb, u(i), Wrench<double>{}),
+                                                 limb.rod, options.max_rod_steps);
+      tips[i] = Vector2<double>(tip.x, tip.y);
+    }
     b_mean += limb.B / n;
     t_mean += tips[i] / n;
   }
@@ -380,17 +388,28 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
   for (int i = 0; i < n; ++i) {
     LimbParams<double>& limb = variant.limb(i);
     const double side = limb.home_bow > 0 ? -1.0 : 1.0;  // an arc turning left bulges right
-    const double turn = side * bow * (1.0 + 0.1 * i), kappa = turn / limb.length;
-    const Vector2<double> a = limb.proximal_position(u(i));
-    const Vector2<double> end =
-        a + Vector2<double>(std::sin(limb.alpha + turn) - std::sin(limb.alpha),
+    const double turn = side * bow * (1.0 + 0.1 * i), kappa = turn / limb.rod.length;
+    start.q[i] = u(i);
+    start.wrenches[i] = Wrench<double>{0.0, 0.0, limb.rod.bending_stiffness() * kappa};
+    // With n = 0 the moment stays EI kappa: a straight rod takes a circular arc; a pre-curved one
+    // turns by kappa s plus its intrinsic turn, a curve its own integration gives.
+    Vector2<double> end;
+    double end_angle;
+    if (limb.rod.straight()) {
+      end = limb.proximal_position(u(i)) +
+            Vector2<double>(std::sin(limb.alpha + turn) - std::sin(limb.alpha),
                             std::cos(limb.alpha) - std::cos(limb.alpha + turn)) /
                 kappa;
+      end_angle = limb.alpha + turn;
+    } else {
+      const RodState<double> tip = integrate_rod(proximal_rod_state(limb, u(i), start.wrenches[i]),
+                                                 limb.rod, options.max_rod_steps);
+      end = Vector2<double>(tip.x, tip.y);
+      end_angle = tip.theta;
+    }
     const Vector2<double> d = end - origin;
     limb.B = Vector2<double>(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
-    limb.beta = limb.alpha + turn - theta;
-    start.q[i] = u(i);
-    start.wrenches[i] = Wrench<double>{0.0, 0.0, limb.bending_stiffness() * kappa};
+    limb.beta = end_angle - theta;
     variant_load.moment += start.wrenches[i].m;
   }
   const RobotParams<double> from = variant;
