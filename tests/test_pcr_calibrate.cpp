@@ -47,7 +47,7 @@ class PcrCalibrate : public ::testing::Test {
   void SetUp() override {
     nominal_ = default_robot();
     RobotUncertainty u;  // only l and the extrinsics are uncertain: a fast, complete problem
-    u.global.length = 126e-6;
+    u.global.rod.length = 126e-6;
     u.limbs.assign(3, u.global);
     u.camera = Eigen::Vector3d(1e-3, 1e-3, 50e-3);
     u.pattern = Eigen::Vector3d(1e-3, 1e-3, 50e-3);

@@ -46,9 +46,9 @@ void write_text(const std::string& path, const std::string& text) {
 RobotDescription lengths_and_extrinsics_uncertain() {
   RobotDescription nominal = default_robot();
   RobotUncertainty u;
-  u.global.length = 126e-6;
-  u.global.young_modulus = 5e9;
-  u.global.diameter = 2e-6;
+  u.global.rod.length = 126e-6;
+  u.global.rod.young_modulus = 5e9;
+  u.global.rod.diameter = 2e-6;
   u.limbs.assign(3, u.global);
   u.camera = nominal.uncertainty->camera;
   u.pattern = nominal.uncertainty->pattern;
@@ -565,6 +565,42 @@ void expect_error(const std::string& name, const nlohmann::json& report,
   }
 }
 
+// A report written before rods had a precurvature (ten parameters per limb) held it: it reads as
+// the current layout with the precurvatures' rows and columns zero, every other entry in place.
+TEST(ParameterCovariance, AReportWithoutPrecurvaturesHeldThem) {
+  const nlohmann::json current = valid_block();
+  nlohmann::json names = nlohmann::json::array(), matrix = nlohmann::json::array();
+  std::vector<int> kept;
+  for (int k = 0; k < num_parameters(3); ++k) {
+    if (parameter_id(k, 3).kind != ParameterKind::kPrecurvature) kept.push_back(k);
+  }
+  ASSERT_EQ(kept.size(), 36u);
+  for (const int r : kept) {
+    names.push_back(current["parameters"][static_cast<std::size_t>(r)]);
+    nlohmann::json row = nlohmann::json::array();
+    for (const int c : kept) {
+      row.push_back(r == c ? 1e-12 * (1 + r) : (r + c == 14 ? 0.5e-12 : 0.0));
+    }
+    matrix.push_back(row);
+  }
+  const std::string path = temp_path("ten_per_limb.json");
+  write_text(path,
+             nlohmann::json{{"covariance", {{"parameters", names}, {"matrix", matrix}}}}.dump());
+  const ParameterCovariance c = read_parameter_covariance(path, 3);
+  ASSERT_EQ(c.names.size(), 39u);
+  for (int k = 0; k < num_parameters(3); ++k) {
+    EXPECT_EQ(c.names[static_cast<std::size_t>(k)], parameter_name(parameter_id(k, 3)));
+    if (parameter_id(k, 3).kind == ParameterKind::kPrecurvature) {
+      EXPECT_EQ(c.matrix.row(k).cwiseAbs().maxCoeff(), 0.0) << k;
+      EXPECT_EQ(c.matrix.col(k).cwiseAbs().maxCoeff(), 0.0) << k;
+    } else {
+      EXPECT_EQ(c.matrix(k, k), 1e-12 * (1 + k)) << k;
+    }
+  }
+  EXPECT_EQ(c.matrix(2, 12), 0.5e-12);
+  EXPECT_EQ(c.matrix(12, 2), 0.5e-12);
+}
+
 TEST(ParameterCovariance, BadBlocksNameFileFieldAndValue) {
   const nlohmann::json good{{"covariance", valid_block()}};
   {
@@ -580,9 +616,9 @@ TEST(ParameterCovariance, BadBlocksNameFileFieldAndValue) {
     return report;
   };
   expect_error("short_row.json", with([](nlohmann::json& b) { b["matrix"][4].erase(0); }),
-               {"covariance.matrix[4]", "row of 36 numbers", "[0.0,0.0"});
+               {"covariance.matrix[4]", "row of 39 numbers", "[0.0,0.0"});
   expect_error("rows.json", with([](nlohmann::json& b) { b["matrix"].erase(35); }),
-               {"covariance.matrix", "35 rows for 36 parameters"});
+               {"covariance.matrix", "38 rows for 39 parameters"});
   expect_error("name.json", with([](nlohmann::json& b) { b["parameters"][2] = "length[0]"; }),
                {"covariance.parameters[2]", "\"l[0]\"", "length[0]"});
   expect_error("limbs.json", good, {"covariance.parameters", "3 limbs", "has 4"}, 4);

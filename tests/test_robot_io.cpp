@@ -67,9 +67,10 @@ void expect_same_limb_uncertainty(const pcr::LimbUncertainty& a, const pcr::Limb
   EXPECT_TRUE(same(a.alpha, b.alpha));
   EXPECT_TRUE(same(a.beta, b.beta));
   EXPECT_TRUE(same(a.gamma, b.gamma));
-  EXPECT_TRUE(same(a.length, b.length));
-  EXPECT_TRUE(same(a.diameter, b.diameter));
-  EXPECT_TRUE(same(a.young_modulus, b.young_modulus));
+  EXPECT_TRUE(same(a.rod.length, b.rod.length));
+  EXPECT_TRUE(same(a.rod.diameter, b.rod.diameter));
+  EXPECT_TRUE(same(a.rod.young_modulus, b.rod.young_modulus));
+  EXPECT_TRUE(same(a.rod.precurvature, b.rod.precurvature));
 }
 
 /// Bit-for-bit equality of two descriptions.
@@ -124,15 +125,15 @@ TEST(RobotIo, ParsesAValidFile) {
   EXPECT_EQ(r.params.extrinsics.pattern.y, 0.02);
   ASSERT_TRUE(r.uncertainty.has_value());
   const pcr::RobotUncertainty& u = *r.uncertainty;
-  EXPECT_EQ(u.global.length, 126e-6);
+  EXPECT_EQ(u.global.rod.length, 126e-6);
   EXPECT_EQ(u.global.A.y(), 150e-6);
-  EXPECT_EQ(u.global.diameter, 0.0);  // absent: 0
+  EXPECT_EQ(u.global.rod.diameter, 0.0);  // absent: 0
   ASSERT_EQ(u.limbs.size(), 3u);
-  EXPECT_EQ(u.limbs[0].length, 126e-6);  // {} keeps the global values
-  EXPECT_EQ(u.limbs[1].length, 1e-6);
+  EXPECT_EQ(u.limbs[0].rod.length, 126e-6);  // {} keeps the global values
+  EXPECT_EQ(u.limbs[1].rod.length, 1e-6);
   EXPECT_EQ(u.limbs[1].alpha, 5e-3);  // not overridden
   EXPECT_EQ(u.limbs[1].B.y(), 2e-5);
-  EXPECT_EQ(u.limbs[2].young_modulus, 1e9);
+  EXPECT_EQ(u.limbs[2].rod.young_modulus, 1e9);
   EXPECT_EQ(u.camera.z(), 0.05);
   EXPECT_EQ(u.pattern.z(), 0.0);
 }
@@ -328,7 +329,7 @@ TEST(RobotIo, RoundTripIsBitExact) {
     auto diameter = [&] { return random_double(rng, -5.5, -3.1, true); };  // below any length
     auto half = [&] { return random_double(rng, -11.5, -2.1, true); };
     pcr::RobotUncertainty u;
-    u.global.length = half();
+    u.global.rod.length = half();
     u.global.A = Eigen::Vector2d(half(), 0.0);
     u.camera = Eigen::Vector3d(half(), half(), 0.0);
     for (int i = 0; i < r.params.num_limbs; ++i) {
@@ -350,7 +351,8 @@ TEST(RobotIo, RoundTripIsBitExact) {
       l.home_bow = (trial + i) % 3 - 1;  // right, not said, left
       pcr::LimbUncertainty lu = u.global;
       if (i == 1) lu.beta = half();
-      if (i == 2) lu.young_modulus = random_double(rng, 6.1, 8.9, true);
+      if (i == 2) lu.rod.young_modulus = random_double(rng, 6.1, 8.9, true);
+      if (i == 3) lu.rod.precurvature = random_double(rng, -8.9, 3.9, true);  // 1/m
       u.limbs.push_back(lu);
     }
     r.params.extrinsics.camera = pcr::Pose2<double>{any(), any(), any()};
@@ -399,14 +401,14 @@ TEST(RobotIo, DefaultRobotIsThePapersRobot) {
   const pcr::RobotUncertainty& u = *r.uncertainty;
   ASSERT_EQ(u.limbs.size(), 3u);
   for (const pcr::LimbUncertainty& lu : u.limbs) {
-    EXPECT_EQ(lu.length, 126e-6);
+    EXPECT_EQ(lu.rod.length, 126e-6);
     EXPECT_EQ(lu.A, Eigen::Vector2d(160e-6, 160e-6));
     EXPECT_EQ(lu.B, Eigen::Vector2d(160e-6, 160e-6));
     EXPECT_EQ(lu.alpha, 5e-3);
     EXPECT_EQ(lu.beta, 5e-3);
     EXPECT_EQ(lu.gamma, 5e-3);
-    EXPECT_EQ(lu.diameter, 20e-6);
-    EXPECT_EQ(lu.young_modulus, 0.0);
+    EXPECT_EQ(lu.rod.diameter, 20e-6);
+    EXPECT_EQ(lu.rod.young_modulus, 0.0);
   }
   EXPECT_EQ(u.camera, Eigen::Vector3d(1e-3, 1e-3, 50e-3));
   EXPECT_EQ(u.pattern, Eigen::Vector3d(1e-3, 1e-3, 50e-3));

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
+#include "pcr/calib/cost.hpp"
 #include "pcr/calib/sensitivity.hpp"
 
 namespace pcr {
@@ -44,6 +46,8 @@ double step_for(const RobotParams<double>& robot, const ParameterId& id) {
     case ParameterKind::kBeta:
     case ParameterKind::kGamma:
       return 1e-4;  // rad
+    case ParameterKind::kPrecurvature:
+      return 1e-3;  // 1/m
     default:
       return 1e-6;  // m
   }
@@ -56,7 +60,7 @@ void cross_check(const PlatformLoad<double>& load) {
   Eigen::MatrixXd J;
   ASSERT_TRUE(platform_parameter_jacobian(robot, q, &J, load));
   ASSERT_EQ(J.rows(), 3);
-  ASSERT_EQ(J.cols(), 30);
+  ASSERT_EQ(J.cols(), 3 * kLimbParameters);
   for (int limb = 0; limb < 3; ++limb) {
     for (int k = 0; k < kLimbParameters; ++k) {
       const ParameterId id{static_cast<ParameterKind>(k), limb};
@@ -142,6 +146,44 @@ TEST(Sensitivity, TableOfTheDefaultRobot) {
   EXPECT_LE(l.position_error, std::hypot(l.dx, l.dy) * l.half_width * (1 + 1e-12));
   EXPECT_GE(l.position_error, std::max(l.dx, l.dy) * l.half_width * (1 - 1e-12));
   EXPECT_FALSE(sensitivity_table_text(report).empty());
+}
+
+// A kind the paper's table does not have is a row when the robot declares it uncertain: the
+// precurvature of rods shape-set to arcs, its error the sensitivity times its half-width. A rod's
+// u0 acts on the pose as a platform moment EI u0 would (docs/kinematics.md, "Pre-curved rods"):
+// its column is EI times the load moment's, two derivations that share nothing but the solution.
+TEST(Sensitivity, PrecurvatureIsARowWhenDeclaredUncertain) {
+  RobotDescription robot = default_robot();
+  for (int i = 0; i < 3; ++i) robot.params.limb(i).rod.precurvature = 10.0 * (i - 1);
+  for (LimbUncertainty& limb : robot.uncertainty->limbs) limb.rod.precurvature = 2.0;
+  const SensitivityReport report = sensitivity_analysis(robot);
+  ASSERT_EQ(report.rows.size(), 12u);
+  const SensitivityRow& u0 = row(report, "precurvature");
+  EXPECT_EQ(u0.half_width, 2.0);
+  EXPECT_GT(u0.dx, 0.0);
+  EXPECT_LE(u0.position_error, std::hypot(u0.dx, u0.dy) * 2.0 * (1 + 1e-12));
+  EXPECT_NE(sensitivity_table_text(report).find("precurvature"), std::string::npos);
+
+  const RobotParams<double>& params = robot.params;
+  const ForwardSolution fk = forward_kinematics(params, joints(2e-3, -1e-3, 3e-3));
+  ASSERT_TRUE(fk.summary.converged());
+  const int count = num_parameters(3);
+  std::vector<double> J(static_cast<std::size_t>(3 * count));
+  double by_load[9];
+  ASSERT_TRUE(platform_pose_jacobian(params, PlatformLoad<double>(), fk, SolverOptions(), J.data(),
+                                     by_load));
+  for (int i = 0; i < 3; ++i) {
+    const int k = parameter_index(ParameterId{ParameterKind::kPrecurvature, i}, 3);
+    const double ei = params.limb(i).rod.bending_stiffness();
+    for (int r = 0; r < 3; ++r) {
+      const double moment = by_load[3 * r + 2];
+      EXPECT_NEAR(J[static_cast<std::size_t>(r * count + k)], ei * moment,
+                  1e-9 * std::abs(ei * moment))
+          << "limb " << i << " row " << r;
+    }
+  }
+  robot.uncertainty->limbs.assign(3, robot.uncertainty->global);  // not declared: no row
+  EXPECT_EQ(sensitivity_analysis(robot).rows.size(), 11u);
 }
 
 TEST(Sensitivity, DiametersMatterUnderAnExternalLoad) {

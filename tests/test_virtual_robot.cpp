@@ -75,7 +75,7 @@ TEST(VirtualRobot, TruthLiesInsideTheUncertaintyIntervals) {
       const LimbParams<double>& a = t.limb(i);
       const LimbParams<double>& b = nominal.params.limb(i);
       const LimbUncertainty& h = u.limbs[static_cast<std::size_t>(i)];
-      EXPECT_LE(std::abs(a.rod.length - b.rod.length), h.length);
+      EXPECT_LE(std::abs(a.rod.length - b.rod.length), h.rod.length);
       EXPECT_LE(std::abs(a.A.x() - b.A.x()), h.A.x());
       EXPECT_LE(std::abs(a.A.y() - b.A.y()), h.A.y());
       EXPECT_LE(std::abs(a.B.x() - b.B.x()), h.B.x());
@@ -83,12 +83,13 @@ TEST(VirtualRobot, TruthLiesInsideTheUncertaintyIntervals) {
       EXPECT_LE(std::abs(a.alpha - b.alpha), h.alpha);
       EXPECT_LE(std::abs(a.beta - b.beta), h.beta);
       EXPECT_LE(std::abs(a.gamma - b.gamma), h.gamma);
-      EXPECT_LE(std::abs(a.rod.diameter - b.rod.diameter), u.global.diameter);
+      EXPECT_LE(std::abs(a.rod.diameter - b.rod.diameter), u.global.rod.diameter);
       EXPECT_EQ(a.rod.young_modulus, b.rod.young_modulus);  // the default E half-width is 0
       // One wire: every limb has the same diameter offset.
       EXPECT_NEAR(a.rod.diameter - b.rod.diameter,
                   t.limb(0).rod.diameter - nominal.params.limb(0).rod.diameter, 1e-18);
-      max_rel_length = std::max(max_rel_length, std::abs(a.rod.length - b.rod.length) / h.length);
+      max_rel_length =
+          std::max(max_rel_length, std::abs(a.rod.length - b.rod.length) / h.rod.length);
     }
     const Pose2<double>& c = t.extrinsics.camera;
     const Pose2<double>& c0 = nominal.params.extrinsics.camera;

@@ -11,16 +11,24 @@
 
 namespace pcr {
 
-/// Half-widths of the uncertainty intervals of one limb's parameters (SI units, radians).
+/// Half-widths of a rod's identifiable parameters (Rod's fields of the same names). A
+/// precurvature slope is described, not identified.
+struct RodUncertainty {
+  double length{0};         ///< m
+  double diameter{0};       ///< m
+  double young_modulus{0};  ///< Pa
+  double precurvature{0};   ///< 1/m
+};
+
+/// Half-widths of the uncertainty intervals of one limb's parameters (SI units, radians), in
+/// LimbParams' shape (pcr::limb_parameter reads both).
 struct LimbUncertainty {
   Eigen::Vector2d A{0, 0};  ///< m, on A_x and A_y
   double alpha{0};          ///< rad
   double gamma{0};          ///< rad
   Eigen::Vector2d B{0, 0};  ///< m, on B_x and B_y
   double beta{0};           ///< rad
-  double length{0};         ///< m
-  double diameter{0};       ///< m
-  double young_modulus{0};  ///< Pa
+  RodUncertainty rod{};
 };
 
 /// Uncertainty half-widths: a global default for every limb, per-limb values (the default with the
@@ -48,14 +56,14 @@ inline RobotDescription default_robot() {
   robot.young_modulus = robot.params.limb(0).rod.young_modulus;
   RobotUncertainty u;
   // Mauze et al. 2021, Section 4: the intervals of the calibrated parameters.
-  u.global.length = 126e-6;
+  u.global.rod.length = 126e-6;
   u.global.A = Eigen::Vector2d(160e-6, 160e-6);
   u.global.B = Eigen::Vector2d(160e-6, 160e-6);
   u.global.alpha = 5e-3;
   u.global.beta = 5e-3;
   u.global.gamma = 5e-3;
-  u.global.diameter = 20e-6;
-  u.global.young_modulus = 0.0;
+  u.global.rod.diameter = 20e-6;
+  u.global.rod.young_modulus = 0.0;
   u.limbs.assign(static_cast<std::size_t>(robot.params.num_limbs), u.global);
   u.camera = Eigen::Vector3d(1e-3, 1e-3, 50e-3);
   u.pattern = Eigen::Vector3d(1e-3, 1e-3, 50e-3);

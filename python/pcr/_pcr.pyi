@@ -81,6 +81,7 @@ class LimbUncertainty:
     l: float
     d: float
     E: float
+    precurvature: float  # 1/m
     def __init__(self) -> None: ...
     def replace(self, **changes: Any) -> LimbUncertainty: ...
 
@@ -196,7 +197,7 @@ class Robot:
     @property
     def num_limbs(self) -> int: ...
     @property
-    def parameters(self) -> FloatArray: ...  # (10 n + 6,) in parameter_names order
+    def parameters(self) -> FloatArray: ...  # (11 n + 6,) in parameter_names order
     def __init__(self) -> None: ...
     @staticmethod
     def default() -> Robot: ...

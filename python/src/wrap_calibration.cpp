@@ -365,6 +365,7 @@ void wrap_calibration(py::module_& m) {
       },
       py::arg("num_limbs"),
       "Names of the flat parameters (per limb E, d, l, A_x, A_y, alpha, B_x, B_y, beta, gamma, "
+      "precurvature, "
       "then the six extrinsics), e.g. 'l[1]', 'camera_theta'.");
 
   m.def(

@@ -151,13 +151,15 @@ void set_limbs(RobotDescription& robot, const std::vector<LimbParams<double>>& l
   }
 }
 
-/// A Limb property's getter and setter that reach one field of its rod (the Limb keeps its flat
-/// Python names l, d, E, precurvature...).
-auto rod_field(double Rod<double>::*field) {
-  return [field](const LimbParams<double>& l) { return l.rod.*field; };
+/// A property's getter and setter that reach one field of an owner's rod (Limb and
+/// LimbUncertainty keep their flat Python names l, d, E, precurvature...).
+template <class Owner, class RodFields>
+auto rod_field(double RodFields::*field) {
+  return [field](const Owner& owner) { return owner.rod.*field; };
 }
-auto rod_setter(double Rod<double>::*field) {
-  return [field](LimbParams<double>& l, double v) { l.rod.*field = v; };
+template <class Owner, class RodFields>
+auto rod_setter(double RodFields::*field) {
+  return [field](Owner& owner, double v) { owner.rod.*field = v; };
 }
 
 }  // namespace
@@ -262,18 +264,21 @@ void wrap_robot(py::module_& m) {
               py::return_value_policy::reference_internal, "distal clamp [x, y] in P (m)")
           .def_readwrite("beta", &LimbParams<double>::beta,
                          "rod tangent angle at the distal clamp, in P (rad)")
-          .def_property("l", rod_field(&Rod<double>::length), rod_setter(&Rod<double>::length),
+          .def_property("l", rod_field<LimbParams<double>>(&Rod<double>::length),
+                        rod_setter<LimbParams<double>>(&Rod<double>::length),
                         "stress-free rod length (m)")
-          .def_property("d", rod_field(&Rod<double>::diameter), rod_setter(&Rod<double>::diameter),
-                        "rod diameter (m)")
-          .def_property("E", rod_field(&Rod<double>::young_modulus),
-                        rod_setter(&Rod<double>::young_modulus), "Young's modulus of this rod (Pa)")
-          .def_property("precurvature", rod_field(&Rod<double>::precurvature),
-                        rod_setter(&Rod<double>::precurvature),
+          .def_property("d", rod_field<LimbParams<double>>(&Rod<double>::diameter),
+                        rod_setter<LimbParams<double>>(&Rod<double>::diameter), "rod diameter (m)")
+          .def_property("E", rod_field<LimbParams<double>>(&Rod<double>::young_modulus),
+                        rod_setter<LimbParams<double>>(&Rod<double>::young_modulus),
+                        "Young's modulus of this rod (Pa)")
+          .def_property("precurvature", rod_field<LimbParams<double>>(&Rod<double>::precurvature),
+                        rod_setter<LimbParams<double>>(&Rod<double>::precurvature),
                         "intrinsic curvature u*(0) of a rod shape-set to a curve (1/m, positive "
                         "counterclockwise); 0 for a straight rod")
-          .def_property("precurvature_slope", rod_field(&Rod<double>::precurvature_slope),
-                        rod_setter(&Rod<double>::precurvature_slope),
+          .def_property("precurvature_slope",
+                        rod_field<LimbParams<double>>(&Rod<double>::precurvature_slope),
+                        rod_setter<LimbParams<double>>(&Rod<double>::precurvature_slope),
                         "du*/ds (1/m^2): u*(s) = precurvature + precurvature_slope s")
           .def_property(
               "q_range",
@@ -360,9 +365,14 @@ void wrap_robot(py::module_& m) {
               },
               py::return_value_policy::reference_internal, "m, on [B_x, B_y]")
           .def_readwrite("beta", &LimbUncertainty::beta, "rad")
-          .def_readwrite("l", &LimbUncertainty::length, "m")
-          .def_readwrite("d", &LimbUncertainty::diameter, "m")
-          .def_readwrite("E", &LimbUncertainty::young_modulus, "Pa");
+          .def_property("l", rod_field<LimbUncertainty>(&RodUncertainty::length),
+                        rod_setter<LimbUncertainty>(&RodUncertainty::length), "m")
+          .def_property("d", rod_field<LimbUncertainty>(&RodUncertainty::diameter),
+                        rod_setter<LimbUncertainty>(&RodUncertainty::diameter), "m")
+          .def_property("E", rod_field<LimbUncertainty>(&RodUncertainty::young_modulus),
+                        rod_setter<LimbUncertainty>(&RodUncertainty::young_modulus), "Pa")
+          .def_property("precurvature", rod_field<LimbUncertainty>(&RodUncertainty::precurvature),
+                        rod_setter<LimbUncertainty>(&RodUncertainty::precurvature), "1/m");
   def_value_semantics(limb_uncertainty);
 
   auto uncertainty =

@@ -296,7 +296,7 @@ def test_robot_parameters_are_in_parameter_names_order():
     ext.pattern = pcr.Pose(1e-3, 2e-3, 0.03)
     robot.extrinsics = ext
     values = dict(zip(pcr.parameter_names(3), robot.parameters))
-    assert len(robot.parameters) == len(values) == 36
+    assert len(robot.parameters) == len(values) == 39
     assert values["l[2]"] == 0.0311 and values["A_x[2]"] == 0.01 and values["A_y[2]"] == -0.02
     assert values["gamma[2]"] == 1e-3 and values["E[1]"] == robot.limbs[1].E
     assert values["d[0]"] == robot.limbs[0].d and values["beta[1]"] == robot.limbs[1].beta
@@ -307,4 +307,4 @@ def test_robot_parameters_are_in_parameter_names_order():
     measured = pcr.VirtualRobot(default, seed=1).measure(q)["measured"]
     _, result = pcr.calibrate(default, q, measured,
                               stages=[{"name": "ext", "free": ["extrinsics"]}])
-    assert np.array_equal([p.nominal for p in result.parameters][:36], default.parameters)
+    assert np.array_equal([p.nominal for p in result.parameters][:39], default.parameters)

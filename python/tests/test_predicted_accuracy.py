@@ -53,9 +53,11 @@ def test_calibration_covariance_reads_back(robot, tmp_path):
     assert np.array_equal(read.matrix, cov.matrix, equal_nan=True)
 
     bad = cov.matrix.copy()
-    bad[2, 12] *= 2  # l[0], l[1]: no longer symmetric
+    l0, l1 = cov.names.index("l[0]"), cov.names.index("l[1]")
+    bad[l0, l1] *= 2  # no longer symmetric
     write_block(path, cov.names, bad)
-    with pytest.raises(ValueError, match=r"report\.json.*covariance\.matrix\[2\]\[12\].*symmetric"):
+    with pytest.raises(ValueError,
+                       match=rf"report\.json.*covariance\.matrix\[{l0}\]\[{l1}\].*symmetric"):
         pcr.read_parameter_covariance(path)
     write_block(path, cov.names, cov.matrix)
     with pytest.raises(ValueError, match=r"covariance\.parameters: .* the robot has 2"):

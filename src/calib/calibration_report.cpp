@@ -14,32 +14,6 @@
 namespace pcr {
 namespace {
 
-/// The unit a reader of the paper's Table 1 thinks of a parameter's deviation in.
-struct DisplayUnit {
-  double factor;  ///< from SI
-  const char* name;
-};
-
-DisplayUnit display_unit(ParameterKind kind) {
-  switch (kind) {
-    case ParameterKind::kYoungModulus:
-      return {1e-6, "MPa"};
-    case ParameterKind::kAlpha:
-    case ParameterKind::kBeta:
-    case ParameterKind::kGamma:
-    case ParameterKind::kCameraTheta:
-    case ParameterKind::kPatternTheta:
-      return {1e3, "mrad"};
-    case ParameterKind::kLoadForceX:
-    case ParameterKind::kLoadForceY:
-      return {1e6, "uN"};
-    case ParameterKind::kLoadMoment:
-      return {1e6, "uNm"};
-    default:
-      return {1e6, "um"};
-  }
-}
-
 using nlohmann::ordered_json;
 
 ordered_json stats_json(const PoseErrorStats& s) {
@@ -176,7 +150,7 @@ std::string calibration_report_text(const CalibrationResult& result,
   std::vector<std::string> at_bound;
   for (const ParameterEstimate& p : result.parameters) {
     if (p.free) {
-      const DisplayUnit unit = display_unit(p.kind);
+      const ParameterKindInfo& unit = parameter_kind_info(p.kind);
       char buf[320];
       char std_text[32];
       char box_text[32] = "";
@@ -185,8 +159,8 @@ std::string calibration_report_text(const CalibrationResult& result,
         std::snprintf(box_text, sizeof box_text, "  box %+.3f", p.box_deviation);
       }
       std::snprintf(buf, sizeof buf, "  %-14s %+.9e  nominal %+.9e  %+9.3f %-4s  std %s%s%s%s\n",
-                    p.name.c_str(), p.value, p.nominal, (p.value - p.nominal) * unit.factor,
-                    unit.name, p.identifiable ? std_text : "not identifiable",
+                    p.name.c_str(), p.value, p.nominal, (p.value - p.nominal) * unit.display_factor,
+                    unit.display_unit, p.identifiable ? std_text : "not identifiable",
                     p.gauge_reference ? "  (gauge reference)" : "", box_text,
                     p.at_bound ? "  AT BOUND" : "");
       out << buf;

@@ -182,9 +182,10 @@ std::array<double, kLoadParameters> load_scales(const RobotParams<double>& robot
   return out;
 }
 
-/// Flat indices of a parameter kind name ("A" covers A_x and A_y, "camera" three values...).
+/// Flat indices of a stage's kind name: a per-limb kind of kParameterKinds ("l", "A_x",
+/// "precurvature" ...) on every limb, or a group ("A" covers A_x and A_y, "camera" three values,
+/// "all", "load"); empty for an unknown name.
 std::vector<int> indices_of_kind(const std::string& kind, int n) {
-  std::vector<ParameterKind> limb_kinds;
   std::vector<int> out;
   const int extrinsics = kLimbParameters * n;
   if (kind == "all") {
@@ -202,30 +203,12 @@ std::vector<int> indices_of_kind(const std::string& kind, int n) {
     for (int k = 3; k < 6; ++k) out.push_back(extrinsics + k);
   }
   if (!out.empty()) return out;
-  if (kind == "E")
-    limb_kinds = {ParameterKind::kYoungModulus};
-  else if (kind == "d")
-    limb_kinds = {ParameterKind::kDiameter};
-  else if (kind == "l")
-    limb_kinds = {ParameterKind::kLength};
-  else if (kind == "A")
-    limb_kinds = {ParameterKind::kAx, ParameterKind::kAy};
-  else if (kind == "A_x")
-    limb_kinds = {ParameterKind::kAx};
-  else if (kind == "A_y")
-    limb_kinds = {ParameterKind::kAy};
-  else if (kind == "alpha")
-    limb_kinds = {ParameterKind::kAlpha};
-  else if (kind == "B")
-    limb_kinds = {ParameterKind::kBx, ParameterKind::kBy};
-  else if (kind == "B_x")
-    limb_kinds = {ParameterKind::kBx};
-  else if (kind == "B_y")
-    limb_kinds = {ParameterKind::kBy};
-  else if (kind == "beta")
-    limb_kinds = {ParameterKind::kBeta};
-  else if (kind == "gamma")
-    limb_kinds = {ParameterKind::kGamma};
+  std::vector<ParameterKind> limb_kinds;
+  if (kind == "A") limb_kinds = {ParameterKind::kAx, ParameterKind::kAy};
+  if (kind == "B") limb_kinds = {ParameterKind::kBx, ParameterKind::kBy};
+  for (int k = 0; k < kLimbParameters; ++k) {
+    if (kind == kParameterKinds[k].name) limb_kinds.push_back(kParameterKinds[k].kind);
+  }
   for (int i = 0; i < n; ++i) {
     for (ParameterKind pk : limb_kinds) out.push_back(parameter_index(ParameterId{pk, i}, n));
   }
@@ -246,15 +229,7 @@ std::vector<int> stage_free_indices(const CalibrationStage& stage,
   return std::vector<int>(free.begin(), free.end());
 }
 
-bool known_kind(const std::string& kind) {
-  static const char* const kKinds[] = {"E",      "d",       "l",          "A",   "A_x",  "A_y",
-                                       "alpha",  "B",       "B_x",        "B_y", "beta", "gamma",
-                                       "camera", "pattern", "extrinsics", "all", "load"};
-  for (const char* k : kKinds) {
-    if (kind == k) return true;
-  }
-  return false;
-}
+bool known_kind(const std::string& kind) { return !indices_of_kind(kind, 1).empty(); }
 
 std::string format_number(double v) {
   std::ostringstream s;
@@ -1460,38 +1435,7 @@ std::vector<double> parameter_half_widths(const RobotUncertainty& u, int num_lim
       const LimbUncertainty& l = static_cast<std::size_t>(id.limb) < u.limbs.size()
                                      ? u.limbs[static_cast<std::size_t>(id.limb)]
                                      : u.global;
-      switch (id.kind) {
-        case ParameterKind::kYoungModulus:
-          v = l.young_modulus;
-          break;
-        case ParameterKind::kDiameter:
-          v = l.diameter;
-          break;
-        case ParameterKind::kLength:
-          v = l.length;
-          break;
-        case ParameterKind::kAx:
-          v = l.A.x();
-          break;
-        case ParameterKind::kAy:
-          v = l.A.y();
-          break;
-        case ParameterKind::kAlpha:
-          v = l.alpha;
-          break;
-        case ParameterKind::kBx:
-          v = l.B.x();
-          break;
-        case ParameterKind::kBy:
-          v = l.B.y();
-          break;
-        case ParameterKind::kBeta:
-          v = l.beta;
-          break;
-        default:
-          v = l.gamma;
-          break;
-      }
+      v = limb_parameter(l, id.kind);
     } else {
       const int e = static_cast<int>(id.kind) - static_cast<int>(ParameterKind::kCameraX);
       v = e < 3 ? u.camera(e) : u.pattern(e - 3);

@@ -49,6 +49,40 @@ int limbs_of(std::size_t size, bool* load) {
   return -1;
 }
 
+/// A report written before rods had a precurvature (ten parameters per limb) held it at its
+/// nominal value, a straight rod: its covariance with their rows and columns zero. Any other
+/// layout comes back as it is, for the validation to judge.
+ParameterCovariance with_held_precurvatures(const ParameterCovariance& in) {
+  const auto precurvature = [](const ParameterId& id) {
+    return id.kind == ParameterKind::kPrecurvature;
+  };
+  for (int n = 2; n <= kMaxLimbs; ++n) {
+    for (int load = 0; load < 2; ++load) {
+      const int count = num_parameters(n) + load * kLoadParameters;
+      std::vector<int> kept;  // current flat indices of the report's parameters, in its order
+      for (int k = 0; k < count; ++k) {
+        if (!precurvature(parameter_id(k, n))) kept.push_back(k);
+      }
+      if (kept.size() != in.names.size()) continue;
+      bool same = true;
+      for (std::size_t j = 0; j < kept.size() && same; ++j)
+        same = in.names[j] == parameter_name(parameter_id(kept[j], n));
+      if (!same) continue;
+      ParameterCovariance out;
+      for (int k = 0; k < count; ++k) out.names.push_back(parameter_name(parameter_id(k, n)));
+      out.matrix = Eigen::MatrixXd::Zero(count, count);
+      for (std::size_t r = 0; r < kept.size(); ++r) {
+        for (std::size_t c = 0; c < kept.size(); ++c) {
+          out.matrix(kept[r], kept[c]) =
+              in.matrix(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c));
+        }
+      }
+      return out;
+    }
+  }
+  return in;
+}
+
 /// The farthest point from the origin of the zonotope {sum_k s_k g_k : |s_k| <= 1} in the plane
 /// (m generators g_k, zero ones left out). A convex function's maximum over a polytope is at a
 /// vertex, and the vertex that maximises u . x is sum_k sign(u . g_k) g_k, constant while u turns
@@ -251,7 +285,8 @@ void validate_parameter_covariance(const ParameterCovariance& covariance, const 
   const int n = limbs_of(names.size(), &load);
   if (n < 0) {
     throw InputError(source + ": covariance.parameters: " + std::to_string(size) +
-                     " names are not the flat parameters of a robot (10 per limb, up to " +
+                     " names are not the flat parameters of a robot (" +
+                     std::to_string(kLimbParameters) + " per limb, up to " +
                      std::to_string(kMaxLimbs) + " limbs, then 6 extrinsics, then optionally " +
                      "the load's 3)");
   }
@@ -439,6 +474,7 @@ ParameterCovariance parse_parameter_covariance(const std::string& json_text,
       out.matrix(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = value;
     }
   }
+  out = with_held_precurvatures(out);
   validate_parameter_covariance(out, source, num_limbs);
   return out;
 }

@@ -14,47 +14,28 @@ namespace pcr {
 namespace {
 
 /// Table 2 rows: kind name and the per-limb parameter it differentiates; E and D sum all limbs.
+/// A kind the paper's table does not have is a row when the robot declares it uncertain.
 struct RowSpec {
   const char* name;
   ParameterKind kind;
   bool all_limbs;
+  bool when_declared = false;
 };
 
 const RowSpec kRows[] = {
-    {"E", ParameterKind::kYoungModulus, true}, {"D", ParameterKind::kDiameter, true},
-    {"d", ParameterKind::kDiameter, false},    {"alpha", ParameterKind::kAlpha, false},
-    {"beta", ParameterKind::kBeta, false},     {"gamma", ParameterKind::kGamma, false},
-    {"l", ParameterKind::kLength, false},      {"A_x", ParameterKind::kAx, false},
-    {"A_y", ParameterKind::kAy, false},        {"B_x", ParameterKind::kBx, false},
+    {"E", ParameterKind::kYoungModulus, true},
+    {"D", ParameterKind::kDiameter, true},
+    {"d", ParameterKind::kDiameter, false},
+    {"alpha", ParameterKind::kAlpha, false},
+    {"beta", ParameterKind::kBeta, false},
+    {"gamma", ParameterKind::kGamma, false},
+    {"l", ParameterKind::kLength, false},
+    {"A_x", ParameterKind::kAx, false},
+    {"A_y", ParameterKind::kAy, false},
+    {"B_x", ParameterKind::kBx, false},
     {"B_y", ParameterKind::kBy, false},
+    {"precurvature", ParameterKind::kPrecurvature, false, true},
 };
-
-double half_width(const LimbUncertainty& u, ParameterKind kind) {
-  switch (kind) {
-    case ParameterKind::kYoungModulus:
-      return u.young_modulus;
-    case ParameterKind::kDiameter:
-      return u.diameter;
-    case ParameterKind::kLength:
-      return u.length;
-    case ParameterKind::kAx:
-      return u.A.x();
-    case ParameterKind::kAy:
-      return u.A.y();
-    case ParameterKind::kAlpha:
-      return u.alpha;
-    case ParameterKind::kBx:
-      return u.B.x();
-    case ParameterKind::kBy:
-      return u.B.y();
-    case ParameterKind::kBeta:
-      return u.beta;
-    case ParameterKind::kGamma:
-      return u.gamma;
-    default:
-      return 0.0;
-  }
-}
 
 std::string format_q(const JointVector& q) {
   std::ostringstream out;
@@ -149,17 +130,18 @@ SensitivityReport sensitivity_analysis(const RobotDescription& description,
   if (u.limbs.size() != static_cast<std::size_t>(n))
     u.limbs.assign(static_cast<std::size_t>(n), u.global);
 
+  std::vector<RowSpec> specs;
   for (const RowSpec& spec : kRows) {
     SensitivityRow row;
     row.kind = spec.name;
     if (spec.all_limbs) {
-      row.half_width = half_width(u.global, spec.kind);
+      row.half_width = limb_parameter(u.global, spec.kind);
     } else {
-      for (int i = 0; i < n; ++i) {
-        row.half_width =
-            std::max(row.half_width, half_width(u.limbs[static_cast<std::size_t>(i)], spec.kind));
-      }
+      for (LimbUncertainty& limb : u.limbs)
+        row.half_width = std::max(row.half_width, limb_parameter(limb, spec.kind));
     }
+    if (spec.when_declared && !(row.half_width > 0)) continue;
+    specs.push_back(spec);
     report.rows.push_back(row);
   }
 
@@ -171,7 +153,7 @@ SensitivityReport sensitivity_analysis(const RobotDescription& description,
                                " (a smaller step keeps the configurations closer to the centre)");
     }
     for (std::size_t r = 0; r < report.rows.size(); ++r) {
-      const RowSpec& spec = kRows[r];
+      const RowSpec& spec = specs[r];
       SensitivityRow& row = report.rows[r];
       const int k = static_cast<int>(spec.kind);
       auto accumulate = [&](const Eigen::Vector3d& d, double h) {
@@ -188,7 +170,7 @@ SensitivityReport sensitivity_analysis(const RobotDescription& description,
       } else {
         for (int i = 0; i < n; ++i) {
           accumulate(J.col(i * kLimbParameters + k),
-                     half_width(u.limbs[static_cast<std::size_t>(i)], spec.kind));
+                     limb_parameter(u.limbs[static_cast<std::size_t>(i)], spec.kind));
         }
       }
     }
@@ -211,23 +193,27 @@ std::string sensitivity_table_text(const SensitivityReport& report) {
   out << "Sensitivity of the platform pose to the parameters (Table 2), max over "
       << report.configurations.size() << " configurations (3^n grid, step " << report.step * 1e3
       << " mm, minus its centre) and the limbs; SI units\n";
-  std::snprintf(line, sizeof(line), "%-6s %12s %12s %12s\n", "param", "|dx/dp|", "|dy/dp|",
+  int width = 6;  // the paper's names; a longer one widens the column
+  for (const SensitivityRow& row : report.rows)
+    width = std::max(width, static_cast<int>(row.kind.size()));
+  std::snprintf(line, sizeof(line), "%-*s %12s %12s %12s\n", width, "param", "|dx/dp|", "|dy/dp|",
                 "|dtheta/dp|");
   out << line;
   for (const SensitivityRow& row : report.rows) {
-    std::snprintf(line, sizeof(line), "%-6s %12.3g %12.3g %12.3g\n", row.kind.c_str(), row.dx,
-                  row.dy, row.dtheta);
+    std::snprintf(line, sizeof(line), "%-*s %12.3g %12.3g %12.3g\n", width, row.kind.c_str(),
+                  row.dx, row.dy, row.dtheta);
     out << line;
   }
   out << "\nRanking: pose error each parameter can cause = sensitivity x uncertainty half-width\n";
-  std::snprintf(line, sizeof(line), "%-4s %-6s %14s %14s %14s\n", "rank", "param", "half-width",
-                "e_p (um)", "e_theta (urad)");
+  std::snprintf(line, sizeof(line), "%-4s %-*s %14s %14s %14s\n", "rank", width, "param",
+                "half-width", "e_p (um)", "e_theta (urad)");
   out << line;
   int rank = 1;
   for (int r : report.ranking) {
     const SensitivityRow& row = report.rows[static_cast<std::size_t>(r)];
-    std::snprintf(line, sizeof(line), "%-4d %-6s %14.3g %14.4g %14.4g\n", rank++, row.kind.c_str(),
-                  row.half_width, row.position_error * 1e6, row.orientation_error * 1e6);
+    std::snprintf(line, sizeof(line), "%-4d %-*s %14.3g %14.4g %14.4g\n", rank++, width,
+                  row.kind.c_str(), row.half_width, row.position_error * 1e6,
+                  row.orientation_error * 1e6);
     out << line;
   }
   return out.str();

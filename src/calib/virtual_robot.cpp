@@ -52,15 +52,15 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
   RobotParams<double>& p = truth_.params;
   // One material and one wire: E and d are drawn once for all limbs (relative to limb 0's
   // nominal offset, so per-limb nominal differences are kept).
-  const double e_offset = draw(rng, 0.0, u.global.young_modulus, f);
-  const double d_offset = draw(rng, 0.0, u.global.diameter, f);
+  const double e_offset = draw(rng, 0.0, u.global.rod.young_modulus, f);
+  const double d_offset = draw(rng, 0.0, u.global.rod.diameter, f);
   truth_.young_modulus = nominal.young_modulus + e_offset;
   for (int i = 0; i < n; ++i) {
     const LimbUncertainty& h = u.limbs[static_cast<std::size_t>(i)];
     LimbParams<double>& limb = p.limb(i);
     limb.rod.young_modulus += e_offset;
     limb.rod.diameter += d_offset;
-    limb.rod.length = draw(rng, limb.rod.length, h.length, f);
+    limb.rod.length = draw(rng, limb.rod.length, h.rod.length, f);
     limb.A.x() = draw(rng, limb.A.x(), h.A.x(), f);
     limb.A.y() = draw(rng, limb.A.y(), h.A.y(), f);
     limb.alpha = draw(rng, limb.alpha, h.alpha, f);
@@ -68,6 +68,9 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
     limb.B.y() = draw(rng, limb.B.y(), h.B.y(), f);
     limb.beta = draw(rng, limb.beta, h.beta, f);
     limb.gamma = draw(rng, limb.gamma, h.gamma, f);
+    // Drawn when declared only: the paper's robots keep their truths seed for seed.
+    if (h.rod.precurvature > 0)
+      limb.rod.precurvature = draw(rng, limb.rod.precurvature, h.rod.precurvature, f);
   }
   Pose2<double>& camera = p.extrinsics.camera;
   Pose2<double>& pattern = p.extrinsics.pattern;

@@ -176,9 +176,12 @@ class Reader {
     for (auto it = object.begin(); it != object.end(); ++it) {
       const std::string key = it.key();
       const std::string p = join(path, key);
-      if (key == "E") out.young_modulus = half_width(*it, p, kMinYoungModulus * 1e-9, 1e12, "Pa");
-      if (key == "l") out.length = half_width(*it, p, 1e-12, 0.1, "m");
-      if (key == "d") out.diameter = half_width(*it, p, 1e-12, 1e-2, "m");
+      if (key == "E") {
+        out.rod.young_modulus = half_width(*it, p, kMinYoungModulus * 1e-9, 1e12, "Pa");
+      }
+      if (key == "l") out.rod.length = half_width(*it, p, 1e-12, 0.1, "m");
+      if (key == "d") out.rod.diameter = half_width(*it, p, 1e-12, 1e-2, "m");
+      if (key == "precurvature") out.rod.precurvature = half_width(*it, p, 1e-9, 1e4, "1/m");
       if (key == "alpha") out.alpha = half_width(*it, p, 1e-12, 1.0, "rad");
       if (key == "beta") out.beta = half_width(*it, p, 1e-12, 1.0, "rad");
       if (key == "gamma") out.gamma = half_width(*it, p, 1e-12, 1.0, "rad");
@@ -190,7 +193,8 @@ class Reader {
   RobotUncertainty uncertainty(const Json& object, int num_limbs) const {
     const std::string path = "uncertainty";
     check_object(object, path,
-                 {"E", "l", "d", "A", "alpha", "B", "beta", "gamma", "camera", "pattern", "limbs"});
+                 {"E", "l", "d", "precurvature", "A", "alpha", "B", "beta", "gamma", "camera",
+                  "pattern", "limbs"});
     RobotUncertainty u;
     limb_uncertainty(object, path, u.global);
     if (object.contains("camera")) {
@@ -211,7 +215,7 @@ class Reader {
       }
       for (std::size_t i = 0; i < limbs.size(); ++i) {
         check_object(limbs[i], index(lpath, i),
-                     {"E", "l", "d", "A", "alpha", "B", "beta", "gamma"});
+                     {"E", "l", "d", "precurvature", "A", "alpha", "B", "beta", "gamma"});
         limb_uncertainty(limbs[i], index(lpath, i), u.limbs[i]);
       }
     }
@@ -391,9 +395,13 @@ Ordered triple(const Eigen::Vector3d& v) { return Ordered::array({v(0), v(1), v(
 /// Uncertainty fields of `u` that differ from `base` (all of them when base is null).
 Ordered limb_uncertainty_json(const LimbUncertainty& u, const LimbUncertainty* base) {
   Ordered out = Ordered::object();
-  if (!base || !same_bits(u.young_modulus, base->young_modulus)) out["E"] = u.young_modulus;
-  if (!base || !same_bits(u.length, base->length)) out["l"] = u.length;
-  if (!base || !same_bits(u.diameter, base->diameter)) out["d"] = u.diameter;
+  if (!base || !same_bits(u.rod.young_modulus, base->rod.young_modulus))
+    out["E"] = u.rod.young_modulus;
+  if (!base || !same_bits(u.rod.length, base->rod.length)) out["l"] = u.rod.length;
+  if (!base || !same_bits(u.rod.diameter, base->rod.diameter)) out["d"] = u.rod.diameter;
+  // Only a robot that declares it: the paper's files keep their fields.
+  if (base ? !same_bits(u.rod.precurvature, base->rod.precurvature) : u.rod.precurvature != 0.0)
+    out["precurvature"] = u.rod.precurvature;
   if (!base || !same_bits(u.A, base->A)) out["A"] = pair(u.A);
   if (!base || !same_bits(u.alpha, base->alpha)) out["alpha"] = u.alpha;
   if (!base || !same_bits(u.B, base->B)) out["B"] = pair(u.B);

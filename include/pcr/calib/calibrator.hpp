@@ -81,9 +81,10 @@ struct CalibrationSample {
 
 struct CalibrationStage {
   std::string name;
-  /// Kinds: "E", "d", "l", "A", "A_x", "A_y", "alpha", "B", "B_x", "B_y", "beta", "gamma",
-  /// "camera", "pattern", "extrinsics", "all" (the geometry and extrinsics), "load" (the constant
-  /// platform load, kLoadParameters values; not in "all").
+  /// Kinds: a per-limb kind of kParameterKinds ("E", "d", "l", "A_x", "A_y", "alpha", "B_x",
+  /// "B_y", "beta", "gamma", "precurvature"), "A", "B", "camera", "pattern", "extrinsics", "all"
+  /// (the geometry and extrinsics), "load" (the constant platform load, kLoadParameters values;
+  /// not in "all").
   std::vector<std::string> free;
   double bounds_scale = 1.0;
 };

@@ -17,16 +17,16 @@
 //
 // Two exact implementations of that derivative:
 // - DerivativeMode::kImplicit (default), PoseMeasurementCost: assembled per limb. Rod i's residual
-//   rows depend only on limb i's ten parameters, and of those the rod integration itself only on
-//   (alpha_i, EI_i, l_i): the rod's symmetries give them from the tip's sensitivities to its
+//   rows depend only on limb i's parameters, and of those the rod integration itself only on
+//   (alpha_i, EI_i, l_i, u0_i): the rod's symmetries give them from the tip's sensitivities to its
 //   wrench, which the Jacobian dr/dz already integrated (limb_residual_partials); A, gamma, E, d,
 //   B, beta enter by hand-written chain rules. The pose rows of (dr/dz)^-1 come from one
 //   transposed solve with the LU of that Jacobian, and the extrinsics (which enter only the final
 //   measurement transform) through a Jet<double, 9>. No RK4 pass beyond the Jacobian's: far
-//   cheaper than the auto-diff pass below, which pushes all 36 lanes through every RK4 step of
+//   cheaper than the auto-diff pass below, which pushes all 39 lanes through every RK4 step of
 //   every rod.
 // - DerivativeMode::kAutoDiff: one Newton step in Jet (forward_pose_implicit) through the whole
-//   residual: AutoDiffCostFunction<3, 36> for n = 3, DynamicAutoDiffCostFunction with
+//   residual: AutoDiffCostFunction<3, 39> for n = 3, DynamicAutoDiffCostFunction with
 //   Jet<double, 16> chunks otherwise. Kept as the independent cross-check of the assembly.
 
 #include <ceres/autodiff_cost_function.h>
@@ -99,15 +99,16 @@ namespace internal {
 /// The force balance rows do not depend on the parameters. `tip`: the rod's tip at that point
 /// with its sensitivities to (n_x, n_y, m(0)).
 ///
-/// The rod's own parameters (start angle, EI, l) need no integration: three symmetries of the
+/// The rod's own parameters (start angle, EI, l, u0) need no integration: three symmetries of the
 /// planar rod, which RK4 at a fixed step count keeps exactly, turn them into the sensitivities:
 ///   turning the start angle and the force by delta turns the rod about its start by delta;
 ///   (EI, n, m) -> c (EI, n, m) leaves the shape and scales m;
 ///   l -> c l with (n, m, u0, u1) -> (n / c^2, m / c, u0 / c, u1 / c^2) scales the shape about its
 ///   start by c and m by 1/c (u0, u1: the intrinsic curvature u* = u0 + u1 s, Rod).
-/// A pre-curved rod's length column thus needs d/du0 and d/du1: u0 enters theta' = m / EI + u0
-/// as a moment EI u0 would (d/du0 = EI d/dm(0), less EI on m(l)); u1 has no such twin and is
-/// differentiated by a Jet through the rod's rod_steps RK4 steps (rods with u1 != 0 only).
+/// and u0 enters theta' = m / EI + u0 as a moment EI u0 would: d/du0 = EI d/dm(0), less EI on
+/// m(l). A pre-curved rod's length column takes d/du0 and d/du1 too; u1 has no such twin and is
+/// differentiated by a Jet through the rod's rod_steps RK4 steps (rods with u1 != 0 only: the
+/// slope is described, not identified).
 inline void limb_residual_partials(const LimbParams<double>& limb, double q,
                                    const Wrench<double>& w, const RodTip<double>& tip,
                                    const Pose2<double>& pose, const ShootingScale& scale,
@@ -122,10 +123,8 @@ inline void limb_residual_partials(const LimbParams<double>& limb, double q,
       (Eigen::Vector4d(0.0, 0.0, 0.0, tip.state.m) - S * Eigen::Vector3d(w.nx, w.ny, w.m)) / ei;
   Eigen::Vector4d d_length =
       Eigen::Vector4d(dx, dy, 0.0, -tip.state.m) + S * Eigen::Vector3d(2.0 * w.nx, 2.0 * w.ny, w.m);
-  if (limb.rod.precurvature != 0.0) {
-    const Eigen::Vector4d d_u0 = ei * (S.col(2) - Eigen::Vector4d(0.0, 0.0, 0.0, 1.0));
-    d_length += limb.rod.precurvature * d_u0;
-  }
+  const Eigen::Vector4d d_u0 = ei * (S.col(2) - Eigen::Vector4d(0.0, 0.0, 0.0, 1.0));
+  d_length += limb.rod.precurvature * d_u0;
   if (limb.rod.precurvature_slope != 0.0) {
     using Dual = ceres::Jet<double, 1>;
     const LimbParams<Dual> dual = limb.template cast<Dual>();
@@ -149,6 +148,7 @@ inline void limb_residual_partials(const LimbParams<double>& limb, double q,
   d.col(kE) = d_ei * ei / limb.rod.young_modulus;  // EI = E pi d^4 / 64
   d.col(kD) = d_ei * 4.0 * ei / limb.rod.diameter;
   d.col(kL) = d_length;
+  d.col(static_cast<int>(ParameterKind::kPrecurvature)) = d_u0;
   d.col(kAlpha) = d_start_angle;
   // The start point A + q (cos, sin)(alpha + gamma) shifts the whole rod.
   d(0, kAx) = 1.0;
