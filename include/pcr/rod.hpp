@@ -212,6 +212,7 @@ struct RodStepper {
     // Stage values (the rhs of x, y, theta are c, s, k) and slopes of (c, s, m); g: tangents.
     L sc[4], ss[4], sk[4], dc[4], ds[4], dm[4];
     L gc[3][4], gs[3][4], gk[3][4], gdc[3][4], gds[3][4], gdm[3][4];  // [column][stage]
+    const L u_half = u_node + du_half, u_end = u_node + du_step;      // u* at the stages
     // The loops over stages and columns are unrolled, so that the branches fold away and the
     // values stay in registers (with lanes GCC kept them rolled, going through memory).
 #pragma GCC unroll 4
@@ -221,7 +222,7 @@ struct RodStepper {
       const L cc = st == 0 ? c : L(c + a * dc[p]);
       const L sv = st == 0 ? s : L(s + a * ds[p]);
       const L mm = st == 0 ? m : L(m + a * dm[p]);
-      const L u = st == 0 ? u_node : L(u_node + (st == 3 ? du_step : du_half));
+      const L& u = st == 0 ? u_node : st == 3 ? u_end : u_half;
       const L k = mm * inv_ei + u;
       sc[st] = cc;
       ss[st] = sv;
