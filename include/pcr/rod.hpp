@@ -59,8 +59,6 @@ struct Rod {
   /// EA of the circular section (N): the kinematics takes the rods as inextensible, the stability
   /// check (pcr/stability.hpp) needs their axial compliance.
   T axial_stiffness() const { return young_modulus * T(M_PI / 4.0) * diameter * diameter; }
-  /// u*(s) (1/m).
-  T intrinsic_curvature(const T& s) const { return precurvature + precurvature_slope * s; }
   /// The angle the stress-free rod's tangent turns through from 0 to s: u0 s + u1 s^2 / 2 (rad).
   T intrinsic_turn(const T& s) const {
     return s * (precurvature + T(0.5) * precurvature_slope * s);
