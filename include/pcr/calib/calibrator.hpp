@@ -65,58 +65,15 @@
 #include <string>
 #include <vector>
 
+#include "pcr/calib/calibration_sample.hpp"
+#include "pcr/calib/calibration_stages.hpp"
+#include "pcr/calib/configuration_errors.hpp"
 #include "pcr/calib/cost.hpp"
+#include "pcr/calib/gauge.hpp"
 #include "pcr/input_error.hpp"
 #include "pcr/robot_description.hpp"
 
 namespace pcr {
-
-/// One measured configuration: joints (m) and measured pattern pose ^Se T_M (m, m, rad).
-struct CalibrationSample {
-  JointVector q;
-  Pose2<double> measured;
-  std::string origin;  ///< where the row came from ("data.csv:17"); empty: "configuration j"
-  int line = 0;        ///< 1-based line in its file (0: not from a file)
-};
-
-struct CalibrationStage {
-  std::string name;
-  /// Kinds: a per-limb kind of kParameterKinds ("E", "d", "l", "A_x", "A_y", "alpha", "B_x",
-  /// "B_y", "beta", "gamma", "precurvature"), "A", "B", "camera", "pattern", "extrinsics", "all"
-  /// (the geometry and extrinsics), "load" (the constant platform load, kLoadParameters values;
-  /// not in "all").
-  std::vector<std::string> free;
-  double bounds_scale = 1.0;
-};
-
-/// The paper's three stages.
-std::vector<CalibrationStage> default_stages();
-
-/// Whether a stage frees "load" (the calibration then identifies a constant platform load).
-bool frees_load(const std::vector<CalibrationStage>& stages);
-
-/// The load model: `stages` with their last stage also freeing "load" (unchanged when a stage
-/// frees it already).
-std::vector<CalibrationStage> with_load_stage(std::vector<CalibrationStage> stages);
-
-/// Throws InputError naming `source` on an unknown kind or a non-positive bounds scale.
-void validate_stages(const std::vector<CalibrationStage>& stages, const std::string& source);
-
-/// The number of parameters `stage` frees on `nominal` (which has an uncertainty section): those
-/// its kinds name with a non-zero half-width (the others are held), and the platform load's three
-/// for "load".
-int free_parameter_count(const CalibrationStage& stage, const RobotDescription& nominal);
-
-/// Throws InputError, naming `source`, when `rows` configurations give fewer measured values
-/// (3 each) than a stage has free parameters: its least squares would be underdetermined whatever
-/// the data. calibrate() checks it; a front-end may check it first to name its file.
-void check_enough_measurements(const std::vector<CalibrationStage>& stages,
-                               const RobotDescription& nominal, std::size_t rows,
-                               const std::string& source);
-
-/// Reads a stages file: {"stages": [{"name": ..., "free": [kinds], "bounds_scale": 1}, ...]} or
-/// the bare list. Throws InputError naming the file, the field and the value.
-std::vector<CalibrationStage> load_calibration_stages(const std::string& path);
 
 /// How a stage treats the gauge directions (see the header comment).
 enum class StageGauge {
@@ -188,18 +145,6 @@ struct CalibrationOptions {
            kIntermediateFunctionTolerance.check(intermediate_function_tolerance, error) &&
            kRobustScale.check(robust_scale, error) && fk.is_valid(error);
   }
-};
-
-/// Table 3 of the paper for one model and one set: e_p (Eq. 8, m) and e_theta (Eq. 9, rad),
-/// comparing FK with the platform pose computed from the measurement by Eq. 5.
-struct PoseErrorStats {
-  double max_p = 0, mean_p = 0, min_p = 0;
-  double max_theta = 0, mean_theta = 0, min_theta = 0;
-  int count = 0;   ///< configurations evaluated
-  int failed = 0;  ///< configurations whose FK did not converge (not in the statistics)
-  /// Configurations measured on another equilibrium than the model's (ConfigurationErrors::
-  /// branch_mismatch; not in the statistics).
-  int branch_mismatches = 0;
 };
 
 struct StageReport {
@@ -312,18 +257,6 @@ struct CalibrationResult {
 /// data do not identify (rounding in the exact Jacobian is ~1e-12 of it).
 inline constexpr double kRankThreshold = 1e-7;
 
-/// A tangent vector of the gauge orbit (see the header comment): moving the parameters along it
-/// changes no prediction when the platform carries no load.
-struct GaugeGenerator {
-  std::string name;               ///< e.g. "proximal clamps + camera: rotation"
-  std::string combination;        ///< the parameters it moves, in words
-  std::vector<double> direction;  ///< flat (parameters.hpp order), unscaled
-};
-
-/// The seven generators at `robot`: proximal translation x, y and rotation, distal translation
-/// x, y and rotation, common scale of the bending stiffness.
-std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot);
-
 /// The whitened residual Jacobian of one configuration at `robot`, as the stages see it (Eq. 6
 /// divided by residual_scale): 3 x num_parameters, rows (w theta, x, y) / residual_scale, columns
 /// in flat order, extrinsics included; exact (DerivativeMode::kImplicit, FK from home). Returns
@@ -337,110 +270,5 @@ bool measurement_jacobian(const RobotParams<double>& robot, const JointVector& q
 CalibrationResult calibrate(const RobotDescription& nominal,
                             const std::vector<CalibrationSample>& data,
                             const CalibrationOptions& options = CalibrationOptions());
-
-/// Per-configuration errors of one model on one set (the paper's Figures 8 and 9): e_p (Eq. 8,
-/// m) and e_theta (Eq. 9, rad), NaN where FK failed. The rows are solved as `order` says: by
-/// default the path the experiment followed, from home in the rows' order (a dataset's row order
-/// is its measurement order, each dataset an experiment from home: see docs/calibration.md, "Row
-/// order is measurement order"), as the robot moved; SequenceMode::kIndependent solves each from
-/// home, as the calibration's residuals do.
-///
-/// A row whose error is kMismatchFactor times the set's median or more, and whose measurement
-/// lies kMismatchFactor times nearer another equilibrium of the model at the same joints, is a
-/// branch mismatch: the robot held another equilibrium than the one the model predicts there.
-/// The other equilibria looked at: the rows' solutions in the other readings of the set (each
-/// from home, as a path, as a path through folds: a robot that snapped through one), and
-/// buckled variants of the predicted one (each rod bent one or two turns further either way).
-struct ConfigurationErrors {
-  std::vector<double> e_p, e_theta;
-  std::vector<bool> branch_mismatch;
-  /// Where branch_mismatch: the platform pose of the equilibrium the measurement lies next to.
-  std::vector<Pose2<double>> other_pose;
-};
-inline constexpr double kMismatchFactor = 10.0;
-/// Two equilibria at the same joints are distinct beyond this (m, with angles at the orientation
-/// weight): far above the solver's accuracy.
-inline constexpr double kDistinctEquilibrium = 1e-7;
-ConfigurationErrors configuration_errors(const RobotParams<double>& robot,
-                                         const std::vector<CalibrationSample>& data,
-                                         const SolverOptions& fk = SolverOptions(),
-                                         const PlatformLoad<double>& load = PlatformLoad<double>(),
-                                         SequenceMode order = SequenceMode::kPath);
-
-/// Table 3 statistics (max, mean, min) of per-configuration errors; failures are counted apart.
-PoseErrorStats error_statistics(const ConfigurationErrors& errors);
-
-/// Table 3 statistics of `robot` (with its extrinsics) on `data` (configuration_errors).
-PoseErrorStats pose_errors(const RobotParams<double>& robot,
-                           const std::vector<CalibrationSample>& data,
-                           const SolverOptions& fk = SolverOptions(),
-                           const PlatformLoad<double>& load = PlatformLoad<double>(),
-                           SequenceMode order = SequenceMode::kPath);
-
-/// The flat half-widths of `uncertainty` for a robot with `num_limbs` limbs.
-std::vector<double> parameter_half_widths(const RobotUncertainty& uncertainty, int num_limbs);
-
-/// Moves `params` along the gauge orbit (predictions with no load are unchanged): the proximal
-/// clamps and the camera frame by the rigid motion G (A -> G A, alpha -> alpha + G.theta,
-/// camera -> G camera), the distal clamps and the pattern frame by H (B -> H B,
-/// beta -> beta + H.theta, pattern -> pattern H^-1), every diameter times stiffness_scale.
-RobotParams<double> move_along_gauge(const RobotParams<double>& params, const Pose2<double>& G,
-                                     const Pose2<double>& H, double stiffness_scale);
-
-/// The constant platform load (pcr/calib/cost.hpp, kLoadParameters) that keeps the predictions
-/// of move_along_gauge(params, G, H, stiffness_scale) under `load`: the force turns with G (the
-/// world moves), force and moment scale with the bending stiffness (stiffness_scale^4), and the
-/// moment, taken about the platform origin that H moves, gains the force's arm. That arm turns
-/// with each configuration's platform angle; it is taken at theta = 0. So with a force on the
-/// platform a distal translation is no longer a gauge (the spread of the platform angles over the
-/// data sees it, weakly), and the predictions are kept exactly only when H does not translate.
-PlatformLoad<double> move_load_along_gauge(const PlatformLoad<double>& load, const Pose2<double>& G,
-                                           const Pose2<double>& H, double stiffness_scale);
-
-/// The equilibrium `solution` of a robot moved along the gauge orbit by (G, H, stiffness_scale):
-/// the same rods turned by G, the platform pose G P H^-1, the proximal forces turned by G and every
-/// wrench scaled with the bending stiffness (stiffness_scale^4). The model's symmetry makes it the
-/// equilibrium of move_along_gauge(...) exactly under move_load_along_gauge(...) when H does not
-/// translate; otherwise a start one Newton step away. Its chord matrix is dropped.
-ForwardSolution move_equilibrium_along_gauge(const ForwardSolution& solution,
-                                             const Pose2<double>& G, const Pose2<double>& H,
-                                             double stiffness_scale);
-
-/// The seven generators at `robot` under a constant platform load, with the load's components
-/// (move_load_along_gauge to first order, the distal translations' at platform angle 0) after
-/// the flat ones: directions of num_parameters(n) + kLoadParameters values.
-std::vector<GaugeGenerator> gauge_generators(const RobotParams<double>& robot,
-                                             const PlatformLoad<double>& load);
-
-/// A motion along the gauge orbit (move_along_gauge's arguments).
-struct GaugeMotion {
-  Pose2<double> G{0, 0, 0};  ///< of the proximal clamps and the camera frame
-  Pose2<double> H{0, 0, 0};  ///< of the distal clamps, about the platform origin
-  double stiffness_scale = 1;
-};
-
-/// The motion that puts limb 0's clamps and d_0 at `reference`'s values: A_0 (with
-/// `proximal_translation`) and alpha_0 (with `proximal_rotation` too), B_0 and beta_0 alike (a
-/// distal rotation alone turns about the platform origin and sets beta_0), d_0 (`stiffness`).
-GaugeMotion gauge_fix_motion(const RobotParams<double>& params,
-                             const RobotParams<double>& reference, bool proximal_translation,
-                             bool proximal_rotation, bool distal_translation, bool distal_rotation,
-                             bool stiffness);
-
-/// The distal translation that fixes the gauge of `params` under a constant platform `load`
-/// (after gauge_fix_motion's rotations). Without a force: B_0 takes `reference`'s value, both
-/// coordinates `held`. With one, a distal translation changes the predictions, by the force's arm
-/// that turns with the platform, to first order in the platform angle unless it is perpendicular
-/// to the force: the motion is along that perpendicular, until the coordinate of B_0 with the
-/// larger share in it takes `reference`'s value (held[0]: x, held[1]: y). Move the load with it
-/// (move_load_along_gauge).
-GaugeMotion gauge_fix_motion(const RobotParams<double>& params, const PlatformLoad<double>& load,
-                             const RobotParams<double>& reference, bool held[2]);
-
-/// move_along_gauge by gauge_fix_motion: predictions (with no load) are unchanged.
-RobotParams<double> fix_gauge(const RobotParams<double>& params,
-                              const RobotParams<double>& reference, bool proximal_translation,
-                              bool proximal_rotation, bool distal_translation, bool distal_rotation,
-                              bool stiffness);
 
 }  // namespace pcr
