@@ -14,8 +14,16 @@ PYBIND11_MODULE(_pcr, m) {
   pcr::python::wrap_robot(m);
   pcr::python::wrap_kinematics(m);
 #ifdef PCR_PYTHON_HAS_CALIB
+  pcr::python::wrap_sensitivity(m);
+  pcr::python::wrap_virtual_robot(m);
+  pcr::python::wrap_dataset(m);
+  pcr::python::wrap_workspace_map(m);
+  pcr::python::wrap_sampling(m);
+  pcr::python::wrap_calibration_stages(m);
+  pcr::python::wrap_pose_errors(m);
+  // after wrap_pose_errors: CalibrationTable's fields are PoseErrorStats
   pcr::python::wrap_calibration(m);
-  pcr::python::wrap_accuracy(m);  // after wrap_calibration: uses VirtualRobot
+  pcr::python::wrap_accuracy(m);  // after wrap_virtual_robot: uses VirtualRobot
   pcr::python::wrap_predicted_accuracy(m);
   m.attr("has_calibration") = true;
 #else
