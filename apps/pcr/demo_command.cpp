@@ -1,7 +1,8 @@
 // pcr demo: the paper's whole method on the built-in virtual robot, in one seeded command (the
-// paper's Sections 2.3 to 6; README.md, "The main job"): measure -> sensitivity -> sampling and
-// simulated measurements -> three-stage calibration -> trajectories and ISO 9283 accuracy ->
-// report.
+// paper's Sections 2.3 to 6; README.md, "The main job"): the measurement of the nominal robot in
+// rendered images, then the library's method (pcr::run_method: sensitivity -> sampling and
+// simulated measurements -> calibration -> validation -> trajectories and ISO 9283 accuracy ->
+// maps), and its report.
 #ifdef PCR_HAS_CALIB
 #include <chrono>
 #include <cmath>
@@ -18,14 +19,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "pcr/calib/accuracy.hpp"
-#include "pcr/calib/calibration_report.hpp"
-#include "pcr/calib/model_selection.hpp"
-#include "pcr/calib/predicted_accuracy.hpp"
-#include "pcr/calib/sampling.hpp"
-#include "pcr/calib/sensitivity.hpp"
-#include "pcr/calib/virtual_robot.hpp"
-#include "pcr/calib/workspace_map.hpp"
+#include "pcr/calib/method.hpp"
 #ifdef PCR_HAS_VISION
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
@@ -275,75 +269,34 @@ std::string errors_csv(const pcr::CalibrationTable& table) {
   return csv.str();
 }
 
-/// Step 5: the paper's square and circle commanded with the nominal and the identified model,
-/// each pose repeated `repeat` times on the virtual robot. The attained poses are what the camera
-/// measures, mapped to W with the commanding model's extrinsics, as on the real robot: each model
-/// defines its own W (the gauge of the calibration), so this is the frame its commands are in.
-std::string accuracy_section(const pcr::CalibrationResult& calibrated, pcr::VirtualRobot& robot,
-                             const DemoArgs& args, const fs::path& out, json& report,
-                             const Progress& progress) {
-  pcr::SquarePath square;
-  square.num_poses = args.path_poses;
-  pcr::CirclePath circle;
-  circle.num_poses = args.path_poses;
-  pcr::AccuracyOptions options;
-  options.repeat = args.repeat;
-  options.frame = pcr::AttainedFrame::kModelExtrinsics;
-
-  std::string md;
-  std::vector<std::pair<std::string, pcr::Iso9283Result>> results;
-  for (const auto& [path_name, path] :
-       {std::pair<std::string, std::vector<pcr::Pose2<double>>>{"square", pcr::square_path(square)},
-        {"circle", pcr::circle_path(circle)}}) {
-    for (const auto& [model_name, model] : {std::pair<std::string, const pcr::RobotParams<double>*>{
-                                                "nominal", &calibrated.extrinsics_only},
-                                            {"identified", &calibrated.identified}}) {
-      // The identified model commands under its identified load (none unless the load model
-      // was chosen); the nominal model knows of none.
-      options.command.step.load =
-          model_name == "identified" ? calibrated.load : pcr::PlatformLoad<double>();
-      const pcr::AccuracyEvaluation e =
-          pcr::evaluate_on_virtual_robot(*model, robot, path, options);
-      pcr::write_file_atomically(
-          (out / ("attained-" + path_name + "-" + model_name + ".csv")).string(),
-          pcr::measured_to_csv(e.commanded, e.attained));
-      pcr::write_file_atomically(
-          (out / ("accuracy-" + path_name + "-" + model_name + ".csv")).string(),
-          pcr::iso9283_poses_csv(e.iso));
-      progress.say("      " + path_name + ", " + model_name +
-                   fmt(" model: AP_p max %.4f um, mean %.4f um", e.iso.ap_p.max * 1e6,
-                       e.iso.ap_p.mean * 1e6));
-      results.emplace_back(path_name + ", " + model_name + " model", e.iso);
-    }
-  }
+/// Table 4: the paper's square and circle commanded with the nominal and the identified model. The
+/// attained poses are what the camera measures, mapped to W with the commanding model's
+/// extrinsics, as on the real robot: each model defines its own W (the gauge of the calibration),
+/// so this is the frame its commands are in.
+std::string accuracy_section(const pcr::MethodResult& result, const DemoArgs& args,
+                             const fs::path& out, json& report) {
   std::vector<std::pair<std::string, const pcr::Iso9283Result*>> rows;
-  for (const auto& [name, iso] : results) rows.emplace_back(name, &iso);
+  for (const pcr::PathAccuracy& a : result.accuracy) {
+    const std::string name = a.path + "-" + a.model;
+    pcr::write_file_atomically((out / ("attained-" + name + ".csv")).string(),
+                               pcr::measured_to_csv(a.evaluation.commanded, a.evaluation.attained));
+    pcr::write_file_atomically((out / ("accuracy-" + name + ".csv")).string(),
+                               pcr::iso9283_poses_csv(a.evaluation.iso));
+    rows.emplace_back(a.path + ", " + a.model + " model", &a.evaluation.iso);
+  }
   report["accuracy"] = json::parse(pcr::iso9283_json(rows));
   report["accuracy"]["repeat"] = args.repeat;
   report["accuracy"]["poses_per_path"] = args.path_poses;
-  md += pcr::iso9283_table_markdown(rows);
-  md += "\nEach pose repeated " + std::to_string(args.repeat) +
-        " times, approached from the previous pose; attained poses measured by the camera (with "
-        "its noise) and mapped to W with each model's identified extrinsics, as in the paper.\n";
-  return md;
+  return pcr::iso9283_table_markdown(rows) + "\nEach pose repeated " + std::to_string(args.repeat) +
+         " times, approached from the previous pose; attained poses measured by the camera (with "
+         "its noise) and mapped to W with each model's identified extrinsics, as in the paper.\n";
 }
 
-/// Step 6: where the identified robot can work at theta = 0: the maps of `pcr map` (CSV) and, with
-/// the vision library, heat maps of the stability margin, the singularity and the strain.
-std::string workspace_section(const pcr::RobotDescription& identified,
-                              const pcr::CalibrationResult& calibrated, const fs::path& out,
-                              json& report, const Progress& progress) {
-  pcr::WorkspaceMapOptions options;
-  options.grid = 200;
-  // The calibration's covariance predicts each point's error as the camera would measure it.
-  const pcr::ParameterCovariance covariance = pcr::parameter_covariance(calibrated);
-  pcr::PredictedAccuracyOptions accuracy;
-  accuracy.frame = pcr::PoseFrame::kMeasurement;
-  accuracy.load = calibrated.load;
-  options.load = calibrated.load;
-  options.accuracy = pcr::predicted_accuracy_of_points(identified.params, covariance, accuracy);
-  const pcr::WorkspaceMap map = pcr::workspace_map(identified.params, options);
-  const int n = identified.params.num_limbs;
+/// Where the identified robot can work at theta = 0: the map of `pcr map` (CSV) and, with the
+/// vision library, heat maps of the stability margin, the singularity and the strain.
+std::string workspace_section(const pcr::MethodResult& result, const fs::path& out, json& report) {
+  const pcr::WorkspaceMap& map = *result.map;
+  const int n = result.identified.params.num_limbs;
   {
     pcr::OutputFile file((out / "map-identified.csv").string());
     pcr::write_workspace_map_csv(map, n, file.stream());
@@ -358,7 +311,7 @@ std::string workspace_section(const pcr::RobotDescription& identified,
     min_singularity = std::min(min_singularity, p.singularity);
     if (p.stable) max_3sigma = std::max(max_3sigma, p.position_3sigma);
   }
-  const pcr::RotationRange rotation = pcr::rotation_range(identified.params, 0.0, 0.0);
+  const pcr::RotationRange& rotation = result.rotation_range;
   std::vector<std::string> images;
 #ifdef PCR_HAS_VISION
   // Over the reachable points; log scales for quantities that span decades.
@@ -400,11 +353,6 @@ std::string workspace_section(const pcr::RobotDescription& identified,
                          {"seconds", map.seconds},
                          {"files", {"map-identified.csv"}},
                          {"images", images}};
-  char line[160];
-  std::snprintf(line, sizeof line,
-                "      %d x %d map in %.2f s: reachable %.2f mm^2, stable %.2f mm^2", map.nx,
-                map.ny, map.seconds, map.reachable_area * 1e6, map.stable_area * 1e6);
-  progress.say(line);
   char text[1024];
   std::snprintf(
       text, sizeof text,
@@ -423,6 +371,83 @@ std::string workspace_section(const pcr::RobotDescription& identified,
   return md;
 }
 
+/// Table 3 and the stages, with the fit not chosen when both were tried.
+std::string calibration_section(const pcr::MethodResult& result) {
+  const pcr::CalibrationResult& calibrated = result.calibration;
+  const pcr::CalibrationTable& table3 = result.table;
+  const char* header =
+      "| model, set | e_p max (um) | e_p mean (um) | e_p min (um) | e_theta max (urad) | e_theta "
+      "mean (urad) | e_theta min (urad) |\n|---|---|---|---|---|---|---|\n";
+  std::string md = std::string("## 3. Calibration (Table 3)\n\n") + header;
+  md += table3_row("nominal, calibration", table3.nominal_calibration);
+  md += table3_row("nominal, validation", table3.nominal_validation);
+  md += table3_row("identified, calibration", table3.identified_calibration);
+  md += table3_row("identified, validation", table3.identified_validation);
+  md +=
+      "\nNominal model: the measured geometry with identified extrinsics (the paper's first "
+      "stage). Stages:\n\n";
+  for (const pcr::StageReport& s : calibrated.stages) {
+    md += "- " + s.name + ": " + std::to_string(s.free_parameters.size()) + " free parameters, " +
+          std::to_string(s.iterations) + " iterations, " +
+          fmt("cost %.3e -> %.3e m^2, %.2f s\n", s.initial_cost, s.final_cost, s.time_s);
+  }
+  const pcr::ModelSelection& selection = *result.selection;
+  md += "\nModel: " + selection.decision + ".\n";
+  if (selection.tried_load) {
+    const pcr::CalibrationTable& other_table = selection.other_table();
+    md += std::string("\nThe fit not chosen (") +
+          (selection.load_chosen ? "the paper's stages" : "the load model") +
+          "), for comparison:\n\n" + header +
+          table3_row("identified, calibration", other_table.identified_calibration) +
+          table3_row("identified, validation", other_table.identified_validation);
+  }
+  if (calibrated.load_identified) {
+    md += fmt("\nIdentified platform load: f = (%.4g, %.4g) mN, m_z = %.4g uN m.\n",
+              calibrated.load.force.x() * 1e3, calibrated.load.force.y() * 1e3,
+              calibrated.load.moment * 1e6);
+  }
+  return md +
+         "\nFull report (identified values with standard deviations, bounds, gauge): "
+         "calibration-report.txt.\n\n";
+}
+
+/// What each stage of the method found, as progress lines.
+void say_what_was_found(pcr::MethodStage stage, const pcr::MethodResult& r,
+                        const Progress& progress) {
+  switch (stage) {
+    case pcr::MethodStage::kMeasurement:
+      progress.say(fmt("      %.0f + %.0f configurations, Poisson-disc radius %.3f mm",
+                       r.calibration_data.size(), r.validation_data.size(),
+                       r.configurations.spread.min_distance * 1e3));
+      if (r.unmeasured > 0) {
+        progress.say(
+            fmt("      %.0f configurations not measured: the robot holds no stable "
+                "equilibrium there",
+                r.unmeasured));
+      }
+      break;
+    case pcr::MethodStage::kValidation:
+      progress.say(fmt("      validation mean e_p: nominal %.3f um, identified %.4f um",
+                       r.table.nominal_validation.mean_p * 1e6,
+                       r.table.identified_validation.mean_p * 1e6));
+      break;
+    case pcr::MethodStage::kAccuracy:
+      for (const pcr::PathAccuracy& a : r.accuracy) {
+        progress.say("      " + a.path + ", " + a.model +
+                     fmt(" model: AP_p max %.4f um, mean %.4f um", a.evaluation.iso.ap_p.max * 1e6,
+                         a.evaluation.iso.ap_p.mean * 1e6));
+      }
+      break;
+    case pcr::MethodStage::kWorkspaceMap:
+      progress.say(fmt("      %.0f x %.0f map in %.2f s: reachable %.2f mm^2", r.map->nx, r.map->ny,
+                       r.map->seconds, r.map->reachable_area * 1e6) +
+                   fmt(", stable %.2f mm^2", r.map->stable_area * 1e6));
+      break;
+    default:
+      break;
+  }
+}
+
 void run_demo(const DemoArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out = prepare_output(args.output);
@@ -431,8 +456,8 @@ void run_demo(const DemoArgs& args) {
   pcr::OutputTransaction outputs;
   Progress progress(
       {"measurement: render the mounts, detect the tags, measure the nominal robot",
-       "sensitivity analysis (Table 2)", "Poisson-disc sampling and simulated measurements",
-       "three-stage calibration (Table 3)",
+       "sensitivity analysis (Table 2)", "Poisson-disc sampling",
+       "simulated measurements of both sets", "three-stage calibration", "validation (Table 3)",
        "square and circle trajectories, ISO 9283 accuracy (Table 4)",
        "workspace maps of the identified robot (reachability, stability, singularity)"},
       args.quiet);
@@ -477,134 +502,53 @@ void run_demo(const DemoArgs& args) {
   pcr::save_robot(nominal, (out / "nominal.json").string());
   progress.end();
 
-  // 2. Sensitivity.
-  progress.begin();
-  const pcr::SensitivityReport sensitivity = pcr::sensitivity_analysis(nominal);
-  pcr::write_file_atomically((out / "sensitivity.csv").string(), pcr::sensitivity_csv(sensitivity));
-  report["sensitivity"] = json::parse(pcr::sensitivity_json(sensitivity));
-  md += "## 2. Sensitivity analysis (Table 2), most influential first\n\n" +
-        table2_markdown(sensitivity) + "\n";
-  progress.end();
-
-  // 3. Configurations and simulated measurements.
-  progress.begin();
-  pcr::SamplingOptions sampling;
-  sampling.count = args.calibration_count + args.validation_count;
-  sampling.seed = args.seed;
-  const pcr::SamplingResult sampled = pcr::poisson_disc_sample(nominal.params, sampling);
-  if (!sampled.complete) throw std::runtime_error("demo: sampling found too few configurations");
-  std::vector<pcr::JointVector> calibration_q, validation_q;
-  pcr::split_configurations(sampled.configurations, args.calibration_count, &calibration_q,
-                            &validation_q);
-  std::size_t not_measured = 0;  // the robot holds no (stable) equilibrium there
-  const auto simulate = [&](const std::vector<pcr::JointVector>& qs) {
-    const std::vector<pcr::VirtualMeasurement> measured = robot.measure_dataset(qs);
-    pcr::Dataset data;
-    data.num_joints = nominal.params.num_limbs;
-    for (std::size_t k = 0; k < qs.size(); ++k) {
-      if (measured[k].ok) {
-        data.add(qs[k], measured[k].measured);
-      } else {
-        ++not_measured;
-      }
-    }
-    return data;
-  };
-  const pcr::Dataset calibration_data = simulate(calibration_q);
-  const pcr::Dataset validation_data = simulate(validation_q);
-  if (calibration_data.size() == 0 || validation_data.size() == 0) {
-    throw std::runtime_error("demo: the virtual robot measured no configuration of a set");
-  }
-  pcr::write_dataset(calibration_data, (out / "calibration.csv").string());
-  pcr::write_dataset(validation_data, (out / "validation.csv").string());
-  progress.say(fmt("      %.0f + %.0f configurations, Poisson-disc radius %.3f mm",
-                   calibration_data.size(), validation_data.size(), sampled.min_distance * 1e3));
-  if (not_measured > 0) {
-    progress.say(
-        fmt("      %.0f configurations not measured: the robot holds no stable "
-            "equilibrium there",
-            not_measured));
-  }
-  report["configurations"] = {{"calibration", calibration_data.size()},
-                              {"validation", validation_data.size()},
-                              {"min_distance_m", sampled.min_distance},
-                              {"files", {"calibration.csv", "validation.csv"}}};
-  progress.end();
-
-  // 4. Calibration.
-  progress.begin();
-  const std::vector<pcr::CalibrationSample> calibration =
-      pcr::calibration_samples(calibration_data);
-  const std::vector<pcr::CalibrationSample> validation = pcr::calibration_samples(validation_data);
-  pcr::CalibrationOptions calib_options;
+  // 2. The rest of the method: the paper's stages and, when their residuals say the model misses
+  // an effect, the load model, kept only when the validation set supports it.
+  pcr::MethodOptions method;
+  method.sampling.count = args.calibration_count;
+  method.sampling.seed = args.seed;
+  method.validation_count = args.validation_count;
+  method.model = pcr::CalibratedModel::kSelected;
   if (!args.quiet)
-    calib_options.progress = [](const std::string& l) { std::cerr << "      " << l << "\n"; };
-  // The paper's stages and, when their residuals say the model misses an effect, the load model,
-  // kept only when the validation set supports it.
-  const pcr::ModelSelection selection =
-      pcr::calibrate_selecting_model(nominal, calibration, validation, calib_options);
-  const pcr::CalibrationResult& calibrated = selection.chosen();
-  pcr::RobotDescription identified = nominal;
+    method.calibration.progress = [](const std::string& l) { std::cerr << "      " << l << "\n"; };
+  method.square.num_poses = method.circle.num_poses = args.path_poses;
+  method.accuracy.repeat = args.repeat;
+  method.map.grid = 200;
+  method.on_stage_begin = [&](pcr::MethodStage) { progress.begin(); };
+  method.on_stage_end = [&](pcr::MethodStage stage, const pcr::MethodResult& r) {
+    say_what_was_found(stage, r, progress);
+    progress.end();
+  };
+  const pcr::MethodResult result = pcr::run_method(nominal, robot, method);
+
+  pcr::write_file_atomically((out / "sensitivity.csv").string(),
+                             pcr::sensitivity_csv(*result.sensitivity));
+  report["sensitivity"] = json::parse(pcr::sensitivity_json(*result.sensitivity));
+  md += "## 2. Sensitivity analysis (Table 2), most influential first\n\n" +
+        table2_markdown(*result.sensitivity) + "\n";
+
+  pcr::write_dataset(result.calibration_data, (out / "calibration.csv").string());
+  pcr::write_dataset(result.validation_data, (out / "validation.csv").string());
+  report["configurations"] = {{"calibration", result.calibration_data.size()},
+                              {"validation", result.validation_data.size()},
+                              {"min_distance_m", result.configurations.spread.min_distance},
+                              {"files", {"calibration.csv", "validation.csv"}}};
+
+  pcr::RobotDescription identified = result.identified;
   identified.name = "femto-3pf (identified)";
-  identified.params = calibrated.identified;
   pcr::save_robot(identified, (out / "identified.json").string());
-  const pcr::CalibrationTable& table3 = selection.chosen_table();
   pcr::write_file_atomically((out / "calibration-report.txt").string(),
-                             pcr::calibration_report_text(calibrated, table3));
-  pcr::write_file_atomically((out / "calibration-errors.csv").string(), errors_csv(table3));
-  report["calibration"] = json::parse(pcr::calibration_report_json(calibrated, table3));
-  report["calibration"]["model_selection"] = json::parse(pcr::model_selection_json(selection));
-  md +=
-      "## 3. Calibration (Table 3)\n\n| model, set | e_p max (um) | e_p mean (um) | e_p min (um) | "
-      "e_theta max (urad) | e_theta mean (urad) | e_theta min (urad) "
-      "|\n|---|---|---|---|---|---|---|\n";
-  md += table3_row("nominal, calibration", table3.nominal_calibration);
-  md += table3_row("nominal, validation", table3.nominal_validation);
-  md += table3_row("identified, calibration", table3.identified_calibration);
-  md += table3_row("identified, validation", table3.identified_validation);
-  md +=
-      "\nNominal model: the measured geometry with identified extrinsics (the paper's first "
-      "stage). Stages:\n\n";
-  for (const pcr::StageReport& s : calibrated.stages) {
-    md += "- " + s.name + ": " + std::to_string(s.free_parameters.size()) + " free parameters, " +
-          std::to_string(s.iterations) + " iterations, " +
-          fmt("cost %.3e -> %.3e m^2, %.2f s\n", s.initial_cost, s.final_cost, s.time_s);
-  }
-  md += "\nModel: " + selection.decision + ".\n";
-  if (selection.tried_load) {
-    const pcr::CalibrationTable& other_table = selection.other_table();
-    md += std::string("\nThe fit not chosen (") +
-          (selection.load_chosen ? "the paper's stages" : "the load model") +
-          "), for comparison:\n\n| model, set | e_p max (um) | e_p mean (um) | e_p min (um) | "
-          "e_theta max (urad) | e_theta mean (urad) | e_theta min (urad) |\n"
-          "|---|---|---|---|---|---|---|\n" +
-          table3_row("identified, calibration", other_table.identified_calibration) +
-          table3_row("identified, validation", other_table.identified_validation);
-  }
-  if (calibrated.load_identified) {
-    md += fmt("\nIdentified platform load: f = (%.4g, %.4g) mN, m_z = %.4g uN m.\n",
-              calibrated.load.force.x() * 1e3, calibrated.load.force.y() * 1e3,
-              calibrated.load.moment * 1e6);
-  }
-  md +=
-      "\nFull report (identified values with standard deviations, bounds, gauge): "
-      "calibration-report.txt.\n\n";
-  progress.say(fmt("      validation mean e_p: nominal %.3f um, identified %.4f um",
-                   table3.nominal_validation.mean_p * 1e6,
-                   table3.identified_validation.mean_p * 1e6));
-  progress.end();
+                             pcr::calibration_report_text(result.calibration, result.table));
+  pcr::write_file_atomically((out / "calibration-errors.csv").string(), errors_csv(result.table));
+  report["calibration"] =
+      json::parse(pcr::calibration_report_json(result.calibration, result.table));
+  report["calibration"]["model_selection"] =
+      json::parse(pcr::model_selection_json(*result.selection));
+  md += calibration_section(result);
 
-  // 5. Trajectories and accuracy.
-  progress.begin();
   md += "## 4. Trajectory accuracy, ISO 9283 (Table 4)\n\n" +
-        accuracy_section(calibrated, robot, args, out, report, progress);
-  progress.end();
-
-  // 6. Workspace maps.
-  progress.begin();
-  md += "\n## 5. Where the identified robot can work\n\n" +
-        workspace_section(identified, calibrated, out, report, progress);
-  progress.end();
+        accuracy_section(result, args, out, report);
+  md += "\n## 5. Where the identified robot can work\n\n" + workspace_section(result, out, report);
 
   report["files"] = {"report.md",
                      "report.json",

@@ -84,6 +84,11 @@ if has_calibration:
         ParameterCovariance,
         read_parameter_covariance,
     )
+    # The method as one call on a virtual robot, what pcr demo runs (pcr/calib/method.hpp).
+    from ._pcr import (  # noqa: F401
+        MethodResult,
+        run_method,
+    )
 
 from ._pcr import has_vision  # noqa: E402,F401
 

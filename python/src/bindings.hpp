@@ -38,6 +38,7 @@ void wrap_pose_errors(py::module_& m);         // needs pcr::calib
 void wrap_calibration(py::module_& m);         // needs pcr::calib
 void wrap_accuracy(py::module_& m);            // needs pcr::calib
 void wrap_predicted_accuracy(py::module_& m);  // needs pcr::calib
+void wrap_method(py::module_& m);              // needs pcr::calib
 void wrap_vision(py::module_& m);              // needs pcr::vision
 
 /// A solved configuration (FK or IK) as Python sees it: the solver's result plus, on request,

@@ -2,17 +2,86 @@
 // Shared by the bindings of pcr::calib (wrap_calibration.cpp and the files of its topics): joints
 // and poses as row-major arrays, and the checked conversions of datasets and stages.
 
+#include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "bindings.hpp"
 #include "pcr/calib/calibrator.hpp"
+#include "pcr/calib/sensitivity.hpp"
+#include "pcr/calib/workspace_map.hpp"
 
 namespace pcr::python {
 
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 using InputMatrix = Eigen::Ref<const RowMatrix>;
 
+// ---- calibrations (wrap_calibration.cpp) ------------------------------------------------------
+
+/// pcr.CalibrationResult: the C++ result, with the nominal description (identified and
+/// extrinsics_only as pcr.Robot) and the calibration set (Table 3 of a report given no table).
+struct Calibration {
+  CalibrationResult result;
+  RobotDescription nominal;
+  std::vector<CalibrationSample> calibration;
+};
+
+/// The CalibrationOptions of a call: `options` (None: the defaults) with the keyword changes made
+/// through the properties' setters (checked alike, no default written here), and `progress`.
+/// A Python exception in `progress` must not unwind through Ceres: it is kept, later lines are
+/// dropped, and raise_progress_error() raises it once the calibration has returned.
+struct CalledOptions {
+  CalibrationOptions options;
+  std::shared_ptr<std::unique_ptr<py::error_already_set>> progress_error =
+      std::make_shared<std::unique_ptr<py::error_already_set>>();
+
+  CalledOptions(const char* function, const std::optional<CalibrationOptions>& given,
+                const py::object& progress, const py::kwargs& changes) {
+    py::object settings = py::cast(given ? *given : CalibrationOptions());
+    const py::object type = py::type::of(settings);
+    for (const auto& item : changes) {
+      const std::string name = py::str(item.first).cast<std::string>();
+      if (!is_read_write_property(type, name)) {
+        throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" +
+                             name + "' (not a CalibrationOptions field)");
+      }
+      py::setattr(settings, item.first, item.second);
+    }
+    options = settings.cast<CalibrationOptions>();
+    if (progress.is_none()) return;
+    options.progress = [progress, error = progress_error](const std::string& line) {
+      py::gil_scoped_acquire acquire;
+      if (*error) return;
+      try {
+        progress(line);
+      } catch (py::error_already_set& e) {
+        *error = std::make_unique<py::error_already_set>(std::move(e));
+      }
+    };
+  }
+
+  void raise_progress_error() {
+    if (*progress_error) throw std::move(**progress_error);
+  }
+};
+
+/// `nominal` with `params` (its name and uncertainty section kept).
+RobotDescription with_params(const RobotDescription& nominal, const RobotParams<double>& params);
+
+// ---- results as dicts ------------------------------------------------------------------------
+
+/// The report `pcr sensitivity --json` writes, with the configurations as an (N, n) array and the
+/// text table (wrap_sensitivity.cpp).
+py::dict sensitivity_dict(const SensitivityReport& report, int n);
+
+/// A workspace map as arrays over its grid (wrap_workspace_map.cpp).
+py::dict workspace_map_dict(const WorkspaceMap& map, int n);
+
 // ---- datasets (defined in wrap_dataset.cpp) ---------------------------------------------------
+
+/// Poses as an (N, 3) array (m, m, rad).
+RowMatrix poses_matrix(const std::vector<Pose2<double>>& poses);
 
 /// Joint configurations as an (N, n) array (m).
 RowMatrix joints_matrix(const std::vector<JointVector>& rows, int n);

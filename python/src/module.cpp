@@ -25,6 +25,7 @@ PYBIND11_MODULE(_pcr, m) {
   pcr::python::wrap_calibration(m);
   pcr::python::wrap_accuracy(m);  // after wrap_virtual_robot: uses VirtualRobot
   pcr::python::wrap_predicted_accuracy(m);
+  pcr::python::wrap_method(m);  // last: its result holds the classes above
   m.attr("has_calibration") = true;
 #else
   m.attr("has_calibration") = false;

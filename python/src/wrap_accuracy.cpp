@@ -3,21 +3,11 @@
 // (R_k, 3) arrays when the pose counts differ), results as objects whose attributes are arrays.
 #include <optional>
 
-#include "bindings.hpp"
+#include "calibration_bindings.hpp"
 #include "pcr/calib/accuracy.hpp"
 
 namespace pcr::python {
 namespace {
-
-using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
-RowMatrix poses_matrix(const std::vector<Pose2<double>>& poses) {
-  RowMatrix out(static_cast<Eigen::Index>(poses.size()), 3);
-  for (std::size_t r = 0; r < poses.size(); ++r) {
-    out.row(static_cast<Eigen::Index>(r)) << poses[r].x, poses[r].y, poses[r].theta;
-  }
-  return out;
-}
 
 /// (N, 3) array-like (or one (3,) pose) -> poses. ValueError naming `what` otherwise.
 std::vector<Pose2<double>> pose_rows(const py::handle& object, const char* what) {

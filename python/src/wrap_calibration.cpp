@@ -36,65 +36,12 @@ StageGauge stage_gauge(const std::string& name) {
   throw std::invalid_argument("stage_gauge: expected 'subspace' or 'prior', got '" + name + "'");
 }
 
-/// pcr.CalibrationResult: the C++ result, with the nominal description (identified and
-/// extrinsics_only as pcr.Robot) and the calibration set (Table 3 of a report given no table).
-struct Calibration {
-  CalibrationResult result;
-  RobotDescription nominal;
-  std::vector<CalibrationSample> calibration;
-};
-
-/// The CalibrationOptions of a call: `options` (None: the defaults) with the keyword changes made
-/// through the properties' setters (checked alike, no default written here), and `progress`.
-/// A Python exception in `progress` must not unwind through Ceres: it is kept, later lines are
-/// dropped, and raise_progress_error() raises it once the calibration has returned.
-struct CalledOptions {
-  CalibrationOptions options;
-  std::shared_ptr<std::unique_ptr<py::error_already_set>> progress_error =
-      std::make_shared<std::unique_ptr<py::error_already_set>>();
-
-  CalledOptions(const char* function, const std::optional<CalibrationOptions>& given,
-                const py::object& progress, const py::kwargs& changes) {
-    py::object settings = py::cast(given ? *given : CalibrationOptions());
-    const py::object type = py::type::of(settings);
-    for (const auto& item : changes) {
-      const std::string name = py::str(item.first).cast<std::string>();
-      if (!is_read_write_property(type, name)) {
-        throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" +
-                             name + "' (not a CalibrationOptions field)");
-      }
-      py::setattr(settings, item.first, item.second);
-    }
-    options = settings.cast<CalibrationOptions>();
-    if (progress.is_none()) return;
-    options.progress = [progress, error = progress_error](const std::string& line) {
-      py::gil_scoped_acquire acquire;
-      if (*error) return;
-      try {
-        progress(line);
-      } catch (py::error_already_set& e) {
-        *error = std::make_unique<py::error_already_set>(std::move(e));
-      }
-    };
-  }
-
-  void raise_progress_error() {
-    if (*progress_error) throw std::move(**progress_error);
-  }
-};
-
 /// The fields of a CalibrationResult that pickle as they are, in the order of the pickled state.
 auto result_fields(CalibrationResult& r) {
   return std::tie(r.stages, r.parameters, r.load_identified, r.gauge, r.free_count, r.jacobian_rank,
                   r.singular_values, r.residual_variance, r.residuals_exceed_noise, r.covariance_ok,
                   r.covariance, r.dropped, r.outliers, r.outlier_threshold, r.unidentifiable,
                   r.warnings);
-}
-
-RobotDescription with_params(const RobotDescription& nominal, const RobotParams<double>& params) {
-  RobotDescription out = nominal;  // uncertainty section kept from the nominal
-  out.params = params;
-  return out;
 }
 
 /// `table`, or Table 3 on the calibration set alone (what pcr_calibrate reports without
@@ -451,23 +398,8 @@ void wrap_calibration(py::module_& m) {
       .def(
           "in_gauge",
           [](const Calibration& c, const RobotDescription& robot) {
-            // The gauge directions the calibration fixed are those whose limb-0 references it
-            // held (CalibrationOptions.fix_gauge).
-            const auto held = [&c](const char* name) {
-              for (const ParameterEstimate& p : c.result.parameters) {
-                if (p.name == name) return p.gauge_reference;
-              }
-              return false;
-            };
-            if (robot.params.num_limbs != c.nominal.params.num_limbs) {
-              throw std::invalid_argument("robot: expected " +
-                                          std::to_string(c.nominal.params.num_limbs) +
-                                          " limbs, got " + std::to_string(robot.params.num_limbs));
-            }
-            return with_params(
-                robot, fix_gauge(robot.params, c.nominal.params, held("A_x[0]") && held("A_y[0]"),
-                                 held("alpha[0]"), held("B_x[0]") && held("B_y[0]"),
-                                 held("beta[0]"), held("d[0]")));
+            return with_params(robot,
+                               in_calibration_gauge(c.result, c.nominal.params, robot.params));
           },
           py::arg("robot"),
           "`robot` (e.g. a virtual robot's truth) moved along the gauge directions this "
@@ -659,6 +591,12 @@ void wrap_calibration(py::module_& m) {
       "validation rows' squared whitened pose errors passes pcr.MODEL_SELECTION_T (1 %). "
       "Returns (identified Robot, chosen CalibrationResult, the stages' CalibrationResult, the "
       "load model's CalibrationResult or None, ModelSelection). Releases the GIL.");
+}
+
+RobotDescription with_params(const RobotDescription& nominal, const RobotParams<double>& params) {
+  RobotDescription out = nominal;  // uncertainty section kept from the nominal
+  out.params = params;
+  return out;
 }
 
 }  // namespace pcr::python

@@ -3,8 +3,6 @@
 #include "pcr/calib/dataset.hpp"
 
 namespace pcr::python {
-namespace {
-
 RowMatrix poses_matrix(const std::vector<Pose2<double>>& poses) {
   RowMatrix out(static_cast<Eigen::Index>(poses.size()), 3);
   for (std::size_t r = 0; r < poses.size(); ++r) {
@@ -12,8 +10,6 @@ RowMatrix poses_matrix(const std::vector<Pose2<double>>& poses) {
   }
   return out;
 }
-
-}  // namespace
 
 RowMatrix joints_matrix(const std::vector<JointVector>& rows, int n) {
   RowMatrix out(static_cast<Eigen::Index>(rows.size()), n);

@@ -19,6 +19,15 @@ JointVector sensitivity_centre(const RobotParams<double>& robot, double step,
 
 }  // namespace
 
+py::dict sensitivity_dict(const SensitivityReport& report, int n) {
+  // The report `pcr sensitivity --json` writes, one serialiser; the configurations as an array,
+  // and the text table.
+  py::dict d = py::module_::import("json").attr("loads")(sensitivity_json(report));
+  d["configurations"] = joints_matrix(report.configurations, n);
+  d["text"] = sensitivity_table_text(report);
+  return d;
+}
+
 void wrap_sensitivity(py::module_& m) {
   m.def(
       "parameter_names",
@@ -83,12 +92,7 @@ void wrap_sensitivity(py::module_& m) {
           py::gil_scoped_release release;
           report = sensitivity_analysis(robot, options);
         }
-        // The report `pcr sensitivity --json` writes, one serialiser; the configurations as an
-        // array, and the text table.
-        py::dict d = py::module_::import("json").attr("loads")(sensitivity_json(report));
-        d["configurations"] = joints_matrix(report.configurations, robot.params.num_limbs);
-        d["text"] = sensitivity_table_text(report);
-        return d;
+        return sensitivity_dict(report, robot.params.num_limbs);
       },
       py::arg("robot"), py::kw_only(), py::arg("step") = 1e-3, py::arg("centre") = py::none(),
       py::arg("force") = no_force(), py::arg("moment") = 0.0, py::arg("options") = py::none(),

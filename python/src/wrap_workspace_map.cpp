@@ -1,8 +1,48 @@
 // Workspace maps and rotation ranges (pcr/calib/workspace_map.hpp).
-#include "bindings.hpp"
+#include "calibration_bindings.hpp"
 #include "pcr/calib/workspace_map.hpp"
 
 namespace pcr::python {
+
+py::dict workspace_map_dict(const WorkspaceMap& map, int n) {
+  const auto nx = static_cast<py::ssize_t>(map.nx), ny = static_cast<py::ssize_t>(map.ny);
+  py::array_t<double> xs(nx), ys(ny), q({ny, nx, static_cast<py::ssize_t>(n)});
+  py::array_t<bool> reachable({ny, nx}), stable({ny, nx});
+  py::array_t<int> status({ny, nx});
+  const char* names[] = {"max_strain",       "stability_margin",   "singularity",
+                         "position_3sigma",  "orientation_3sigma", "worst_position",
+                         "worst_orientation"};
+  std::vector<py::array_t<double>> fields;
+  for (std::size_t f = 0; f < 7; ++f) fields.emplace_back(std::vector<py::ssize_t>{ny, nx});
+  for (py::ssize_t i = 0; i < nx; ++i) xs.mutable_at(i) = map.points[i].x;
+  for (py::ssize_t j = 0; j < ny; ++j) ys.mutable_at(j) = map.points[j * nx].y;
+  for (py::ssize_t j = 0; j < ny; ++j) {
+    for (py::ssize_t i = 0; i < nx; ++i) {
+      const WorkspaceMapPoint& p = map.points[static_cast<std::size_t>(j * nx + i)];
+      reachable.mutable_at(j, i) = p.reachable;
+      stable.mutable_at(j, i) = p.stable;
+      status.mutable_at(j, i) = static_cast<int>(p.status);
+      for (int k = 0; k < n; ++k) q.mutable_at(j, i, k) = p.q(k);
+      const double values[] = {p.max_strain,       p.stability_margin,   p.singularity,
+                               p.position_3sigma,  p.orientation_3sigma, p.worst_position,
+                               p.worst_orientation};
+      for (std::size_t f = 0; f < 7; ++f) fields[f].mutable_at(j, i) = values[f];
+    }
+  }
+  py::dict d;
+  d["x"] = xs;
+  d["y"] = ys;
+  d["theta"] = map.theta;
+  d["reachable"] = reachable;
+  d["stable"] = stable;
+  d["status_code"] = status;
+  d["q"] = q;
+  for (std::size_t f = 0; f < 7; ++f) d[names[f]] = fields[f];
+  d["reachable_area"] = map.reachable_area;
+  d["stable_area"] = map.stable_area;
+  d["seconds"] = map.seconds;
+  return d;
+}
 
 void wrap_workspace_map(py::module_& m) {
   m.def(
@@ -22,44 +62,7 @@ void wrap_workspace_map(py::module_& m) {
           py::gil_scoped_release release;
           map = workspace_map(robot.params, o);
         }
-        const int n = robot.params.num_limbs;
-        const auto nx = static_cast<py::ssize_t>(map.nx), ny = static_cast<py::ssize_t>(map.ny);
-        py::array_t<double> xs(nx), ys(ny), q({ny, nx, static_cast<py::ssize_t>(n)});
-        py::array_t<bool> reachable({ny, nx}), stable({ny, nx});
-        py::array_t<int> status({ny, nx});
-        const char* names[] = {"max_strain",       "stability_margin",   "singularity",
-                               "position_3sigma",  "orientation_3sigma", "worst_position",
-                               "worst_orientation"};
-        std::vector<py::array_t<double>> fields;
-        for (std::size_t f = 0; f < 7; ++f) fields.emplace_back(std::vector<py::ssize_t>{ny, nx});
-        for (py::ssize_t i = 0; i < nx; ++i) xs.mutable_at(i) = map.points[i].x;
-        for (py::ssize_t j = 0; j < ny; ++j) ys.mutable_at(j) = map.points[j * nx].y;
-        for (py::ssize_t j = 0; j < ny; ++j) {
-          for (py::ssize_t i = 0; i < nx; ++i) {
-            const WorkspaceMapPoint& p = map.points[static_cast<std::size_t>(j * nx + i)];
-            reachable.mutable_at(j, i) = p.reachable;
-            stable.mutable_at(j, i) = p.stable;
-            status.mutable_at(j, i) = static_cast<int>(p.status);
-            for (int k = 0; k < n; ++k) q.mutable_at(j, i, k) = p.q(k);
-            const double values[] = {p.max_strain,       p.stability_margin,   p.singularity,
-                                     p.position_3sigma,  p.orientation_3sigma, p.worst_position,
-                                     p.worst_orientation};
-            for (std::size_t f = 0; f < 7; ++f) fields[f].mutable_at(j, i) = values[f];
-          }
-        }
-        py::dict d;
-        d["x"] = xs;
-        d["y"] = ys;
-        d["theta"] = map.theta;
-        d["reachable"] = reachable;
-        d["stable"] = stable;
-        d["status_code"] = status;
-        d["q"] = q;
-        for (std::size_t f = 0; f < 7; ++f) d[names[f]] = fields[f];
-        d["reachable_area"] = map.reachable_area;
-        d["stable_area"] = map.stable_area;
-        d["seconds"] = map.seconds;
-        return d;
+        return workspace_map_dict(map, robot.params.num_limbs);
       },
       py::arg("robot"), py::kw_only(), py::arg("theta") = 0.0, py::arg("grid") = 200,
       py::arg("range") = py::none(), py::arg("force") = no_force(), py::arg("moment") = 0.0,

@@ -3,10 +3,12 @@
 #include "pcr/calib/gauge.hpp"
 
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "calibration_internal.hpp"
+#include "pcr/calib/calibrator.hpp"
 
 namespace pcr {
 namespace calib_internal {
@@ -200,6 +202,23 @@ RobotParams<double> fix_gauge(const RobotParams<double>& params,
   const GaugeMotion m = gauge_fix_motion(params, reference, proximal_translation, proximal_rotation,
                                          distal_translation, distal_rotation, stiffness);
   return move_along_gauge(params, m.G, m.H, m.stiffness_scale);
+}
+
+RobotParams<double> in_calibration_gauge(const CalibrationResult& result,
+                                         const RobotParams<double>& nominal,
+                                         const RobotParams<double>& robot) {
+  if (robot.num_limbs != nominal.num_limbs) {
+    throw std::invalid_argument("robot: expected " + std::to_string(nominal.num_limbs) +
+                                " limbs, got " + std::to_string(robot.num_limbs));
+  }
+  const auto held = [&result](const char* name) {
+    for (const ParameterEstimate& p : result.parameters) {
+      if (p.name == name) return p.gauge_reference;
+    }
+    return false;
+  };
+  return fix_gauge(robot, nominal, held("A_x[0]") && held("A_y[0]"), held("alpha[0]"),
+                   held("B_x[0]") && held("B_y[0]"), held("beta[0]"), held("d[0]"));
 }
 
 }  // namespace pcr

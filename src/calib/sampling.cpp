@@ -398,6 +398,25 @@ ConfigurationSets sample_configurations(const RobotDescription& robot,
   return sets;
 }
 
+std::vector<std::size_t> visiting_order(const std::vector<JointVector>& configurations) {
+  std::vector<std::size_t> left(configurations.size()), order;
+  for (std::size_t k = 0; k < left.size(); ++k) left[k] = k;
+  const auto take_nearest = [&](const JointVector& from) {
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < left.size(); ++k) {
+      if ((configurations[left[k]] - from).squaredNorm() <
+          (configurations[left[best]] - from).squaredNorm()) {
+        best = k;
+      }
+    }
+    order.push_back(left[best]);
+    left.erase(left.begin() + static_cast<std::ptrdiff_t>(best));
+  };
+  if (!left.empty()) take_nearest(JointVector::Zero(configurations[left[0]].size()));
+  while (!left.empty()) take_nearest(configurations[order.back()]);
+  return order;
+}
+
 void split_configurations(const std::vector<JointVector>& all, int first_count,
                           std::vector<JointVector>* first, std::vector<JointVector>* rest) {
   if (first_count < 0 || first_count > static_cast<int>(all.size())) {

@@ -271,4 +271,12 @@ CalibrationResult calibrate(const RobotDescription& nominal,
                             const std::vector<CalibrationSample>& data,
                             const CalibrationOptions& options = CalibrationOptions());
 
+/// `robot` (a virtual robot's truth, say) moved along the gauge directions `result` fixed, to the
+/// same references (`nominal`'s limb-0 values the calibration held: its gauge_reference
+/// parameters): its predictions (with no load) are unchanged, and its parameters compare one by
+/// one with result.parameters. Throws std::invalid_argument when the limb counts differ.
+RobotParams<double> in_calibration_gauge(const CalibrationResult& result,
+                                         const RobotParams<double>& nominal,
+                                         const RobotParams<double>& robot);
+
 }  // namespace pcr

@@ -166,18 +166,6 @@ def _measured_mounts(design, truth, half_width, rng):
     return out
 
 
-def _tour(q):
-    """The rows of q in the order of a greedy nearest-neighbour tour from the one nearest home:
-    the order an experiment visits them in. Every solve then starts next to the last one (in
-    the sampler's shuffled order, FK warm-started across the stroke box did 5 times the work)."""
-    left = list(range(len(q)))
-    order = [left.pop(int(np.argmin(np.einsum("ij,ij->i", q, q))))] if left else []
-    while left:
-        d = q[left] - q[order[-1]]
-        order.append(left.pop(int(np.argmin(np.einsum("ij,ij->i", d, d)))))
-    return q[order]
-
-
 def _put(row, prefix, tree):
     """Flattens the nested dict `tree` into row[prefix.key.subkey] for the keys row has."""
     for key, value in tree.items():
@@ -253,62 +241,29 @@ def _run(factors, seed, design, row, stages):
             camera[name] = factors[name]
     robot = pcr.VirtualRobot(_exactly(truth), **camera)
 
-    stages.enter("sampling")
+    # The method itself is the library's (pcr.run_method, as pcr demo runs it): the trial only
+    # makes its robots and reduces the result to a row.
     counts = dict(validation_count=factors["validation_count"])
     if factors["calibration_count"] is not None:
         counts["count"] = factors["calibration_count"]
-    sets = pcr.sample_configurations(nominal, design=factors["design"], seed=sampling_seed,
-                                     **counts)
-
-    stages.enter("measurement")
-    measured = {}
-    unreachable = 0
+    method = pcr.run_method(nominal, robot, design=factors["design"], seed=sampling_seed,
+                            model=factors["model"], repeat=factors["repeat"], sensitivity=False,
+                            workspace_map=False, on_stage=stages.enter, drop_unreachable=True,
+                            **counts)
+    result = method.calibration
     for name in ("calibration", "validation"):
-        sets[name] = _tour(sets[name])
-        m = robot.measure_dataset(sets[name])
-        ok = np.asarray(m["ok"], dtype=bool)
-        if not ok.any():
-            statuses = sorted(set(np.asarray(m["status"]).tolist()))
-            raise RuntimeError(f"none of the {len(ok)} {name} configurations is reachable on "
-                               f"the true robot ({', '.join(map(str, statuses))})")
-        unreachable += int(np.count_nonzero(~ok))
-        measured[name] = (sets[name][ok], m["measured"][ok])
-        row[f"configurations.{name}"] = int(np.count_nonzero(ok))
-    row["configurations.unreachable"] = unreachable
+        row[f"configurations.{name}"] = len(method.measured[name]["q"])
+    row["configurations.unreachable"] = method.unmeasured
 
-    stages.enter("calibration")
-    q, poses = measured["calibration"]
-    if factors["model"] == "selected":
-        identified, result, *_ = pcr.calibrate_selecting_model(
-            nominal, q, poses, *measured["validation"], drop_unreachable=True)
-    else:
-        calibration_stages = pcr.default_stages()
-        if factors["model"] == "load":
-            calibration_stages = pcr.with_load_stage(calibration_stages)
-        identified, result = pcr.calibrate(nominal, q, poses, stages=calibration_stages,
-                                           drop_unreachable=True)
     row["calibration.iterations"] = sum(s.iterations for s in result.stages)
     row["calibration.load_identified"] = float(result.load_identified)
-    truth_values = result.in_gauge(truth).parameters  # compared in the same frames
-    for p, true_value in zip(result.parameters, truth_values):
+    # compared in the same frames
+    for p, true_value in zip(result.parameters, method.truth_in_gauge.parameters):
         row[f"parameters.{p.name}.error"] = p.value - true_value
         row[f"parameters.{p.name}.std"] = p.std_dev
-
-    stages.enter("validation")
-    table = pcr.calibration_table(result, q, poses, *measured["validation"])
-    _put(row, "table3", result.to_dict(table)["table3"])
-
-    stages.enter("accuracy")
-    # The identified model commands under its identified load (zeros without one).
-    f_x, f_y, m_z = result.load
-    models = {"nominal": (result.extrinsics_only, {}),
-              "identified": (identified, dict(force=(f_x, f_y), moment=m_z))}
-    for path_name, path in (("square", pcr.square_path()), ("circle", pcr.circle_path())):
-        for model_name in _MODELS:
-            model, load = models[model_name]
-            iso = pcr.evaluate_on_virtual_robot(model, robot, path, repeat=factors["repeat"],
-                                                **load).iso
-            _put(row, f"accuracy.{path_name}.{model_name}", iso.summary)
+    _put(row, "table3", result.to_dict(method.table)["table3"])
+    for (path_name, model_name), evaluation in method.accuracy.items():
+        _put(row, f"accuracy.{path_name}.{model_name}", evaluation.iso.summary)
 
     unusable = [s for s in result.stages if not s.usable]
     if unusable:
