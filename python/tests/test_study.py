@@ -168,14 +168,22 @@ def test_failed_trials_are_rows_with_their_reason(monkeypatch):
     row = study.run_trial(trial.factors, trial.seed)
     assert row["failure"] is None
     assert row["table3.identified_model_validation_set.e_p_m.mean"] < 0.1e-6
-    # A calibration that fails is a row that keeps what was measured.
-    def failing(*args, **kwargs):
-        raise RuntimeError("stage 'all' did not converge")
+    # A calibration that fails is a row naming the stage (an error raised as it begins, through
+    # the library's run_method) and its reason.
+    run_method = pcr.run_method
 
-    monkeypatch.setattr(pcr, "calibrate", failing)
+    def failing(*args, on_stage, **kwargs):
+        def enter(stage):
+            on_stage(stage)
+            if stage == "calibration":
+                raise RuntimeError("stage 'all' did not converge")
+        return run_method(*args, on_stage=enter, **kwargs)
+
+    monkeypatch.setattr(pcr, "run_method", failing)
     row = study.run_trial(dict(FAST), seed=1)
     assert row["failure"] == "calibration: RuntimeError: stage 'all' did not converge"
-    assert row["configurations.calibration"] > 0
+    assert row["time.measurement_s"] > 0
+    assert math.isnan(row["table3.identified_model_validation_set.e_p_m.mean"])
     monkeypatch.undo()
     row = study.run_trial(dict(FAST, robot="/nonexistent/robot.json"), seed=1)
     assert row["failure"].startswith("design: ") and "/nonexistent/robot.json" in row["failure"]

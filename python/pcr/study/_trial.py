@@ -252,7 +252,7 @@ def _run(factors, seed, design, row, stages):
                             **counts)
     result = method.calibration
     for name in ("calibration", "validation"):
-        row[f"configurations.{name}"] = len(method.measured[name]["q"])
+        row[f"configurations.{name}"] = len(method.measured[name][0])
     row["configurations.unreachable"] = method.unmeasured
 
     row["calibration.iterations"] = sum(s.iterations for s in result.stages)
