@@ -174,6 +174,10 @@ struct RodStepper {
   /// u* at the current node, and its increase over half a step and a whole step (u* is linear in
   /// s, so the stages' values are exact; all zero for a straight rod, which then steps as before).
   L u_node, du_half, du_step;
+  /// u* is not known to be zero (for a bundle: in some lane). A straight rod steps without the
+  /// three adds of u*: they sit on the latency-bound chain m -> theta' -> (c, s) and cost a fifth
+  /// of a step. Jets always step as curved: their derivatives in u* may be non-zero at u* = 0.
+  bool curved = true;
   L tx[3], ty[3], tc[3], ts[3], tth[3], tm[3];  ///< tangents, [j]: d / d wrench_j (with Sens)
 
   /// One rod (L a scalar): its proximal state, the rod and the RK4 step count.
@@ -203,9 +207,24 @@ struct RodStepper {
     u_node = rod.precurvature;
     du_half = rod.precurvature_slope * half_h;
     du_step = rod.precurvature_slope * h;
+    if constexpr (std::is_arithmetic_v<L>) {
+      curved = rod.precurvature != L(0) || rod.precurvature_slope != L(0);
+    }
   }
 
-  PCR_SIMD_CLONES void step() {
+  EIGEN_ALWAYS_INLINE void step() {
+    if (curved) {
+      step_with<true>();
+    } else {
+      step_with<false>();
+    }
+  }
+
+  RodState<L> state() const { return RodState<L>{x, y, th, nx, ny, m}; }
+
+ private:
+  template <bool Curved>
+  PCR_SIMD_CLONES void step_with() {
     using std::abs;
     // Stage values (the rhs of x, y, theta are c, s, k) and slopes of (c, s, m); g: tangents.
     L sc[4], ss[4], sk[4], dc[4], ds[4], dm[4];
@@ -221,7 +240,7 @@ struct RodStepper {
       const L sv = st == 0 ? s : L(s + a * ds[p]);
       const L mm = st == 0 ? m : L(m + a * dm[p]);
       const L& u = st == 0 ? u_node : st == 3 ? u_end : u_half;
-      const L k = mm * inv_ei + u;
+      const L k = Curved ? L(mm * inv_ei + u) : L(mm * inv_ei);
       sc[st] = cc;
       ss[st] = sv;
       sk[st] = k;
@@ -266,12 +285,9 @@ struct RodStepper {
       }
     }
     keep_larger(max_abs_moment, L(abs(m)));
-    u_node += du_step;
+    if constexpr (Curved) u_node += du_step;
   }
 
-  RodState<L> state() const { return RodState<L>{x, y, th, nx, ny, m}; }
-
- private:
   /// One RK4 update of a state or a tangent column from its four slopes (forced inline: with
   /// lanes, in a large translation unit, GCC made it a call).
   EIGEN_ALWAYS_INLINE void rk4(L& v, const L (&k)[4]) const {
@@ -319,6 +335,7 @@ void zip_lane_fields(Bundle& bundle, Rod& rod, F&& f) {
 template <int N, bool Sens>
 void set_lane(RodBundle<N, Sens>& bundle, int lane, const RodStepper<double, Sens>& rod) {
   zip_lane_fields(bundle, rod, [lane](auto& lanes, const double& v) { lanes[lane] = v; });
+  bundle.curved = (lane > 0 && bundle.curved) || rod.curved;  // lane 0 is set first
 }
 
 /// The one-rod stepper in lane `lane` of a bundle.
@@ -326,6 +343,7 @@ template <int N, bool Sens>
 RodStepper<double, Sens> get_lane(const RodBundle<N, Sens>& bundle, int lane) {
   RodStepper<double, Sens> rod;
   zip_lane_fields(bundle, rod, [lane](const auto& lanes, double& v) { v = lanes[lane]; });
+  rod.curved = bundle.curved;
   return rod;
 }
 
