@@ -378,6 +378,24 @@ TEST(VisionInputs, MountLayoutErrors) {
     EXPECT_NE(std::string(e.what()).find("B1"), std::string::npos) << e.what();
   }
   EXPECT_THROW(parse_mounts(with("100000"), "m.json"), InputError);  // not in tag36h11
+  // The family of mounts that name none: the caller's (pcr measure --family), unless the file's
+  // root names one; an unknown one is refused by name.
+  for (const Mount& m : parse_mounts(with("1"), "m.json", "tag25h9").mounts) {
+    EXPECT_EQ(m.family, "tag25h9");
+  }
+  std::string rooted = with("1");
+  rooted.insert(1, R"("family": "tag16h5", )");
+  for (const Mount& m : parse_mounts(rooted, "m.json", "tag25h9").mounts) {
+    EXPECT_EQ(m.family, "tag16h5");
+  }
+  try {
+    parse_mounts(with("1"), "m.json", "tag99h1");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("m.json: unknown default tag family 'tag99h1'"),
+              std::string::npos)
+        << e.what();
+  }
   // A megabyte in a field is shown as its first characters, not echoed whole.
   try {
     parse_mounts(with("\"" + std::string(1 << 20, '7') + "\""), "m.json");

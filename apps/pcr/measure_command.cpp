@@ -12,6 +12,7 @@
 void register_measure_command(CLI::App& app) {
   struct Args {
     std::string design, mounts, camera, image, output, annotated;
+    std::string family = pcr::vision::kDefaultTagFamily;
     std::vector<std::string> sweeps;
     pcr::vision::MeasureOptions options;
   };
@@ -27,7 +28,7 @@ void register_measure_command(CLI::App& app) {
                   "in name order of increasing q");
   cmd->add_option("--output", args->output, "measured pcr-robot JSON to write")->required();
   cmd->add_option("--annotated", args->annotated, "annotated PNG for a visual check");
-  cmd->add_option("--family", args->options.detector.family, "default tag family")
+  cmd->add_option("--family", args->family, "tag family of the mounts whose layout file names none")
       ->capture_default_str();
   cmd->add_option("--min-margin", args->options.detector.min_decision_margin,
                   "minimum decision margin")
@@ -39,13 +40,13 @@ void register_measure_command(CLI::App& app) {
   cmd->callback([args]() {
     using namespace pcr;
     using namespace pcr::vision;
-    if (!is_known_family(args->options.detector.family)) {
-      throw InputError("--family: unknown tag family '" + args->options.detector.family +
+    if (!is_known_family(args->family)) {
+      throw InputError("--family: unknown tag family '" + args->family +
                        "'; the accepted families are " + known_families());
     }
     check_distinct_outputs({{"--output", args->output}, {"--annotated", args->annotated}});
     const RobotDescription design = load_robot_or_default(args->design);
-    const MountLayout layout = load_mounts(args->mounts);
+    const MountLayout layout = load_mounts(args->mounts, args->family);
     const CameraModel camera = load_camera(args->camera);
     const GrayImage image = read_image(args->image);
     check_image_size(camera, image.width, image.height, args->camera, args->image);

@@ -194,14 +194,18 @@ void wrap_vision(py::module_& m) {
             return out;
           },
           "A copy whose offsets are exact (zero half-widths).")
-      .def_static("from_json", &parse_mounts, py::arg("text"), py::arg("source") = "<string>")
+      .def_static("from_json", &parse_mounts, py::arg("text"), py::arg("source") = "<string>",
+                  py::arg("family") = kDefaultTagFamily)
       .def("__len__", [](const MountLayout& l) { return l.mounts.size(); });
   m.def(
       "load_mounts",
-      [](const std::filesystem::path& path) { return load_mounts(input_path(path)); },
-      py::arg("path"),
-      "Reads a pcr-mounts JSON file. FileNotFoundError when it does not exist, ValueError naming "
-      "the file, field and value.");
+      [](const std::filesystem::path& path, const std::string& family) {
+        return load_mounts(input_path(path), family);
+      },
+      py::arg("path"), py::arg("family") = kDefaultTagFamily,
+      "Reads a pcr-mounts JSON file; `family`: the tag family of the mounts when the file names "
+      "none. FileNotFoundError when it does not exist, ValueError naming the file, field and "
+      "value.");
   m.def("default_mounts", &default_mounts,
         "The default robot's layout (data/mounts-femto-3pf.json).");
 

@@ -107,7 +107,12 @@ struct Reader {
 
 }  // namespace
 
-MountLayout parse_mounts(const std::string& text, const std::string& source) {
+MountLayout parse_mounts(const std::string& text, const std::string& source,
+                         const std::string& default_family) {
+  if (!is_known_family(default_family)) {
+    throw InputError(source + ": unknown default tag family '" + default_family +
+                     "'; the accepted families are " + known_families());
+  }
   check_json_nesting(text, source);
   json root;
   try {
@@ -121,7 +126,7 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
   if (root.contains("format") && root["format"] != "pcr-mounts") {
     r.fail("format", "expected \"pcr-mounts\", got " + excerpt(root["format"].dump()));
   }
-  const std::string family = r.text(root, "family", "(root)", "tag36h11");
+  const std::string family = r.text(root, "family", "(root)", default_family);
   const double size = root.contains("tag_size") ? r.number(root, "tag_size", "") : 0.0;
   if (!root.contains("mounts") || !root["mounts"].is_array() || root["mounts"].empty()) {
     r.fail("mounts", "missing or empty array");
@@ -192,8 +197,8 @@ MountLayout parse_mounts(const std::string& text, const std::string& source) {
   return layout;
 }
 
-MountLayout load_mounts(const std::string& path) {
-  return parse_mounts(read_input_file(path, kMaxJsonFileBytes, "a mount layout"), path);
+MountLayout load_mounts(const std::string& path, const std::string& family) {
+  return parse_mounts(read_input_file(path, kMaxJsonFileBytes, "a mount layout"), path, family);
 }
 
 }  // namespace pcr::vision

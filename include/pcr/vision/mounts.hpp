@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "pcr/vision/tags.hpp"
+
 namespace pcr::vision {
 
 enum class MountRole { kProximal, kDistal };
@@ -33,7 +35,7 @@ struct Mount {
   std::string name;
   MountRole role{MountRole::kProximal};
   int limb{0};
-  std::string family{"tag36h11"};
+  std::string family{kDefaultTagFamily};
   int id{0};
   double tag_size{0.01};
   Eigen::Vector2d clamp_offset{0, 0};
@@ -51,8 +53,11 @@ struct MountLayout {
 
 /// Parses and validates (unique ids, one proximal and one distal mount per limb 0..n-1, positive
 /// sizes, non-negative uncertainties, known families). `source` names the file in messages.
-MountLayout parse_mounts(const std::string& json_text, const std::string& source);
-MountLayout load_mounts(const std::string& path);
+/// `family`: the tag family of the mounts when neither the mount nor the file's root names one
+/// (InputError when it is not a known family).
+MountLayout parse_mounts(const std::string& json_text, const std::string& source,
+                         const std::string& family = kDefaultTagFamily);
+MountLayout load_mounts(const std::string& path, const std::string& family = kDefaultTagFamily);
 
 /// The default robot's layout (data/mounts-femto-3pf.json, compiled in).
 MountLayout default_mounts();

@@ -13,11 +13,12 @@
 #include "pcr/se2.hpp"
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
+#include "pcr/vision/tags.hpp"
 
 namespace pcr::vision {
 
 struct RenderTag {
-  std::string family{"tag36h11"};
+  std::string family{kDefaultTagFamily};
   int id{0};
   double size_m{0.01};  ///< black border edge
   Pose2<double> pose;   ///< tag frame in the plane frame

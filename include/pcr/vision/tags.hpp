@@ -16,6 +16,9 @@
 
 namespace pcr::vision {
 
+/// The family of a tag that names none (mount layouts, detection, rendering).
+inline constexpr const char* kDefaultTagFamily = "tag36h11";
+
 /// The supported families: tag36h11 (default), tag25h9, tag16h5, tagStandard41h12.
 bool is_known_family(const std::string& family);
 /// Their names, comma-separated, for messages: "tag36h11, tag25h9, tag16h5, tagStandard41h12".
@@ -26,7 +29,7 @@ std::vector<bool> tag_bitmap(const std::string& family, int id, int* total_width
                              int* width_at_border);
 
 struct DetectorOptions {
-  std::string family{"tag36h11"};
+  std::string family{kDefaultTagFamily};
   double min_decision_margin{30.0};  ///< reject weaker detections
   int max_hamming{0};                ///< reject detections with more corrected bits
   double quad_decimate{2.0};         ///< AprilTag's quad detection decimation (refined after)
