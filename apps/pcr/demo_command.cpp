@@ -586,13 +586,13 @@ void register_demo_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "seed of the virtual robot, images, sampling, noise")
       ->capture_default_str();
   cmd->add_option("--calibration", args->calibration_count, "calibration configurations")
-      ->check(CLI::Range(10, 10000))
+      ->check(pcr::cli::within(pcr::SamplingOptions::kCount))
       ->capture_default_str();
   cmd->add_option("--validation", args->validation_count, "validation configurations")
-      ->check(CLI::Range(1, 10000))
+      ->check(pcr::cli::within(pcr::MethodOptions::kValidationCount))
       ->capture_default_str();
   cmd->add_option("--repeat", args->repeat, "ISO 9283 cycles per pose")
-      ->check(CLI::Range(2, 1000))
+      ->check(pcr::cli::within(pcr::AccuracyOptions::kRepeat))
       ->capture_default_str();
   cmd->add_option("--poses", args->path_poses, "poses per trajectory")
       ->check(CLI::Range(4, 100000))
