@@ -44,18 +44,17 @@ void register_render_command(CLI::App& app) {
   cmd->add_option("--q", args->q, "actuator positions q1,...,qn (m, default 0)");
   cmd->add_option("--platform", args->platform,
                   "platform pose x,y,theta in W (m, rad) for the distal tags");
-  // The work grows with its square: 16 x 16 samples per pixel is already a minute's render.
   cmd->add_option("--supersampling", args->render.supersampling, "samples per pixel per axis")
-      ->check(within(1, 16))
+      ->check(within(pcr::vision::RenderOptions::kSupersampling))
       ->capture_default_str();
   cmd->add_option("--blur", args->render.blur_sigma_px, "Gaussian blur sigma (px)")
-      ->check(within(0.0, 50.0, "px"));
+      ->check(within(pcr::vision::RenderOptions::kBlur));
   cmd->add_option("--noise", args->render.noise_sigma,
                   "Gaussian noise sigma (fraction of full scale)")
-      ->check(within(0.0, 1.0));
+      ->check(within(pcr::vision::RenderOptions::kNoise));
   cmd->add_option("--gradient", args->render.gradient,
                   "illumination change across the image (fraction)")
-      ->check(within(0.0, 1.0));
+      ->check(within(pcr::vision::RenderOptions::kGradient));
   cmd->add_option("--seed", args->render.seed, "noise seed");
   cmd->add_option("--bits", args->bits, "PNG bits per pixel (8 or 16)")
       ->check(CLI::IsMember({8, 16}));

@@ -84,16 +84,13 @@ Scene camera_scene(const std::optional<CameraModel>& camera, double height, doub
 
 py::array_t<float> render(const Scene& scene, int supersampling, double blur, double noise,
                           double gradient, unsigned seed) {
-  if (supersampling < 1) {
-    throw std::invalid_argument("supersampling: expected >= 1, got " +
-                                std::to_string(supersampling));
-  }
   RenderOptions o;
   o.supersampling = supersampling;
-  o.blur_sigma_px = checked_number(blur, "blur", "px", 0.0);
-  o.noise_sigma = checked_number(noise, "noise", "fraction of full scale", 0.0);
-  o.gradient = checked_number(gradient, "gradient", "");
+  o.blur_sigma_px = blur;
+  o.noise_sigma = noise;
+  o.gradient = gradient;
   o.seed = seed;
+  checked_options(o);
   GrayImage image;
   {
     py::gil_scoped_release release;

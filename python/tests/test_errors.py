@@ -236,7 +236,7 @@ def test_vision_vectors_and_numbers_are_checked(robot):
            "rad), got 4 numbers (0, 0, 0, 0)", pcr.render_chessboard, board_pose=[0, 0, 0, 0])
     raises(ValueError, "tilt_x: expected a finite number (rad), got nan",
            pcr.render_robot, robot, layout, tilt_x=NAN)
-    raises(ValueError, "blur: expected a finite number >= 0 (px), got nan",
+    raises(ValueError, "blur: expected a number from 0 to 50 (px), got nan",
            pcr.render_chessboard, blur=NAN)
     cam = pcr.Camera(800, 600, np.eye(3))
     raises(ValueError, "point_camera: expected 3 finite numbers (x, y, z in m), got 2 numbers "

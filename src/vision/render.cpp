@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "pcr/input_error.hpp"
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/tags.hpp"
 
@@ -105,6 +106,7 @@ std::vector<Eigen::Vector2d> tag_corner_pixels(const Scene& scene, const RenderT
 }
 
 GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
+  require_valid(opt, "render_scene");
   const CameraModel& cam = scene.camera;
   if (cam.width <= 0 || cam.height <= 0) throw std::invalid_argument("render_scene: empty camera");
   Painter painter{scene, opt, {}};

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "pcr/option_range.hpp"
 #include "pcr/se2.hpp"
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
@@ -77,8 +78,21 @@ struct RenderOptions {
   float white{0.92f};
   float black{0.06f};
   unsigned seed{1};
+
+  // Named as pcr render and Python spell them. The work grows with the square of the
+  // supersampling: 16 x 16 samples per pixel is already a minute's render.
+  static constexpr OptionRange kSupersampling{"supersampling", 1, 16};
+  static constexpr OptionRange kBlur{"blur", 0, 50, "px"};
+  static constexpr OptionRange kNoise{"noise", 0, 1, "fraction of full scale"};
+  static constexpr OptionRange kGradient{"gradient", 0, 1};
+  /// As pcr::SolverOptions::is_valid: the message names the first field out of its range.
+  bool is_valid(std::string* error = nullptr) const {
+    return kSupersampling.check(supersampling, error) && kBlur.check(blur_sigma_px, error) &&
+           kNoise.check(noise_sigma, error) && kGradient.check(gradient, error);
+  }
 };
 
+/// Throws InputError for options out of their ranges.
 GrayImage render_scene(const Scene& scene, const RenderOptions& options);
 
 /// Ground-truth pixel coordinates of a tag's corners (same order as TagDetection::corners).
