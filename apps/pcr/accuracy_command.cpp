@@ -160,7 +160,7 @@ void register_accuracy_command(CLI::App& app) {
   cmd->add_option("--count", args->count, "poses on the path (default 40 square, 36 circle)")
       ->check(within(1, 100000));
   cmd->add_option("--repeat", args->repeat, "ISO 9283 cycles per pose")
-      ->check(CLI::Range(2, 100000))
+      ->check(within(pcr::AccuracyOptions::kRepeat))
       ->capture_default_str();
   auto* truth = cmd->add_option("--truth", args->truth,
                                 "the virtual robot's true description (JSON, used as is)");

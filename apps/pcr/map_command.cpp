@@ -126,7 +126,7 @@ void register_map_command(CLI::App& app) {
   map->add_option("--theta", args->theta, "platform orientation (rad)")
       ->check(pcr::cli::within(pcr::WorkspaceMapOptions::kTheta));
   map->add_option("--grid", args->grid, "points per side")
-      ->check(CLI::Range(2, 4000))
+      ->check(pcr::cli::within(pcr::WorkspaceMapOptions::kGrid))
       ->capture_default_str();
   map->add_option("--range", args->range,
                   "x_min,x_max,y_min,y_max (m); default: the positions an FK scan of the stroke "

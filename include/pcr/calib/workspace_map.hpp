@@ -47,7 +47,8 @@ struct WorkspaceMapOptions {
   std::function<void(const InverseSolution&, WorkspaceMapPoint&)> accuracy;
 
   static constexpr OptionRange kTheta{"theta", -2 * M_PI, 2 * M_PI, "rad"};
-  static constexpr OptionRange kGrid{"grid", 2, 100000};
+  /// 4000 x 4000 points is 16 million IK solves, minutes of work: beyond, a typo.
+  static constexpr OptionRange kGrid{"grid", 2, 4000};
   /// As SolverOptions::is_valid, for these fields and the solver's (the range, given or from the
   /// strokes, is checked by workspace_map).
   bool is_valid(std::string* error = nullptr) const {
