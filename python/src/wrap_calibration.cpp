@@ -52,9 +52,8 @@ CalibrationTable table_or_calibration_set(const Calibration& c, const Calibratio
   return calibration_table(c.result, c.calibration, {});
 }
 
-}  // namespace
-
-void wrap_calibration(py::module_& m) {
+/// pcr.CalibrationOptions: the settings of pcr.calibrate, checked on assignment.
+void bind_calibration_options(py::module_& m) {
   auto options =
       py::class_<CalibrationOptions>(
           m, "CalibrationOptions",
@@ -147,7 +146,10 @@ void wrap_calibration(py::module_& m) {
                          "FK solution on the nominal geometry instead of a ValueError naming "
                          "them");
   def_value_semantics(options);
+}
 
+/// pcr.StageReport: one stage of a calibration.
+void bind_stage_report(py::module_& m) {
   auto stage_report =
       py::class_<StageReport>(m, "StageReport", "One calibration stage, as Ceres ran it.")
           .def_readonly("name", &StageReport::name, "the stage's name")
@@ -193,7 +195,10 @@ void wrap_calibration(py::module_& m) {
                         s.fk_newton_iterations);
       },
       "StageReport");
+}
 
+/// pcr.ParameterEstimate: one identified parameter.
+void bind_parameter_estimate(py::module_& m) {
   auto parameter_estimate =
       py::class_<ParameterEstimate>(m, "ParameterEstimate",
                                     "One identified parameter, in the limb-0 gauge (SI units).")
@@ -234,7 +239,10 @@ void wrap_calibration(py::module_& m) {
                         p.gauge_reference, p.box_deviation, p.at_bound, p.identifiable);
       },
       "ParameterEstimate");
+}
 
+/// pcr.GaugeDirection: a gauge of the parameters.
+void bind_gauge_direction(py::module_& m) {
   auto gauge_direction =
       py::class_<GaugeDirection>(m, "GaugeDirection",
                                  "A motion of the parameters that changes no prediction (a gauge).")
@@ -259,7 +267,10 @@ void wrap_calibration(py::module_& m) {
         return std::tie(g.name, g.combination, g.relative_gain, g.free, g.present);
       },
       "GaugeDirection");
+}
 
+/// pcr.CalibrationTable: the paper's Table 3.
+void bind_calibration_table(py::module_& m) {
   // The validation rows are None without a validation set, not zeros.
   const auto validation_stats = [](PoseErrorStats CalibrationTable::*field) {
     return [field](const CalibrationTable& t) -> py::object {
@@ -310,7 +321,10 @@ void wrap_calibration(py::module_& m) {
                         t.identified_validation_errors.e_theta, t.has_validation, t.warnings);
       },
       "CalibrationTable");
+}
 
+/// pcr.CalibrationResult (a Calibration): its fields, reports and pickling.
+void bind_calibration_result(py::module_& m) {
   py::class_<Calibration>(m, "CalibrationResult",
                           "What pcr.calibrate identified (pcr/calib/calibrator.hpp, SI units). "
                           "to_json() is the report pcr_calibrate --report writes.")
@@ -474,7 +488,10 @@ void wrap_calibration(py::module_& m) {
                               "CalibrationResult");
             return c;
           }));
+}
 
+/// pcr.calibration_table and pcr.calibrate (after the classes of their signatures).
+void bind_calibrate(py::module_& m) {
   m.def(
       "calibration_table",
       [](const Calibration& c, const InputMatrix& q, const InputMatrix& measured,
@@ -531,7 +548,10 @@ void wrap_calibration(py::module_& m) {
       "the nominal geometry are left out, else they are a ValueError naming them. progress: "
       "optional callable(str). Returns (identified Robot, CalibrationResult); "
       "result.to_json() is the report pcr_calibrate writes. Releases the GIL.");
+}
 
+/// pcr.ModelSelection, pcr.MODEL_SELECTION_T and pcr.calibrate_selecting_model.
+void bind_model_selection(py::module_& m) {
   py::class_<ModelSelection>(m, "ModelSelection",
                              "The calibration's stages against the load model, chosen on the "
                              "validation set (pcr.calibrate_selecting_model).")
@@ -591,6 +611,19 @@ void wrap_calibration(py::module_& m) {
       "validation rows' squared whitened pose errors passes pcr.MODEL_SELECTION_T (1 %). "
       "Returns (identified Robot, chosen CalibrationResult, the stages' CalibrationResult, the "
       "load model's CalibrationResult or None, ModelSelection). Releases the GIL.");
+}
+
+}  // namespace
+
+void wrap_calibration(py::module_& m) {
+  bind_calibration_options(m);
+  bind_stage_report(m);
+  bind_parameter_estimate(m);
+  bind_gauge_direction(m);
+  bind_calibration_table(m);
+  bind_calibration_result(m);
+  bind_calibrate(m);
+  bind_model_selection(m);
 }
 
 RobotDescription with_params(const RobotDescription& nominal, const RobotParams<double>& params) {
