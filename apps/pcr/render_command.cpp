@@ -34,13 +34,12 @@ void register_render_command(CLI::App& app) {
   cmd->add_option("--truth", args->truth, "JSON ground truth to write");
   using pcr::cli::within;
   cmd->add_option("--height", args->height, "camera height above the work plane (m)")
-      ->check(within(0.01, 100.0, "m"))
+      ->check(within(pcr::vision::PlanePose::kHeight))
       ->capture_default_str();
-  // Beyond about 60 degrees the plane is seen too obliquely to measure.
   cmd->add_option("--tilt-x", args->tilt_x, "camera tilt about its x axis (rad)")
-      ->check(within(-1.0, 1.0, "rad"));
+      ->check(within(pcr::vision::PlanePose::kTiltX));
   cmd->add_option("--tilt-y", args->tilt_y, "camera tilt about its y axis (rad)")
-      ->check(within(-1.0, 1.0, "rad"));
+      ->check(within(pcr::vision::PlanePose::kTiltY));
   cmd->add_option("--q", args->q, "actuator positions q1,...,qn (m, default 0)");
   cmd->add_option("--platform", args->platform,
                   "platform pose x,y,theta in W (m, rad) for the distal tags");

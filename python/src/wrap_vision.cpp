@@ -72,13 +72,11 @@ CameraModel default_render_camera() {
 
 Scene camera_scene(const std::optional<CameraModel>& camera, double height, double tilt_x,
                    double tilt_y) {
-  if (!(height > 0)) {
-    throw std::invalid_argument("height: expected > 0 m, got " + std::to_string(height));
-  }
   Scene scene;
   scene.camera = camera ? *camera : default_render_camera();
-  scene.plane = PlanePose::looking_down(height, checked_number(tilt_x, "tilt_x", "rad"),
-                                        checked_number(tilt_y, "tilt_y", "rad"));
+  scene.plane = PlanePose::looking_down(in_range(height, PlanePose::kHeight),
+                                        in_range(tilt_x, PlanePose::kTiltX),
+                                        in_range(tilt_y, PlanePose::kTiltY));
   return scene;
 }
 

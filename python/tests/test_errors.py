@@ -234,7 +234,7 @@ def test_vision_vectors_and_numbers_are_checked(robot):
            "got (nan, 0, 0)", pcr.render_robot, robot, layout, platform=pcr.Pose(NAN, 0, 0))
     raises(ValueError, "board_pose: expected a pcr.Pose or 3 finite numbers (x m, y m, theta "
            "rad), got 4 numbers (0, 0, 0, 0)", pcr.render_chessboard, board_pose=[0, 0, 0, 0])
-    raises(ValueError, "tilt_x: expected a finite number (rad), got nan",
+    raises(ValueError, "tilt_x: expected a number from -1 to 1 (rad), got nan",
            pcr.render_robot, robot, layout, tilt_x=NAN)
     raises(ValueError, "blur: expected a number from 0 to 50 (px), got nan",
            pcr.render_chessboard, blur=NAN)

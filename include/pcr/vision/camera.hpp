@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "pcr/option_range.hpp"
+
 namespace pcr::vision {
 
 struct CameraModel {
@@ -45,6 +47,12 @@ struct PlanePose {
   /// A camera looking straight down at the plane from `height_m`, the plane's y axis pointing to
   /// the image's top and its origin on the optical axis; tilted by `tilt_x`, `tilt_y` (rad).
   static PlanePose looking_down(double height_m, double tilt_x = 0.0, double tilt_y = 0.0);
+
+  // A rendered view's placement. Beyond about 60 degrees of tilt the plane is seen too obliquely
+  // to measure.
+  static constexpr OptionRange kHeight{"height", 0.01, 100, "m"};
+  static constexpr OptionRange kTiltX{"tilt_x", -1, 1, "rad"};
+  static constexpr OptionRange kTiltY{"tilt_y", -1, 1, "rad"};
 };
 
 /// The chessboard used by `pcr camera`: `cols` x `rows` inner corners, square edge `square_m`.
