@@ -32,10 +32,10 @@ void register_measure_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--min-margin", args->options.detector.min_decision_margin,
                   "minimum decision margin")
-      ->check(pcr::cli::within(0.0, 1000.0))
+      ->check(pcr::cli::within(pcr::vision::DetectorOptions::kMinDecisionMargin))
       ->capture_default_str();
   cmd->add_option("--max-hamming", args->options.detector.max_hamming, "maximum corrected bits")
-      ->check(pcr::cli::within(0, 3))
+      ->check(pcr::cli::within(pcr::vision::DetectorOptions::kMaxHamming))
       ->capture_default_str();
   cmd->callback([args]() {
     using namespace pcr;

@@ -702,8 +702,7 @@ class RobotMeasurement:
 
 def measure_robot(image: ArrayLike, mounts: MountLayout, camera: Camera, design: Robot, *,
                   source: str = "<image>", coverage_factor: float = 3.0,
-                  family: str = "tag36h11", min_margin: float = 30.0,
-                  max_hamming: int = 0) -> RobotMeasurement: ...
+                  min_margin: float = 30.0, max_hamming: int = 0) -> RobotMeasurement: ...
 def measured_description(design: Robot, measurement: RobotMeasurement) -> Robot: ...
 
 class SweepResult:

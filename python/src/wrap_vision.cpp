@@ -339,22 +339,23 @@ void wrap_vision(py::module_& m) {
       "measure_robot",
       [](const py::object& image, const MountLayout& layout, const CameraModel& camera,
          const RobotDescription& design, const std::string& source, double coverage_factor,
-         const std::string& family, double min_margin, int max_hamming) {
+         double min_margin, int max_hamming) {
         const GrayImage gray = from_array(image, source);
         check_image_size(camera, gray.width, gray.height, "camera", source);
         MeasureOptions o;
         o.coverage_factor = checked_number(coverage_factor, "coverage_factor", "", 0.0);
-        o.detector.family = family;
-        o.detector.min_decision_margin = checked_number(min_margin, "min_margin", "", 0.0);
-        o.detector.max_hamming = max_hamming;
+        o.detector.min_decision_margin = in_range(min_margin, DetectorOptions::kMinDecisionMargin);
+        o.detector.max_hamming =
+            static_cast<int>(in_range(max_hamming, DetectorOptions::kMaxHamming));
         py::gil_scoped_release release;
         return measure_robot(gray, source, layout, camera, design.params, o);
       },
       py::arg("image"), py::arg("mounts"), py::arg("camera"), py::arg("design"), py::kw_only(),
-      py::arg("source") = "<image>", py::arg("coverage_factor") = 3.0,
-      py::arg("family") = "tag36h11", py::arg("min_margin") = 30.0, py::arg("max_hamming") = 0,
-      "Detects the mount tags in `image` ((H, W) array in [0, 1]), fits their poses and the "
-      "plane, and registers the clamps onto `design` -> RobotMeasurement. `source` names the "
+      py::arg("source") = "<image>", py::arg("coverage_factor") = 3.0, py::arg("min_margin") = 30.0,
+      py::arg("max_hamming") = 0,
+      "Detects the mount tags in `image` ((H, W) array in [0, 1]) in the families of the "
+      "layout's mounts, fits their poses and the plane, and registers the clamps onto `design` -> "
+      "RobotMeasurement. `source` names the "
       "image in error messages (ValueError for a missing marker, a size mismatch). Releases "
       "the GIL.");
   py::class_<SweepResult>(m, "SweepResult",

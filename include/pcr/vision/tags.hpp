@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "pcr/option_range.hpp"
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
 
@@ -36,6 +37,11 @@ struct DetectorOptions {
   double quad_sigma{0.0};
   int threads{1};
   bool refine{true};  ///< sub-pixel edge refinement (below)
+
+  // Named as pcr measure and Python spell them. More than 3 corrected bits makes AprilTag's
+  // decoding tables grow beyond use.
+  static constexpr OptionRange kMinDecisionMargin{"min_margin", 0, 1000};
+  static constexpr OptionRange kMaxHamming{"max_hamming", 0, 3};
 };
 
 struct TagDetection {
