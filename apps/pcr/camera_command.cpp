@@ -20,7 +20,7 @@ void register_camera_command(CLI::App& app) {
   cmd->add_option("--board", args->board, "inner corners COLSxROWS of the chessboard")
       ->capture_default_str();
   cmd->add_option("--square", args->square, "chessboard square edge (m)")
-      ->check(pcr::cli::within(1e-4, 1.0, "m"))
+      ->check(pcr::cli::within(pcr::vision::ChessboardSpec::kSquare))
       ->capture_default_str();
   cmd->add_option("--images", args->images, "images of the board (at least 3, varied poses)")
       ->required();

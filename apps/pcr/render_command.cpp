@@ -65,7 +65,7 @@ void register_render_command(CLI::App& app) {
   cmd->add_option("--chessboard", args->chessboard,
                   "also draw a chessboard of COLSxROWS inner corners (for pcr camera)");
   cmd->add_option("--square", args->square, "chessboard square edge (m)")
-      ->check(within(1e-4, 1.0, "m"))
+      ->check(within(pcr::vision::ChessboardSpec::kSquare))
       ->capture_default_str();
   cmd->add_option("--board-pose", args->board_pose,
                   "chessboard centre pose x,y,theta in the plane (m, rad)");

@@ -275,12 +275,11 @@ void wrap_vision(py::module_& m) {
       [](const std::optional<CameraModel>& camera, int cols, int rows, double square,
          const py::object& board_pose, double height, double tilt_x, double tilt_y,
          int supersampling, double blur, double noise, double gradient, unsigned seed) {
-        if (cols < 2 || rows < 2 || !(square > 0)) {
-          throw std::invalid_argument(
-              "chessboard: expected at least 2 x 2 inner corners and "
-              "square > 0 m, got " +
-              std::to_string(cols) + " x " + std::to_string(rows) + ", " + std::to_string(square));
+        if (cols < 2 || rows < 2) {
+          throw std::invalid_argument("chessboard: expected at least 2 x 2 inner corners, got " +
+                                      std::to_string(cols) + " x " + std::to_string(rows));
         }
+        in_range(square, ChessboardSpec::kSquare);
         Scene scene = camera_scene(camera, height, tilt_x, tilt_y);
         scene.chessboard =
             RenderChessboard::centred(cols, rows, square, to_pose(board_pose, "board_pose"));
@@ -420,7 +419,7 @@ void wrap_vision(py::module_& m) {
         ChessboardSpec board;
         board.cols = cols;
         board.rows = rows;
-        board.square_m = square;
+        board.square_m = in_range(square, ChessboardSpec::kSquare);
         py::gil_scoped_release release;
         return calibrate_camera(paths, board);
       },

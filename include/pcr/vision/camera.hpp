@@ -62,6 +62,8 @@ struct ChessboardSpec {
   int cols{9};
   int rows{6};
   double square_m{0.005};
+
+  static constexpr OptionRange kSquare{"square", 1e-4, 1, "m"};  ///< as pcr camera spells it
 };
 
 /// `option`'s text "COLSxROWS" as cols and rows of ChessboardSpec: digits, 'x', digits and nothing
