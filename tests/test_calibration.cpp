@@ -134,11 +134,25 @@ TEST(CostFunctor, ExactDerivativesMatchCentralDifferencesWithPrecurvedRods) {
   expect_exact_derivatives_match_differences(nominal);
 }
 
+// Tapered rods (EI(s) varies): the diameter's and the length's columns take the slope's own
+// derivative, and u0 no longer acts as a moment (a Jet through the rod for all three).
+TEST(CostFunctor, ExactDerivativesMatchCentralDifferencesWithTaperedRods) {
+  RobotDescription nominal = default_robot();
+  const double tip_ratios[3] = {0.6, 1.0, 1.5};
+  const double curvatures[3][2] = {{0.0, 0.0}, {-8.0, 0.0}, {10.0, -600.0}};  // 1/m, 1/m^2
+  for (int i = 0; i < 3; ++i) {
+    Rod<double>& rod = nominal.params.limb(i).rod;
+    rod.diameter_slope = rod.diameter * (tip_ratios[i] - 1.0) / rod.length;
+    rod.precurvature = curvatures[i][0];
+    rod.precurvature_slope = curvatures[i][1];
+  }
+  expect_exact_derivatives_match_differences(nominal);
+}
+
 // The per-limb analytic assembly (the default) against the auto-diff pass through the whole
 // residual: two independent implementations of the same implicit-function derivative; with the
 // constant platform load as three more parameters, also its columns.
-TEST(CostFunctor, AnalyticJacobianMatchesAutoDiff) {
-  const RobotDescription nominal = default_robot();
+void expect_analytic_jacobian_matches_autodiff(const RobotDescription& nominal) {
   const RobotParams<double>& base = nominal.params;
   const int count = num_parameters(base.num_limbs);
   const std::vector<double> h = parameter_half_widths(*nominal.uncertainty, base.num_limbs);
@@ -219,6 +233,22 @@ TEST(CostFunctor, AnalyticJacobianMatchesAutoDiff) {
       for (int i = 0; i < 3; ++i) EXPECT_NEAR(rc[i], rb[i], 1e-9 * std::max(1.0, std::abs(rb[i])));
     }
   }
+}
+
+TEST(CostFunctor, AnalyticJacobianMatchesAutoDiff) {
+  expect_analytic_jacobian_matches_autodiff(default_robot());
+}
+
+// With shaped rods: the precurvature's column of a tapered rod comes from a Jet through the rod.
+TEST(CostFunctor, AnalyticJacobianMatchesAutoDiffWithTaperedRods) {
+  RobotDescription nominal = default_robot();
+  const double tip_ratios[3] = {0.7, 1.4, 1.0};
+  for (int i = 0; i < 3; ++i) {
+    Rod<double>& rod = nominal.params.limb(i).rod;
+    rod.diameter_slope = rod.diameter * (tip_ratios[i] - 1.0) / rod.length;
+    rod.precurvature = 6.0 * (i - 1);
+  }
+  expect_analytic_jacobian_matches_autodiff(nominal);
 }
 
 TEST(CostFunctor, ReturnsFalseWhenForwardKinematicsFails) {

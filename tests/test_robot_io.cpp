@@ -88,6 +88,7 @@ void expect_same(const pcr::RobotDescription& a, const pcr::RobotDescription& b)
     EXPECT_TRUE(same(x.rod.young_modulus, y.rod.young_modulus));
     EXPECT_TRUE(same(x.rod.precurvature, y.rod.precurvature));
     EXPECT_TRUE(same(x.rod.precurvature_slope, y.rod.precurvature_slope));
+    EXPECT_TRUE(same(x.rod.diameter_slope, y.rod.diameter_slope));
     EXPECT_TRUE(same(x.q_min, y.q_min) && same(x.q_max, y.q_max));
     EXPECT_EQ(x.home_bow, y.home_bow);
   }
@@ -250,6 +251,12 @@ TEST(RobotIo, ValueRules) {
   EXPECT_MESSAGE(error_of(j), "limbs[1].precurvature_slope", "steep");
   j["limbs"][1]["precurvature_slope"] = 2e4;
   EXPECT_MESSAGE(error_of(j), "limbs[1].precurvature_slope", "physical range", "1/m^2");
+  j = valid();  // a tapered rod's tip: from half to twice its base diameter, d' l / d in [-0.5, 1]
+  j["limbs"][1]["diameter_slope"] =
+      -0.6 * j["limbs"][1]["d"].get<double>() / j["limbs"][1]["l"].get<double>();
+  EXPECT_MESSAGE(error_of(j), "limbs[1].diameter_slope", "physical range", "m/m");
+  j["limbs"][1]["diameter_slope"] = "thin";
+  EXPECT_MESSAGE(error_of(j), "limbs[1].diameter_slope", "thin");
   j = valid();
   j["limbs"][1]["q_range"] = Json::array({0.01, -0.01});
   EXPECT_MESSAGE(error_of(j), "limbs[1].q_range", "min > max", "[0.01,-0.01]");
@@ -345,6 +352,10 @@ TEST(RobotIo, RoundTripIsBitExact) {
       if (i % 3 == 1) {  // |u0| < 0.63 1/m and |u1| < 0.16 1/m^2: inside 2 pi / l, 4 pi / l^2
         l.rod.precurvature = random_double(rng, -300, -0.2, false);
         l.rod.precurvature_slope = random_double(rng, -300, -0.8, false);
+      }
+      if (i % 3 == 2) {  // a tapered rod: |d' l / d| < 0.4, its tip 0.6 to 1.4 times as thick
+        l.rod.diameter_slope =
+            0.4 * l.rod.diameter / l.rod.length * random_double(rng, -300, -0.01, false);
       }
       l.q_min = -std::abs(any());
       l.q_max = std::abs(any());

@@ -94,7 +94,7 @@ TEST(Rod, SampledShapeVisitsEveryNode) {
 // Rods stepped together in SIMD lanes (shooting_residual's path in double) against each rod stepped
 // alone: the lanes do the same operations in the same order, so the results are the same to the
 // bit. Every robot size (bundles of 2, 4 and 8 lanes, some lanes idle), rods of different lengths,
-// EI, angles and wrenches.
+// EI, laws, angles and wrenches.
 template <bool Sens>
 void expect_lanes_match_rods_alone() {
   // A compiler free to fuse a * b + c into an FMA (-march=native) may fuse in one path and not in
@@ -115,10 +115,16 @@ void expect_lanes_match_rods_alone() {
       const RodState<double> start{0.01 * i,         -0.003 * i,
                                    -2.0 + 1.1 * i,   (i - 2.5) * 4e-4,
                                    (1.5 - i) * 3e-4, (i % 2 ? 1 : -1) * (1e-5 + 4e-5 * i)};
-      // EI (0.5 + 0.3 i), lengths apart, half of them pre-curved
-      const Rod<double> rod{kLength * (0.7 + 0.15 * i), kRod.diameter,
-                            kRod.young_modulus * (0.5 + 0.3 * i), i % 2 ? 40.0 - 9.0 * i : 0.0,
-                            i % 3 ? 0.0 : 1500.0 * (i - 1)};
+      // EI (0.5 + 0.3 i), lengths apart, half of them pre-curved, a third tapered (their tips
+      // 1.5, 0.7, 1.3 times as thick): bundles mix the three laws
+      const double length = kLength * (0.7 + 0.15 * i);
+      const double tip_ratio[] = {1.5, 0.7, 1.3};
+      const Rod<double> rod{length,
+                            kRod.diameter,
+                            kRod.young_modulus * (0.5 + 0.3 * i),
+                            i % 2 ? 40.0 - 9.0 * i : 0.0,
+                            i % 3 ? 0.0 : 1500.0 * (i - 1),
+                            i % 3 == 1 ? kRod.diameter * (tip_ratio[i / 3] - 1.0) / length : 0.0};
       lanes[i].init(start, rod, kSteps);
       alone[i] = lanes[i];
       for (int k = 0; k < kSteps; ++k) alone[i].step();

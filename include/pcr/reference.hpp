@@ -52,7 +52,8 @@ struct ReferenceOptions {
 };
 
 /// Integrates one rod over [0, rod.length] from its proximal state with CVODE.
-/// With max_abs_moment, also returns max |m(s)| (N m) over CVODE's internal steps.
+/// With max_abs_moment, also returns max |m(s)| (d / d(s))^3 (N m) over CVODE's internal steps
+/// (max |m| for a uniform rod; RodTip::max_abs_moment).
 /// Throws std::invalid_argument on non-finite input or non-positive EI / length, and
 /// std::runtime_error when CVODE fails.
 RodState<double> integrate_rod_reference(const RodState<double>& start, const Rod<double>& rod,
@@ -96,9 +97,10 @@ ForwardSolution forward_kinematics_reference(
 // n N + 3: for tests.
 
 /// A rod clamped at A (in W) with tangent angle alpha (in W), its tip attached to the platform at
-/// B (in P) with tangent angle beta (in P). Length l (m), EI (N m^2), intrinsic curvature
-/// u*(s) = precurvature + precurvature_slope s (1/m, 1/m^2): bending energy int EI (theta' - u*)^2
-/// / 2.
+/// B (in P) with tangent angle beta (in P). Length l (m), EI (N m^2) at s = 0, varying as
+/// EI(s) = EI (1 + taper s)^4 along a tapered rod (taper = d' / d, 1/m), intrinsic curvature
+/// u*(s) = precurvature + precurvature_slope s (1/m, 1/m^2): bending energy
+/// int EI(s) (theta' - u*)^2 / 2.
 struct EnergyRod {
   Vector2<double> A;
   double alpha = 0;
@@ -108,6 +110,7 @@ struct EnergyRod {
   double ei = 0;
   double precurvature = 0;
   double precurvature_slope = 0;
+  double taper = 0;
 };
 
 struct EnergyProblem {

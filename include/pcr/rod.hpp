@@ -1,11 +1,12 @@
 #pragma once
 // Planar Kirchhoff rod (Mauze et al. 2021, Eq. 1), integrated by fixed-step RK4.
 //
-//   x' = cos(theta), y' = sin(theta), theta' = m / EI + u*(s), n' = 0,
+//   x' = cos(theta), y' = sin(theta), theta' = m / EI(s) + u*(s), n' = 0,
 //   m' = n_x sin(theta) - n_y cos(theta)
 //
 // u*(s) is the rod's intrinsic curvature (zero for the paper's straight rods): the linear
-// constitutive law m = EI (theta' - u*) of a rod shape-set to a curve (Rod below).
+// constitutive law m = EI (theta' - u*) of a rod shape-set to a curve (Rod below). EI(s) varies
+// along a tapered rod (constant for the paper's rods).
 //
 // Sign convention: n(s) and m(s) are the force and moment exerted by the material beyond s
 // (larger arc length) on the material before it. So n(0), m(0) is what the rod exerts on its
@@ -17,6 +18,7 @@
 // theta is integrated alongside, so it stays continuous over full turns.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <type_traits>
 
@@ -43,31 +45,44 @@ T bending_stiffness(const T& young_modulus, const T& diameter) {
 }
 
 /// One rod as the model sees it: its constitutive law, its geometry and the parameters a
-/// calibration may identify. A circular section (EI and EA constant along the rod) and an
-/// intrinsic curvature u*(s) = u0 + u1 s: zero for a straight rod, u0 for a rod shape-set to a
-/// circular arc (superelastic NiTi), u0 + u1 s for a clothoid. The stress-free rod is the curve
-/// whose tangent turns by u*; the bending moment is m = EI (theta' - u*).
+/// calibration may identify. A circular section of diameter d(s) = d + d' s: uniform (d' = 0,
+/// the paper's rods) or tapered (a ground or etched rod), so EI(s) = E pi d(s)^4 / 64 and
+/// EA(s) = E pi d(s)^2 / 4. An intrinsic curvature u*(s) = u0 + u1 s: zero for a straight rod, u0
+/// for a rod shape-set to a circular arc (superelastic NiTi), u0 + u1 s for a clothoid. The
+/// stress-free rod is the curve whose tangent turns by u*; the bending moment is
+/// m = EI(s) (theta' - u*).
 template <class T>
 struct Rod {
   T length{0};              ///< stress-free length l (m)
-  T diameter{0};            ///< circular section diameter d (m)
+  T diameter{0};            ///< circular section diameter d = d(0) at the proximal end (m)
   T young_modulus{0};       ///< E (Pa)
   T precurvature{0};        ///< u0 = u*(0) (1/m), positive turning counterclockwise
   T precurvature_slope{0};  ///< u1 = du*/ds (1/m^2)
+  T diameter_slope{0};      ///< d' = dd/ds (m/m): negative for a rod thinner at its tip
 
+  /// EI at the proximal end (N m^2): the whole rod's for a uniform rod.
   T bending_stiffness() const { return pcr::bending_stiffness(young_modulus, diameter); }
-  /// EA of the circular section (N): the kinematics takes the rods as inextensible, the stability
+  /// The section's diameter d(s) = d + d' s (m) and EI(s) (N m^2) at arc length s.
+  T diameter_at(const T& s) const { return diameter + diameter_slope * s; }
+  T bending_stiffness_at(const T& s) const {
+    return pcr::bending_stiffness(young_modulus, diameter_at(s));
+  }
+  /// EA at the proximal end (N): the kinematics takes the rods as inextensible, the stability
   /// check (pcr/stability.hpp) needs their axial compliance.
   T axial_stiffness() const { return young_modulus * T(M_PI / 4.0) * diameter * diameter; }
+  /// u*(s) (1/m).
+  T intrinsic_curvature(const T& s) const { return precurvature + precurvature_slope * s; }
   /// The angle the stress-free rod's tangent turns through from 0 to s: u0 s + u1 s^2 / 2 (rad).
   T intrinsic_turn(const T& s) const {
     return s * (precurvature + T(0.5) * precurvature_slope * s);
   }
   bool straight() const { return precurvature == T(0) && precurvature_slope == T(0); }
+  bool uniform() const { return diameter_slope == T(0); }
 
   template <class U>
   Rod<U> cast() const {
-    return Rod<U>{U(length), U(diameter), U(young_modulus), U(precurvature), U(precurvature_slope)};
+    return Rod<U>{U(length),       U(diameter),           U(young_modulus),
+                  U(precurvature), U(precurvature_slope), U(diameter_slope)};
   }
 };
 
@@ -84,7 +99,8 @@ struct RodTip {
   RodState<T> state;
   /// d(x, y, theta, m)(l) / d(n_x, n_y, m)(0); n(l) = n(0) needs no sensitivity.
   Eigen::Matrix<T, 4, 3> sensitivity;
-  /// max |m(s)| over the RK4 nodes (N m), for the bending strain |m| d / (2 EI).
+  /// max |m(s)| (d / d(s))^3 over the RK4 nodes (N m): the largest moment, scaled to the proximal
+  /// section (|m| itself for a uniform rod), for the bending strain |m| d / (2 EI).
   T max_abs_moment{0};
 };
 
@@ -132,6 +148,11 @@ struct LaneArray {
   EIGEN_ALWAYS_INLINE friend LaneArray operator+(LaneArray a, const LaneArray& b) { return a += b; }
   EIGEN_ALWAYS_INLINE friend LaneArray operator-(LaneArray a, const LaneArray& b) { return a -= b; }
   EIGEN_ALWAYS_INLINE friend LaneArray operator*(LaneArray a, const LaneArray& b) { return a *= b; }
+  EIGEN_ALWAYS_INLINE friend LaneArray operator/(LaneArray a, const LaneArray& b) {
+#pragma GCC unroll 8
+    for (int i = 0; i < N; ++i) a.v[i] /= b.v[i];
+    return a;
+  }
   EIGEN_ALWAYS_INLINE friend LaneArray operator-(LaneArray a) {
 #pragma GCC unroll 8
     for (int i = 0; i < N; ++i) a.v[i] = -a.v[i];
@@ -148,6 +169,14 @@ struct LaneArray {
     for (int i = 0; i < N; ++i) max.v[i] = v.v[i] > max.v[i] ? v.v[i] : max.v[i];
   }
 };
+
+template <class L>
+struct is_lane_array : std::false_type {};
+template <int N>
+struct is_lane_array<LaneArray<N>> : std::true_type {};
+
+/// The constitutive laws RodStepper steps by, from the cheapest: each handles the ones before.
+enum class RodLaw { kStraightUniform, kCurvedUniform, kTapered };
 
 /// `if (v > max) max = v` (NaN never replaces max); LaneArray has its own, lane by lane.
 template <class T>
@@ -170,14 +199,19 @@ template <class L, bool Sens>
 struct RodStepper {
   static constexpr bool kSens = Sens;
   L nx, ny, x, y, c, s, th, m;
-  L inv_ei, h, half_h, sixth_h, max_abs_moment;
+  L inv_ei, h, half_h, sixth_h, max_abs_moment;  ///< inv_ei: 1 / EI at the current node
   /// u* at the current node, and its increase over half a step and a whole step (u* is linear in
   /// s, so the stages' values are exact; all zero for a straight rod, which then steps as before).
   L u_node, du_half, du_step;
-  /// u* is not known to be zero (for a bundle: in some lane). A straight rod steps without the
-  /// three adds of u*: they sit on the latency-bound chain m -> theta' -> (c, s) and cost a fifth
-  /// of a step. Jets always step as curved: their derivatives in u* may be non-zero at u* = 0.
-  bool curved = true;
+  /// A tapered rod: 1 / EI(s) = inv_ei_base / w^4 with w = d(s) / d = 1 + taper s, evaluated at
+  /// each stage (taper = d' / d, 1/m); s_node is the current node's arc length.
+  L inv_ei_base, taper, s_node;
+  /// Which law this stepper's rods need (for a bundle: the most general of its lanes). A straight
+  /// uniform rod steps without the three adds of u*: they sit on the latency-bound chain
+  /// m -> theta' -> (c, s) and cost a fifth of a step; only a tapered rod pays for EI(s) at the
+  /// stages. Jets always step by the general law: their derivatives in u* and d' may be non-zero
+  /// at zero.
+  RodLaw law = RodLaw::kTapered;
   L tx[3], ty[3], tc[3], ts[3], tth[3], tm[3];  ///< tangents, [j]: d / d wrench_j (with Sens)
 
   /// One rod (L a scalar): its proximal state, the rod and the RK4 step count.
@@ -207,29 +241,51 @@ struct RodStepper {
     u_node = rod.precurvature;
     du_half = rod.precurvature_slope * half_h;
     du_step = rod.precurvature_slope * h;
+    inv_ei_base = inv_ei;
+    taper = rod.diameter_slope / rod.diameter;
+    s_node = L(0);
     if constexpr (std::is_arithmetic_v<L>) {
-      curved = rod.precurvature != L(0) || rod.precurvature_slope != L(0);
+      law = !rod.uniform()   ? RodLaw::kTapered
+            : rod.straight() ? RodLaw::kStraightUniform
+                             : RodLaw::kCurvedUniform;
     }
   }
 
   EIGEN_ALWAYS_INLINE void step() {
-    if (curved) {
-      step_with<true>();
+    if constexpr (std::is_arithmetic_v<L> || is_lane_array<L>::value) {
+      if (law == RodLaw::kStraightUniform) {
+        step_with<RodLaw::kStraightUniform>();
+      } else if (law == RodLaw::kCurvedUniform) {
+        step_with<RodLaw::kCurvedUniform>();
+      } else {
+        step_with<RodLaw::kTapered>();
+      }
     } else {
-      step_with<false>();
+      step_with<RodLaw::kTapered>();
     }
   }
 
   RodState<L> state() const { return RodState<L>{x, y, th, nx, ny, m}; }
 
  private:
-  template <bool Curved>
+  template <RodLaw Law>
   PCR_SIMD_CLONES void step_with() {
     using std::abs;
+    constexpr bool kCurved = Law != RodLaw::kStraightUniform, kTapered = Law == RodLaw::kTapered;
     // Stage values (the rhs of x, y, theta are c, s, k) and slopes of (c, s, m); g: tangents.
     L sc[4], ss[4], sk[4], dc[4], ds[4], dm[4];
     L gc[3][4], gs[3][4], gk[3][4], gdc[3][4], gds[3][4], gdm[3][4];  // [column][stage]
     const L u_half = u_node + du_half, u_end = u_node + du_step;      // u* at the stages
+    // 1 / EI at the stages and (d / d(s))^3 at the step's end (its strain scale): off the chain.
+    L inv_ei_half = inv_ei, inv_ei_end = inv_ei, cube_end = L(1);
+    if constexpr (kTapered) {
+      const L r_half = L(1) / (L(1) + taper * (s_node + half_h));
+      const L r_end = L(1) / (L(1) + taper * (s_node + h));
+      const L r2_half = r_half * r_half, r2_end = r_end * r_end;
+      inv_ei_half = inv_ei_base * (r2_half * r2_half);
+      inv_ei_end = inv_ei_base * (r2_end * r2_end);
+      cube_end = r2_end * r_end;
+    }
     // The loops over stages and columns are unrolled, so that the branches fold away and the
     // values stay in registers (with lanes GCC kept them rolled, going through memory).
 #pragma GCC unroll 4
@@ -240,7 +296,8 @@ struct RodStepper {
       const L sv = st == 0 ? s : L(s + a * ds[p]);
       const L mm = st == 0 ? m : L(m + a * dm[p]);
       const L& u = st == 0 ? u_node : st == 3 ? u_end : u_half;
-      const L k = Curved ? L(mm * inv_ei + u) : L(mm * inv_ei);
+      const L& ie = !kTapered || st == 0 ? inv_ei : st == 3 ? inv_ei_end : inv_ei_half;
+      const L k = kCurved ? L(mm * ie + u) : L(mm * ie);
       sc[st] = cc;
       ss[st] = sv;
       sk[st] = k;
@@ -253,11 +310,11 @@ struct RodStepper {
           if (st == 0) {
             gc[j][0] = tc[j];
             gs[j][0] = ts[j];
-            gk[j][0] = tm[j] * inv_ei;
+            gk[j][0] = tm[j] * ie;
           } else {
             gc[j][st] = tc[j] + a * gdc[j][p];
             gs[j][st] = ts[j] + a * gds[j][p];
-            gk[j][st] = (tm[j] + a * gdm[j][p]) * inv_ei;
+            gk[j][st] = (tm[j] + a * gdm[j][p]) * ie;
           }
           gdc[j][st] = -gs[j][st] * k - sv * gk[j][st];
           gds[j][st] = gc[j][st] * k + cc * gk[j][st];
@@ -284,8 +341,12 @@ struct RodStepper {
         rk4(tm[j], gdm[j]);
       }
     }
-    keep_larger(max_abs_moment, L(abs(m)));
-    if constexpr (Curved) u_node += du_step;
+    keep_larger(max_abs_moment, kTapered ? L(abs(m) * cube_end) : L(abs(m)));
+    if constexpr (kCurved) u_node += du_step;
+    if constexpr (kTapered) {
+      inv_ei = inv_ei_end;
+      s_node += h;
+    }
   }
 
   /// One RK4 update of a state or a tangent column from its four slopes (forced inline: with
@@ -319,6 +380,9 @@ void zip_lane_fields(Bundle& bundle, Rod& rod, F&& f) {
   f(bundle.u_node, rod.u_node);
   f(bundle.du_half, rod.du_half);
   f(bundle.du_step, rod.du_step);
+  f(bundle.inv_ei_base, rod.inv_ei_base);
+  f(bundle.taper, rod.taper);
+  f(bundle.s_node, rod.s_node);
   if constexpr (std::decay_t<Rod>::kSens) {
     for (int j = 0; j < 3; ++j) {
       f(bundle.tx[j], rod.tx[j]);
@@ -335,7 +399,7 @@ void zip_lane_fields(Bundle& bundle, Rod& rod, F&& f) {
 template <int N, bool Sens>
 void set_lane(RodBundle<N, Sens>& bundle, int lane, const RodStepper<double, Sens>& rod) {
   zip_lane_fields(bundle, rod, [lane](auto& lanes, const double& v) { lanes[lane] = v; });
-  bundle.curved = (lane > 0 && bundle.curved) || rod.curved;  // lane 0 is set first
+  bundle.law = lane == 0 ? rod.law : std::max(bundle.law, rod.law);  // lane 0 is set first
 }
 
 /// The one-rod stepper in lane `lane` of a bundle.
@@ -343,7 +407,7 @@ template <int N, bool Sens>
 RodStepper<double, Sens> get_lane(const RodBundle<N, Sens>& bundle, int lane) {
   RodStepper<double, Sens> rod;
   zip_lane_fields(bundle, rod, [lane](const auto& lanes, double& v) { v = lanes[lane]; });
-  rod.curved = bundle.curved;
+  rod.law = bundle.law;
   return rod;
 }
 

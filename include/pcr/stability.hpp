@@ -65,11 +65,12 @@ namespace internal {
 template <int N>
 struct LaneJacobiMonitor {
   using Lanes = LaneArray<N>;
-  Lanes half_h_over_ea;                ///< trapezoid weight h / 2 / EA (m / N)
+  Lanes half_h_over_ea;                ///< trapezoid weight h / 2 / EA (m / N), EA at s = 0
   Lanes cxx{0.0}, cxy{0.0}, cyy{0.0};  ///< int_0^s t t^T ds / EA (m / N)
-  Lanes txx, txy, tyy;                 ///< t t^T at the previous node
-  Lanes det_prev{0.0};                 ///< Jacobi determinant at the previous node
-  double conjugate[N];                 ///< first conjugate point (m), else NaN
+  Lanes txx, txy, tyy;   ///< t t^T at the previous node (tapered: times h / 2 / EA(s) there)
+  bool tapered = false;  ///< some lane's EA varies along s: each node weighs by its own EA(s)
+  Lanes det_prev{0.0};   ///< Jacobi determinant at the previous node
+  double conjugate[N];   ///< first conjugate point (m), else NaN
   int rods = 0;
 
   /// For n initialised rods (before their first step) of axial stiffnesses ea[i] (N).
@@ -81,12 +82,41 @@ struct LaneJacobiMonitor {
       txy[i] = rod.c * rod.s;
       tyy[i] = rod.s * rod.s;
       conjugate[i] = std::numeric_limits<double>::quiet_NaN();
+      tapered |= rod.law == RodLaw::kTapered;
+    }
+    if (tapered) {
+      txx *= half_h_over_ea;
+      txy *= half_h_over_ea;
+      tyy *= half_h_over_ea;
     }
   }
 
-  /// At node k of the bundle b. Built for AVX2 as well, like the step itself (four lanes in one
-  /// instruction: half the cost on the machines that have it).
-  PCR_SIMD_CLONES void step(int k, const RodBundle<N, true>& b) {
+  /// At node k of the bundle b.
+  void step(int k, const RodBundle<N, true>& b) {
+    if (tapered) {
+      step_with<true>(k, b);
+    } else {
+      step_with<false>(k, b);
+    }
+  }
+
+  /// Rod i's scaled Jacobi matrix a (a block of the forward Jacobian) with its axial compliance
+  /// up to the current node added.
+  Eigen::Matrix3d with_axial_compliance(int i, Eigen::Matrix3d a,
+                                        const ShootingScale& scale) const {
+    const double axial = scale.force / scale.length;
+    a(0, 0) += cxx[i] * axial;
+    a(0, 1) += cxy[i] * axial;
+    a(1, 0) += cxy[i] * axial;
+    a(1, 1) += cyy[i] * axial;
+    return a;
+  }
+
+ private:
+  /// Built for AVX2 as well, like the step itself (four lanes in one instruction: half the cost
+  /// on the machines that have it); the taper a template argument, so the loop has no branch.
+  template <bool Tapered>
+  PCR_SIMD_CLONES void step_with(int k, const RodBundle<N, true>& b) {
     Lanes det;
     // One lane at a time in a loop the compiler vectorises (ivdep: the bundle is not the
     // monitor; as LaneArray expressions, GCC scalarised this through memory).
@@ -95,10 +125,21 @@ struct LaneJacobiMonitor {
       // Trapezoidal rule: its O(h^2) error is well below RK4's effect on the stiffness (the
       // Jacobi fields along a bent rod, tests/test_stability.cpp).
       const double c = b.c[i], s = b.s[i];
-      const double xx = c * c, xy = c * s, yy = s * s;
-      cxx[i] += half_h_over_ea[i] * (txx[i] + xx);
-      cxy[i] += half_h_over_ea[i] * (txy[i] + xy);
-      cyy[i] += half_h_over_ea[i] * (tyy[i] + yy);
+      double xx = c * c, xy = c * s, yy = s * s;
+      if constexpr (Tapered) {  // EA(s) = EA (d(s) / d)^2 at each node, d(s) / d = 1 + taper s
+        const double w = 1.0 + b.taper[i] * b.s_node[i];
+        const double weight = half_h_over_ea[i] / (w * w);
+        xx *= weight;
+        xy *= weight;
+        yy *= weight;
+        cxx[i] += txx[i] + xx;
+        cxy[i] += txy[i] + xy;
+        cyy[i] += tyy[i] + yy;
+      } else {
+        cxx[i] += half_h_over_ea[i] * (txx[i] + xx);
+        cxy[i] += half_h_over_ea[i] * (txy[i] + xy);
+        cyy[i] += half_h_over_ea[i] * (tyy[i] + yy);
+      }
       txx[i] = xx;
       txy[i] = xy;
       tyy[i] = yy;
@@ -124,18 +165,6 @@ struct LaneJacobiMonitor {
       }
     }
     det_prev = det;
-  }
-
-  /// Rod i's scaled Jacobi matrix a (a block of the forward Jacobian) with its axial compliance
-  /// up to the current node added.
-  Eigen::Matrix3d with_axial_compliance(int i, Eigen::Matrix3d a,
-                                        const ShootingScale& scale) const {
-    const double axial = scale.force / scale.length;
-    a(0, 0) += cxx[i] * axial;
-    a(0, 1) += cxy[i] * axial;
-    a(1, 0) += cxy[i] * axial;
-    a(1, 1) += cyy[i] * axial;
-    return a;
   }
 };
 

@@ -51,6 +51,7 @@ class Limb:
     E: float  # Pa
     precurvature: float  # 1/m: intrinsic curvature u*(0) of a rod shape-set to a curve
     precurvature_slope: float  # 1/m^2: u*(s) = precurvature + precurvature_slope s
+    diameter_slope: float  # m/m: a tapered rod's d(s) = d + diameter_slope s
     q_range: tuple[float, float]  # m
     home_bow: Optional[str]  # 'left', 'right' or None: which home a pre-stressed robot is in
     @property

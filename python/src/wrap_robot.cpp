@@ -280,6 +280,11 @@ void wrap_robot(py::module_& m) {
                         rod_field<LimbParams<double>>(&Rod<double>::precurvature_slope),
                         rod_setter<LimbParams<double>>(&Rod<double>::precurvature_slope),
                         "du*/ds (1/m^2): u*(s) = precurvature + precurvature_slope s")
+          .def_property("diameter_slope",
+                        rod_field<LimbParams<double>>(&Rod<double>::diameter_slope),
+                        rod_setter<LimbParams<double>>(&Rod<double>::diameter_slope),
+                        "dd/ds (m/m) of a tapered rod: d(s) = d + diameter_slope s; 0 for a "
+                        "uniform rod")
           .def_property(
               "q_range",
               [](const LimbParams<double>& l) { return std::make_pair(l.q_min, l.q_max); },
@@ -311,7 +316,7 @@ void wrap_robot(py::module_& m) {
               "or 'right' (which home a pre-stressed robot, n >= 4, is in), or None")
           .def_property_readonly(
               "EI", [](const LimbParams<double>& l) { return l.rod.bending_stiffness(); },
-              "bending stiffness E pi d^4 / 64 (N m^2)")
+              "bending stiffness E pi d^4 / 64 (N m^2), at the proximal end of a tapered rod")
           .def("__repr__", [](const LimbParams<double>& l) {
             std::ostringstream s;
             s.precision(9);
@@ -323,6 +328,7 @@ void wrap_robot(py::module_& m) {
               s << ", precurvature=" << l.rod.precurvature
                 << ", precurvature_slope=" << l.rod.precurvature_slope;
             }
+            if (!l.rod.uniform()) s << ", diameter_slope=" << l.rod.diameter_slope;
             s << ", q_range=(" << l.q_min << ", " << l.q_max << ")"
               << (l.home_bow == 0  ? ""
                   : l.home_bow > 0 ? ", home_bow='left'"

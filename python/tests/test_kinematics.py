@@ -204,6 +204,30 @@ def test_precurved_rods_reach_the_cli_and_the_file(cli, robot, tmp_path):
                                               abs=1e-12)
 
 
+def test_tapered_rods_reach_the_cli_and_the_file(cli, robot, tmp_path):
+    # Tapered rods (Limb.diameter_slope, m/m: d(s) = d + diameter_slope s): Python, the saved file
+    # and `pcr fk` on it give one answer, and a thinner tip bends the robot differently.
+    slopes = [limb.d * (ratio - 1.0) / limb.l for limb, ratio in zip(robot.limbs, (0.6, 1.0, 1.5))]
+    tapered = robot.copy()
+    tapered.limbs = [limb.replace(diameter_slope=k) for limb, k in zip(robot.limbs, slopes)]
+    assert "diameter_slope=" in repr(tapered.limbs[0]) and "diameter_slope" not in repr(robot.limbs[0])
+    path = tmp_path / "tapered.json"
+    tapered.save(path)
+    assert [l.diameter_slope for l in pcr.Robot.load(path).limbs] == slopes
+    q = np.random.default_rng(13).uniform(-0.006, 0.006, size=(6, 3))
+    rows = run_cli(cli, "fk", q, ["q1", "q2", "q3"], "--robot", str(path))
+    batch, uniform = tapered.forward(q), robot.forward(q)
+    for k, row in enumerate(rows):
+        assert row["status"] == batch.status[k] == "converged"
+        assert batch.pose[k] == pytest.approx([float(row[c]) for c in ("x", "y", "theta")],
+                                              abs=1e-12)
+    assert np.abs(batch.pose - uniform.pose).max() > 1e-7
+    slopes[0] = -0.7 * robot.limbs[0].d / robot.limbs[0].l  # the tip at 0.3 d: refused on load
+    tapered.limbs = [limb.replace(diameter_slope=k) for limb, k in zip(robot.limbs, slopes)]
+    with pytest.raises(ValueError, match=r"limbs\[0\]\.diameter_slope"):
+        tapered.save(tmp_path / "too-thin.json")
+
+
 def test_rods_shape_set_to_arcs_act_as_a_moment_on_the_platform(robot):
     # theta' = m / EI + u0 is theta' = (m + EI u0) / EI: rods shape-set to arcs and clamped at both
     # ends are straight rods whose moment carries EI u0 more, so the platform sits where the straight

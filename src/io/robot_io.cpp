@@ -250,7 +250,7 @@ class Reader {
       const Json& l = limbs[i];
       check_object(l, path,
                    {"A", "alpha", "gamma", "B", "beta", "l", "d", "q_range", "E", "precurvature",
-                    "precurvature_slope", "home_bow"});
+                    "precurvature_slope", "diameter_slope", "home_bow"});
       LimbParams<double>& limb = out.params.limb(static_cast<int>(i));
       limb.A = position(required(l, path, "A"), join(path, "A"));
       limb.alpha = angle(required(l, path, "alpha"), join(path, "alpha"));
@@ -275,6 +275,12 @@ class Reader {
         const double bound = 2.0 * turn_per_length / limb.rod.length;
         limb.rod.precurvature_slope = in_range(
             l["precurvature_slope"], join(path, "precurvature_slope"), -bound, bound, "1/m^2");
+      }
+      // A tapered rod ends between half and twice its proximal diameter (EI within 16 times).
+      if (l.contains("diameter_slope")) {
+        const double per_length = limb.rod.diameter / limb.rod.length;
+        limb.rod.diameter_slope = in_range(l["diameter_slope"], join(path, "diameter_slope"),
+                                           -0.5 * per_length, per_length, "m/m");
       }
       const Json& range = required(l, path, "q_range");
       const Eigen::Vector2d q = position(range, join(path, "q_range"));
@@ -525,6 +531,7 @@ std::string robot_to_json(const RobotDescription& robot) {
     if (!same_bits(limb.rod.young_modulus, robot.young_modulus)) l["E"] = limb.rod.young_modulus;
     if (limb.rod.precurvature != 0.0) l["precurvature"] = limb.rod.precurvature;
     if (limb.rod.precurvature_slope != 0.0) l["precurvature_slope"] = limb.rod.precurvature_slope;
+    if (limb.rod.diameter_slope != 0.0) l["diameter_slope"] = limb.rod.diameter_slope;
     if (limb.home_bow != 0) l["home_bow"] = limb.home_bow > 0 ? "left" : "right";
     limbs.push_back(l);
   }

@@ -77,8 +77,14 @@ Kkt evaluate(const EnergyProblem& problem, const Layout& layout, const Eigen::Ve
     const auto intrinsic_turn = [&](double s) {
       return s * (rod.precurvature + 0.5 * rod.precurvature_slope * s);
     };
+    // EI over an interval: at its midpoint (a tapered rod's varies; the rule's O(h^2) error is
+    // the discretisation's own order).
+    const auto ei_over = [&](int j) {
+      const double ratio = 1.0 + rod.taper * 0.5 * (arc_length(j) + arc_length(j + 1));  // d(s) / d
+      return rod.ei * (ratio * ratio) * (ratio * ratio);
+    };
     for (int j = 0; j <= N; ++j) {
-      const double w = (j == 0 || j == N ? 2.0 : 1.0) * rod.ei / h;
+      const double w = (j == 0 || j == N ? 2.0 : 1.0) * ei_over(j) / h;
       const double d = angle(j + 1) - angle(j) -
                        (intrinsic_turn(arc_length(j + 1)) - intrinsic_turn(arc_length(j)));
       const int a = index(j + 1), b = index(j);
@@ -137,9 +143,10 @@ EnergyStability energy_stability(const EnergyProblem& problem, const EnergyState
   for (int i = 0; i < n; ++i) {
     const EnergyRod& rod = problem.rods[static_cast<std::size_t>(i)];
     if (static_cast<int>(start.angles[static_cast<std::size_t>(i)].size()) != N ||
-        !(rod.length > 0) || !(rod.ei > 0)) {
+        !(rod.length > 0) || !(rod.ei > 0) || !(1.0 + rod.taper * rod.length > 0)) {
       throw std::invalid_argument("energy_stability: rod " + std::to_string(i) +
-                                  ": positive length and EI, and the same segment count");
+                                  ": positive length, EI and tip diameter, and the same segment "
+                                  "count");
     }
     mean_length += rod.length / n;
     mean_ei += rod.ei / n;
@@ -238,7 +245,8 @@ EnergyProblem energy_problem(const RobotParams<double>& robot, const JointVector
     const LimbParams<double>& limb = robot.limb(i);
     problem.rods.push_back({limb.proximal_position(q(i)), limb.alpha, limb.B, limb.beta,
                             limb.rod.length, limb.rod.bending_stiffness(), limb.rod.precurvature,
-                            limb.rod.precurvature_slope});
+                            limb.rod.precurvature_slope,
+                            limb.rod.diameter_slope / limb.rod.diameter});
   }
   return problem;
 }

@@ -23,9 +23,11 @@ namespace {
 // CVODE state: (x, y, theta, m). n is constant (n' = 0), so it rides along as a parameter.
 constexpr int kStates = 4;
 
+// EI(s) and u*(s) come from the Rod's own formulas, evaluated at CVODE's arc lengths; the
+// RK4 stepper's stage-wise evaluation is not shared.
 struct RodData {
-  double nx, ny, inv_ei;
-  double precurvature, precurvature_slope;  ///< u*(s) = precurvature + precurvature_slope s
+  double nx, ny;
+  const Rod<double>* rod;
 };
 
 int rod_rhs(sunrealtype arc, N_Vector y, N_Vector ydot, void* user_data) {
@@ -35,12 +37,12 @@ int rod_rhs(sunrealtype arc, N_Vector y, N_Vector ydot, void* user_data) {
   const double c = std::cos(Y[2]), s = std::sin(Y[2]);
   D[0] = c;
   D[1] = s;
-  D[2] = Y[3] * data->inv_ei + data->precurvature + data->precurvature_slope * arc;
+  D[2] = Y[3] / data->rod->bending_stiffness_at(arc) + data->rod->intrinsic_curvature(arc);
   D[3] = data->nx * s - data->ny * c;
   return 0;
 }
 
-int rod_jacobian(sunrealtype /*s*/, N_Vector y, N_Vector /*fy*/, SUNMatrix J, void* user_data,
+int rod_jacobian(sunrealtype arc, N_Vector y, N_Vector /*fy*/, SUNMatrix J, void* user_data,
                  N_Vector, N_Vector, N_Vector) {
   const auto* data = static_cast<const RodData*>(user_data);
   const double theta = N_VGetArrayPointer(y)[2];
@@ -48,7 +50,7 @@ int rod_jacobian(sunrealtype /*s*/, N_Vector y, N_Vector /*fy*/, SUNMatrix J, vo
   SUNMatZero(J);
   SM_ELEMENT_D(J, 0, 2) = -s;
   SM_ELEMENT_D(J, 1, 2) = c;
-  SM_ELEMENT_D(J, 2, 3) = data->inv_ei;
+  SM_ELEMENT_D(J, 2, 3) = 1.0 / data->rod->bending_stiffness_at(arc);
   SM_ELEMENT_D(J, 3, 2) = data->nx * c + data->ny * s;
   return 0;
 }
@@ -87,11 +89,14 @@ std::string describe(const char* what, double value) {
 
 void check_rod_input(const RodState<double>& start, const Rod<double>& rod) {
   const double ei = rod.bending_stiffness(), length = rod.length;
-  const double values[] = {start.x,  start.y, start.theta,      start.nx,
-                           start.ny, start.m, rod.precurvature, rod.precurvature_slope};
-  const char* names[] = {"start.x",  "start.y", "start.theta",      "start.nx",
-                         "start.ny", "start.m", "rod.precurvature", "rod.precurvature_slope"};
-  for (int i = 0; i < 8; ++i) {
+  const double values[] = {start.x,           start.y, start.theta,      start.nx,
+                           start.ny,          start.m, rod.precurvature, rod.precurvature_slope,
+                           rod.diameter_slope};
+  const char* names[] = {
+      "start.x",           "start.y", "start.theta",      "start.nx",
+      "start.ny",          "start.m", "rod.precurvature", "rod.precurvature_slope",
+      "rod.diameter_slope"};
+  for (int i = 0; i < 9; ++i) {
     if (!std::isfinite(values[i])) {
       throw std::invalid_argument("pcr::integrate_rod_reference: non-finite " +
                                   describe(names[i], values[i]));
@@ -104,6 +109,12 @@ void check_rod_input(const RodState<double>& start, const Rod<double>& rod) {
   if (!(length > 0.0) || !std::isfinite(length)) {
     throw std::invalid_argument("pcr::integrate_rod_reference: length must be positive, " +
                                 describe("length", length));
+  }
+  if (!(rod.diameter_at(length) > 0.0)) {
+    throw std::invalid_argument(
+        "pcr::integrate_rod_reference: the tip's diameter must be "
+        "positive, " +
+        describe("d(l)", rod.diameter_at(length)));
   }
 }
 
@@ -153,7 +164,7 @@ RodState<double> integrate(const RodState<double>& start, const Rod<double>& rod
   check("CVodeInit", CVodeInit(mem.get(), rod_rhs, 0.0, y.get()));
   check("CVodeSVtolerances",
         CVodeSVtolerances(mem.get(), options.relative_tolerance, abstol.get()));
-  RodData data{start.nx, start.ny, 1.0 / ei, rod.precurvature, rod.precurvature_slope};
+  RodData data{start.nx, start.ny, &rod};
   check("CVodeSetUserData", CVodeSetUserData(mem.get(), &data));
   check("CVodeSetStopTime", CVodeSetStopTime(mem.get(), length));
 
@@ -190,7 +201,9 @@ RodState<double> integrate(const RodState<double>& start, const Rod<double>& rod
     // One internal step at a time: max |m| is tracked at every step and the samples come from
     // the dense output of the step that covers them.
     check("CVode", CVode(mem.get(), length, y.get(), &s, CV_ONE_STEP));
-    max_m = std::max(max_m, std::abs(Y[3]));
+    // Scaled to the proximal section, as RodTip::max_abs_moment: the strain's largest.
+    const double thinning = rod.diameter / rod.diameter_at(std::min(s, length));
+    max_m = std::max(max_m, std::abs(Y[3]) * thinning * thinning * thinning);
     while (samples && next_sample < arc_lengths.size() &&
            (arc_lengths[next_sample] <= s || s >= length)) {
       const double at = std::min(arc_lengths[next_sample], s);

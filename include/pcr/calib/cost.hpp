@@ -105,10 +105,13 @@ namespace internal {
 ///   (EI, n, m) -> c (EI, n, m) leaves the shape and scales m;
 ///   l -> c l with (n, m, u0, u1) -> (n / c^2, m / c, u0 / c, u1 / c^2) scales the shape about its
 ///   start by c and m by 1/c (u0, u1: the intrinsic curvature u* = u0 + u1 s, Rod).
-/// and u0 enters theta' = m / EI + u0 as a moment EI u0 would: d/du0 = EI d/dm(0), less EI on
-/// m(l). A pre-curved rod's length column takes d/du0 and d/du1 too; u1 has no such twin and is
-/// differentiated by a Jet through the rod's rod_steps RK4 steps (rods with u1 != 0 only: the
-/// slope is described, not identified).
+/// and on a uniform rod u0 enters theta' = m / EI + u0 as a moment EI u0 would: d/du0 =
+/// EI d/dm(0), less EI on m(l). A pre-curved rod's length column takes d/du0 and d/du1 too; u1 has
+/// no such twin and is differentiated by a Jet through the rod's rod_steps RK4 steps (rods with
+/// u1 != 0 only: the slope is described, not identified). A tapered rod (d' != 0) breaks two
+/// twins: EI(s) is no longer a constant times a profile fixed by d, and u0 no longer acts as a
+/// moment. Its Jet then also takes u0 and d': d (d, d') -> c (d, d') scales EI(s) by c^4, so
+/// d d/dd = 4 EI d/dEI - d' d/dd'; l -> c l takes d' -> d' / c (the taper scales with the rod).
 inline void limb_residual_partials(const LimbParams<double>& limb, double q,
                                    const Wrench<double>& w, const RodTip<double>& tip,
                                    const Pose2<double>& pose, const ShootingScale& scale,
@@ -123,17 +126,31 @@ inline void limb_residual_partials(const LimbParams<double>& limb, double q,
       (Eigen::Vector4d(0.0, 0.0, 0.0, tip.state.m) - S * Eigen::Vector3d(w.nx, w.ny, w.m)) / ei;
   Eigen::Vector4d d_length =
       Eigen::Vector4d(dx, dy, 0.0, -tip.state.m) + S * Eigen::Vector3d(2.0 * w.nx, 2.0 * w.ny, w.m);
-  const Eigen::Vector4d d_u0 = ei * (S.col(2) - Eigen::Vector4d(0.0, 0.0, 0.0, 1.0));
-  d_length += limb.rod.precurvature * d_u0;
-  if (limb.rod.precurvature_slope != 0.0) {
-    using Dual = ceres::Jet<double, 1>;
+  Eigen::Vector4d d_u0 = ei * (S.col(2) - Eigen::Vector4d(0.0, 0.0, 0.0, 1.0));
+  Eigen::Vector4d d_diameter = d_ei * 4.0 * ei / limb.rod.diameter;
+  const bool tapered = !limb.rod.uniform();
+  if (limb.rod.precurvature_slope != 0.0 || tapered) {
+    using Dual = ceres::Jet<double, 3>;  // d / d(u0, u1, d')
     const LimbParams<Dual> dual = limb.template cast<Dual>();
     Rod<Dual> rod = dual.rod;
-    rod.precurvature_slope.v[0] = 1.0;
+    rod.precurvature.v[0] = 1.0;
+    rod.precurvature_slope.v[1] = 1.0;
+    rod.diameter_slope.v[2] = 1.0;
     const RodState<Dual> end =
         integrate_rod(proximal_rod_state(dual, Dual(q), w.template cast<Dual>()), rod, rod_steps);
-    const Eigen::Vector4d d_u1(end.x.v[0], end.y.v[0], end.theta.v[0], end.m.v[0]);
-    d_length += 2.0 * limb.rod.precurvature_slope * d_u1;
+    const auto column = [&](int j) {
+      return Eigen::Vector4d(end.x.v[j], end.y.v[j], end.theta.v[j], end.m.v[j]);
+    };
+    if (tapered) d_u0 = column(0);
+    d_length += limb.rod.precurvature * d_u0;
+    d_length += 2.0 * limb.rod.precurvature_slope * column(1);
+    if (tapered) {
+      const Eigen::Vector4d d_slope = column(2);
+      d_length += limb.rod.diameter_slope * d_slope;
+      d_diameter -= limb.rod.diameter_slope * d_slope / limb.rod.diameter;
+    }
+  } else {
+    d_length += limb.rod.precurvature * d_u0;
   }
   d_length /= limb.rod.length;
   Eigen::Matrix<double, 4, kLimbParameters> d = Eigen::Matrix<double, 4, kLimbParameters>::Zero();
@@ -146,7 +163,7 @@ inline void limb_residual_partials(const LimbParams<double>& limb, double q,
   const int kBeta = static_cast<int>(ParameterKind::kBeta);
   const int kGamma = static_cast<int>(ParameterKind::kGamma);
   d.col(kE) = d_ei * ei / limb.rod.young_modulus;  // EI = E pi d^4 / 64
-  d.col(kD) = d_ei * 4.0 * ei / limb.rod.diameter;
+  d.col(kD) = d_diameter;
   d.col(kL) = d_length;
   d.col(static_cast<int>(ParameterKind::kPrecurvature)) = d_u0;
   d.col(kAlpha) = d_start_angle;

@@ -47,10 +47,13 @@ inline bool self_stressed(const ShootingProblem& problem, const ShootingVector& 
     const LimbParams<double>& limb = problem.robot().limb(i);
     const Wrench<double>& w = p.wrenches[i];
     const double across = -w.nx * std::sin(limb.alpha) + w.ny * std::cos(limb.alpha);
-    // A pre-curved rod is not straight even unloaded: its intrinsic turn counts.
-    const double turn = (std::abs(w.m) + 0.5 * std::abs(across) * limb.rod.length) *
-                            limb.rod.length / limb.rod.bending_stiffness() +
-                        std::abs(limb.rod.intrinsic_turn(limb.rod.length));
+    // A pre-curved rod is not straight even unloaded: its intrinsic turn counts. A tapered
+    // rod's bound takes its thinner end's EI.
+    const double least_ei =
+        std::min(limb.rod.bending_stiffness(), limb.rod.bending_stiffness_at(limb.rod.length));
+    const double turn =
+        (std::abs(w.m) + 0.5 * std::abs(across) * limb.rod.length) * limb.rod.length / least_ei +
+        std::abs(limb.rod.intrinsic_turn(limb.rod.length));
     straight += turn < kStraightTurn ? 1 : 0;
   }
   return straight >= 4;
@@ -391,11 +394,11 @@ inline SolveStatus bowed_variant_homotopy(const RobotParams<double>& robot,
     const double turn = side * bow * (1.0 + 0.1 * i), kappa = turn / limb.rod.length;
     start.q[i] = u(i);
     start.wrenches[i] = Wrench<double>{0.0, 0.0, limb.rod.bending_stiffness() * kappa};
-    // With n = 0 the moment stays EI kappa: a straight rod takes a circular arc; a pre-curved one
-    // turns by kappa s plus its intrinsic turn, a curve its own integration gives.
+    // With n = 0 the moment stays EI kappa: a straight uniform rod takes a circular arc; a
+    // pre-curved or tapered one takes a curve its own integration gives.
     Vector2<double> end;
     double end_angle;
-    if (limb.rod.straight()) {
+    if (limb.rod.straight() && limb.rod.uniform()) {
       end = limb.proximal_position(u(i)) +
             Vector2<double>(std::sin(limb.alpha + turn) - std::sin(limb.alpha),
                             std::cos(limb.alpha) - std::cos(limb.alpha + turn)) /

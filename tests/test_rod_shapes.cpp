@@ -1,7 +1,7 @@
-// Pre-curved rods (Rod's intrinsic curvature u*(s) = u0 + u1 s): the RK4 rod against closed forms
-// and CVODE, the cantilever against the energy reference, and robots with pre-curved rods, drawn at
-// random, solved (FK and IK, cold, in shuffled order) within 1 nm of CVODE, their stability
-// agreeing with the energy's.
+// Shaped rods: pre-curved (Rod's intrinsic curvature u*(s) = u0 + u1 s) and tapered (d(s) = d + d'
+// s, so EI(s) varies). The RK4 rod against closed forms and CVODE, the cantilever against the
+// energy reference, and robots with pre-curved and tapered rods, drawn at random, solved (FK and
+// IK, cold, in shuffled order) within 1 nm of CVODE, their stability agreeing with the energy's.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -23,7 +23,11 @@ constexpr double kLength = 0.030;
 constexpr double kPositionPromise = 1e-9;  // m: SolverOptions' default accuracy, with margin
 constexpr double kAnglePromise = 1e-6;     // rad
 
-Rod<double> rod(double u0, double u1) { return Rod<double>{kLength, 125e-6, 69e9, u0, u1}; }
+/// A rod of the paper's section, its tip tip_ratio times as thick as its base.
+Rod<double> rod(double u0, double u1, double tip_ratio = 1.0) {
+  constexpr double kDiameter = 125e-6;
+  return Rod<double>{kLength, kDiameter, 69e9, u0, u1, kDiameter * (tip_ratio - 1.0) / kLength};
+}
 
 /// CVODE tighter than its default, below RK4's error at 1024 steps on strongly bent rods.
 ReferenceOptions tight_reference() {
@@ -95,17 +99,95 @@ TEST(PrecurvedRod, FreeRodTakesItsIntrinsicShape) {
   }
 }
 
-// Loaded pre-curved rods drawn at random (turns up to a full one, loads up to 3 EI / l^2): RK4
-// converges to CVODE at fourth order (512 -> 1024 steps: over ten times closer, to within
-// 1e-9 l) where it is above the rounding floor.
+// A tapered rod under a moment alone: m(s) = m0, so theta(s) = theta0 + m0 int_0^s dt / EI(t) in
+// closed form, (64 m0 / (E pi)) (d^-3 - d(s)^-3) / (3 d'), and its centreline by quadrature: RK4
+// within 1e-9 l at 1024 steps (EI varying 16 times costs it accuracy), fourth order in between;
+// CVODE within 1e-11 l. The largest strain
+// |m| d(s) / (2 EI(s)) sits at the thinner end.
+TEST(TaperedRod, MomentBendsItByTheClosedForm) {
+  for (const double tip_ratio : {0.5, 0.8, 1.7, 2.0}) {
+    const Rod<double> r = rod(0.0, 0.0, tip_ratio);
+    const double m0 = 4e-5, theta0 = -0.4;  // N m: 0.6 % strain at the thinnest tip
+    const double d = r.diameter, slope = r.diameter_slope;
+    const auto theta = [&](double s) {
+      const double d3 = d * d * d, ds = r.diameter_at(s), ds3 = ds * ds * ds;
+      return theta0 + 64.0 * m0 / (r.young_modulus * M_PI) * (1.0 / d3 - 1.0 / ds3) / (3.0 * slope);
+    };
+    const auto centreline = [&](double s) {  // composite Simpson, 20000 panels
+      constexpr int kPanels = 20000;
+      const double h = s / kPanels;
+      Vector2<double> sum(0, 0);
+      for (int i = 0; i <= kPanels; ++i) {
+        const double weight = (i == 0 || i == kPanels) ? 1.0 : (i % 2 ? 4.0 : 2.0);
+        sum += weight * Vector2<double>(std::cos(theta(i * h)), std::sin(theta(i * h)));
+      }
+      return Vector2<double>(sum * h / 3.0);
+    };
+    const RodState<double> start{0.0, 0.0, theta0, 0.0, 0.0, m0};
+    const Vector2<double> exact = centreline(kLength);
+    double errors[2];
+    for (int pass = 0; pass < 2; ++pass) {
+      const RodTip<double> tip = integrate_rod_with_sensitivity(start, r, 512 << pass);
+      errors[pass] = (Vector2<double>(tip.state.x, tip.state.y) - exact).norm();
+      EXPECT_NEAR(tip.state.theta, theta(kLength), 1e-10) << tip_ratio;
+      EXPECT_NEAR(tip.state.m, m0, 1e-18) << tip_ratio;
+      const double thinnest = std::min(1.0, tip_ratio) * d;
+      const double strain = m0 * thinnest / (2.0 * bending_stiffness(r.young_modulus, thinnest));
+      EXPECT_NEAR(tip.max_abs_moment * d / (2.0 * r.bending_stiffness()), strain, 1e-12 * strain)
+          << tip_ratio;
+    }
+    EXPECT_LT(errors[1], 1e-9 * kLength) << tip_ratio;
+    if (errors[0] > 1e-13) EXPECT_GT(errors[0] / errors[1], 10.0) << tip_ratio;
+    const std::vector<double> arc = {0.3 * kLength, kLength};
+    const std::vector<RodState<double>> reference =
+        sample_rod_reference(start, r, arc, tight_reference());
+    for (std::size_t i = 0; i < arc.size(); ++i) {
+      EXPECT_NEAR(reference[i].theta, theta(arc[i]), 1e-11) << tip_ratio;
+      EXPECT_LT((Vector2<double>(reference[i].x, reference[i].y) - centreline(arc[i])).norm(),
+                1e-11 * kLength)
+          << tip_ratio;
+    }
+  }
+}
+
+// The tangents RK4 carries are the derivatives of its own map on a tapered, pre-curved rod: against
+// central differences of integrate_rod in each proximal wrench component.
+TEST(TaperedRod, SensitivityMatchesCentralDifferences) {
+  const Rod<double> r = rod(30.0, -900.0, 0.6);
+  const RodState<double> start{0.0, 0.0, 0.2, 0.02, -0.01, 3e-5};
+  constexpr int kSteps = 256;
+  const RodTip<double> tip = integrate_rod_with_sensitivity(start, r, kSteps);
+  const double steps[3] = {1e-6, 1e-6, 1e-9};  // N, N, N m
+  for (int j = 0; j < 3; ++j) {
+    RodState<double> plus = start, minus = start;
+    double* p[3] = {&plus.nx, &plus.ny, &plus.m};
+    double* m[3] = {&minus.nx, &minus.ny, &minus.m};
+    *p[j] += steps[j];
+    *m[j] -= steps[j];
+    const RodState<double> a = integrate_rod(plus, r, kSteps), b = integrate_rod(minus, r, kSteps);
+    const double numeric[4] = {(a.x - b.x) / (2 * steps[j]), (a.y - b.y) / (2 * steps[j]),
+                               (a.theta - b.theta) / (2 * steps[j]), (a.m - b.m) / (2 * steps[j])};
+    for (int row = 0; row < 4; ++row) {
+      EXPECT_NEAR(tip.sensitivity(row, j), numeric[row],
+                  1e-6 * std::max(std::abs(numeric[row]), 1e-3 * tip.sensitivity.col(j).norm()))
+          << "row " << row << " column " << j;
+    }
+  }
+}
+
+// Loaded pre-curved rods drawn at random (turns up to a full one, loads up to 3 EI / l^2), half of
+// them tapered (tips 0.5 to 2 times as thick): RK4 converges to CVODE at fourth order
+// (512 -> 1024 steps: over ten times closer, to within 1e-9 l) where it is above the rounding
+// floor.
 TEST(PrecurvedRod, Rk4MatchesCvodeUnderLoad) {
   std::mt19937_64 rng(20261128);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double unit = rod(0, 0).bending_stiffness() / (kLength * kLength);  // N
   double worst = 0;
   for (int trial = 0; trial < 40; ++trial) {
+    const double tip_ratio = trial % 2 ? std::pow(2.0, u(rng)) : 1.0;
     const Rod<double> r =
-        rod(2.0 * M_PI / kLength * u(rng), 4.0 * M_PI / (kLength * kLength) * u(rng));
+        rod(2.0 * M_PI / kLength * u(rng), 4.0 * M_PI / (kLength * kLength) * u(rng), tip_ratio);
     const RodState<double> start{
         0.0, 0.0, u(rng), 3.0 * unit * u(rng), 3.0 * unit * u(rng), 2.0 * unit * kLength * u(rng)};
     const RodState<double> exact = integrate_rod_reference(start, r, tight_reference());
@@ -120,63 +202,66 @@ TEST(PrecurvedRod, Rk4MatchesCvodeUnderLoad) {
     EXPECT_LT(errors[1], 1e-9 * kLength) << trial;
     worst = std::max(worst, errors[1]);
   }
-  std::printf("[ precurved ] RK4 (1024 steps) vs CVODE, 40 loaded rods: worst tip %.2e m\n", worst);
+  std::printf("[ shaped ] RK4 (1024 steps) vs CVODE, 40 loaded rods: worst tip %.2e m\n", worst);
 }
 
-// A cantilever shape-set to a clothoid, clamped along x at the origin, under a dead force at its
-// free tip: the shooting answer (m(l) = 0 by Newton on m(0), n = the load) against the energy
-// reference's discrete minimum, extrapolated from N and 2N segments (its error is O(1 / N^2)),
-// and both call it stable.
+// A cantilever shape-set to a clothoid, uniform or tapered (its tip 0.6 times as thick), clamped
+// along x at the origin, under a dead force at its free tip: the shooting answer (m(l) = 0 by
+// Newton on m(0), n = the load) against the energy reference's discrete minimum, extrapolated
+// from N and 2N segments (its error is O(1 / N^2)), and both call it stable.
 TEST(PrecurvedRod, CantileverUnderATipLoadMatchesTheEnergy) {
-  const Rod<double> r = rod(20.0, 800.0);
-  RobotParams<double> robot;
-  robot.num_limbs = 1;
-  robot.limb(0).rod = r;
-  const double unit = r.bending_stiffness() / (kLength * kLength);
   double worst = 0;
-  for (const Vector2<double> load :
-       {Vector2<double>(0.0, -unit), Vector2<double>(-1.5 * unit, 0.7 * unit),
-        Vector2<double>(2.0 * unit, 2.0 * unit)}) {
-    constexpr int kSteps = 512;
-    double m0 = 0;
-    RodTip<double> tip;
-    for (int it = 0; it < 30; ++it) {
-      tip = integrate_rod_with_sensitivity(RodState<double>{0, 0, 0, load.x(), load.y(), m0}, r,
-                                           kSteps);
-      m0 -= tip.state.m / tip.sensitivity(3, 2);
-      if (std::abs(tip.state.m) < 1e-15 * unit * kLength) break;
+  for (const double tip_ratio : {1.0, 0.6}) {
+    const Rod<double> r = rod(20.0, 800.0, tip_ratio);
+    RobotParams<double> robot;
+    robot.num_limbs = 1;
+    robot.limb(0).rod = r;
+    const double unit = r.bending_stiffness_at(kLength) / (kLength * kLength);
+    for (const Vector2<double> load :
+         {Vector2<double>(0.0, -unit), Vector2<double>(-1.5 * unit, 0.7 * unit),
+          Vector2<double>(2.0 * unit, 2.0 * unit)}) {
+      constexpr int kSteps = 512;
+      double m0 = 0;
+      RodTip<double> tip;
+      for (int it = 0; it < 30; ++it) {
+        tip = integrate_rod_with_sensitivity(RodState<double>{0, 0, 0, load.x(), load.y(), m0}, r,
+                                             kSteps);
+        m0 -= tip.state.m / tip.sensitivity(3, 2);
+        if (std::abs(tip.state.m) < 1e-15 * unit * kLength) break;
+      }
+      ASSERT_LT(std::abs(tip.state.m), 1e-13 * unit * kLength);
+      const Pose2<double> pose{tip.state.x, tip.state.y, tip.state.theta};
+      std::array<Wrench<double>, kMaxLimbs> wrenches{};
+      wrenches[0] = Wrench<double>{load.x(), load.y(), m0};
+      const JointVector q = JointVector::Zero(1);
+      EnergyProblem problem = energy_problem(robot, q);
+      problem.load.force = load;
+      Vector2<double> tips[2];
+      double eigenvalue = 0;
+      for (int pass = 0; pass < 2; ++pass) {
+        const EnergyStability e =
+            energy_stability(problem, energy_start(robot, q, pose, wrenches, 200 << pass));
+        ASSERT_TRUE(e.converged) << load.transpose();
+        tips[pass] = e.state.pose.translation();
+        eigenvalue = e.min_eigenvalue;
+      }
+      const Vector2<double> extrapolated = (4.0 * tips[1] - tips[0]) / 3.0;
+      const double error = (extrapolated - pose.translation()).norm();
+      EXPECT_LT(error, kPositionPromise) << tip_ratio << " " << load.transpose() << " N=400 alone "
+                                         << (tips[1] - pose.translation()).norm();
+      worst = std::max(worst, error);
+      EXPECT_GT(eigenvalue, 0) << load.transpose();
+      EXPECT_TRUE(equilibrium_stability(robot, q, pose, wrenches, kSteps).stable);
     }
-    ASSERT_LT(std::abs(tip.state.m), 1e-13 * unit * kLength);
-    const Pose2<double> pose{tip.state.x, tip.state.y, tip.state.theta};
-    std::array<Wrench<double>, kMaxLimbs> wrenches{};
-    wrenches[0] = Wrench<double>{load.x(), load.y(), m0};
-    const JointVector q = JointVector::Zero(1);
-    EnergyProblem problem = energy_problem(robot, q);
-    problem.load.force = load;
-    Vector2<double> tips[2];
-    double eigenvalue = 0;
-    for (int pass = 0; pass < 2; ++pass) {
-      const EnergyStability e =
-          energy_stability(problem, energy_start(robot, q, pose, wrenches, 200 << pass));
-      ASSERT_TRUE(e.converged) << load.transpose();
-      tips[pass] = e.state.pose.translation();
-      eigenvalue = e.min_eigenvalue;
-    }
-    const Vector2<double> extrapolated = (4.0 * tips[1] - tips[0]) / 3.0;
-    const double error = (extrapolated - pose.translation()).norm();
-    EXPECT_LT(error, kPositionPromise)
-        << load.transpose() << " N=400 alone " << (tips[1] - pose.translation()).norm();
-    worst = std::max(worst, error);
-    EXPECT_GT(eigenvalue, 0) << load.transpose();
-    EXPECT_TRUE(equilibrium_stability(robot, q, pose, wrenches, kSteps).stable);
   }
-  std::printf("[ precurved ] cantilever vs energy (Richardson, N = 200, 400): worst %.2e m\n",
-              worst);
+  std::printf("[ shaped ] cantilever vs energy (Richardson, N = 200, 400): worst %.2e m\n", worst);
 }
 
 /// regular_robot(n) with rods shape-set to random curves (u0 l and u1 l^2 / 2 each up to
-/// max_turn rad), each distal clamp where its stress-free rod ends: stress-free at home (0, 0, 0).
-RobotParams<double> precurved_design(int n, std::mt19937_64& rng, double max_turn) {
+/// max_turn rad) and, if `tapered`, half of them tapered (tips 0.6 to 1.6 times as thick), each
+/// distal clamp where its stress-free rod ends: stress-free at home (0, 0, 0).
+RobotParams<double> precurved_design(int n, std::mt19937_64& rng, double max_turn,
+                                     bool tapered = true) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   RobotParams<double> robot = testing::regular_robot(n);
   for (int i = 0; i < n; ++i) {
@@ -184,6 +269,10 @@ RobotParams<double> precurved_design(int n, std::mt19937_64& rng, double max_tur
     const double l = limb.rod.length;
     limb.rod.precurvature = max_turn * u(rng) / l;
     limb.rod.precurvature_slope = 2.0 * max_turn * u(rng) / (l * l);
+    if (tapered) {
+      const double tip_ratio = 1.1 + 0.5 * u(rng);
+      if (u(rng) > 0) limb.rod.diameter_slope = limb.rod.diameter * (tip_ratio - 1.0) / l;
+    }
     const RodState<double> free_tip =
         integrate_rod(proximal_rod_state(limb, 0.0, Wrench<double>{}), limb.rod, 4096);
     limb.B = Vector2<double>(free_tip.x, free_tip.y);
@@ -203,8 +292,9 @@ struct Case {
   ForwardSolution rk4, reference;
 };
 
-/// Robots of 2 to 5 pre-curved limbs, configurations drawn across their stroke box (from barely to
-/// strongly bent, at most 1 % strain), solved cold one by one, as rows in shuffled order come.
+/// Robots of 2 to 5 pre-curved limbs (half of them tapered), configurations drawn across their
+/// stroke box (from barely to strongly bent, at most 1 % strain), solved cold one by one, as rows
+/// in shuffled order come.
 std::vector<Case> precurved_cases(int& unjudged) {
   constexpr int kLimbs[] = {3, 2, 3, 4, 3, 5, 2, 3};
   std::mt19937_64 rng(20261128);
@@ -276,7 +366,7 @@ TEST_F(PrecurvedRobot, ForwardKinematicsIsWithinOneNanometreOfCvode) {
     worst = std::max(worst, e);
     worst_angle = std::max(worst_angle, std::abs(c.rk4.pose.theta - c.reference.pose.theta));
   }
-  std::printf("[ precurved ] FK, %zu configurations of 8 robots: worst %.3e m, %.3e rad\n",
+  std::printf("[ shaped ] FK, %zu configurations of 8 robots: worst %.3e m, %.3e rad\n",
               cases_->size(), worst, worst_angle);
 }
 
@@ -300,13 +390,14 @@ TEST_F(PrecurvedRobot, InverseKinematicsIsWithinOneNanometreOfCvode) {
   }
   EXPECT_GE(solved, 24);
   EXPECT_LE(other_branch, 3);
-  std::printf("[ precurved ] IK, %d poses (%d cold on another branch): worst %.3e m\n", solved,
+  std::printf("[ shaped ] IK, %d poses (%d cold on another branch): worst %.3e m\n", solved,
               other_branch, worst);
 }
 
 // The stability check against the energy reference on the drawn equilibria, and on both sides of
-// a fold: a pre-curved design with a 200 mm stroke, its platform moved along a line by warm IK
-// left on its branch until the check calls it unstable (25 mm out, rod 0 pushed 50 mm in).
+// a fold: a pre-curved design with a 200 mm stroke, uniform and tapered, its platform moved along a
+// line by warm IK left on its branch until the check calls it unstable (25 mm out, rod 0 pushed
+// 50 mm in, for the uniform rods).
 TEST_F(PrecurvedRobot, StabilityAgreesWithTheEnergy) {
   const auto energy_eigenvalue = [](const RobotParams<double>& robot, const JointVector& q,
                                     const Pose2<double>& pose,
@@ -327,37 +418,45 @@ TEST_F(PrecurvedRobot, StabilityAgreesWithTheEnergy) {
     ++drawn;
   }
   std::mt19937_64 rng(3);
-  RobotParams<double> robot = precurved_design(3, rng, 0.5);
-  for (int i = 0; i < 3; ++i) {
-    robot.limb(i).q_min = -0.1;
-    robot.limb(i).q_max = 0.1;
-  }
-  SolverOptions options;
-  options.stable_inverse = false;
-  InverseSequence sequence(robot, options, PlatformLoad<double>(), SequenceMode::kPath);
-  const double direction = 75 * M_PI / 180;
-  int flip = -1, stable = 0, unstable = 0;
-  for (int k = 0; k <= 300 && (flip < 0 || k <= flip + 30); ++k) {
-    const double t = k * 1e-4;
-    const InverseSolution& ik =
-        sequence.solve({t * std::cos(direction), t * std::sin(direction), 0.0});
-    ASSERT_TRUE(is_equilibrium(ik.summary)) << t << " " << to_string(ik.summary.status);
-    const bool is_stable = ik.summary.stability == Stability::kStable;
-    if (flip < 0 && !is_stable) flip = k;
-    // Not at the fold itself: the discrete energy model's own fold lies O(1 / N^2) away.
-    if ((flip < 0 && k % 20 == 0) ||
-        (flip >= 0 && (k == flip + 10 || k == flip + 20 || k == flip + 30))) {
-      EXPECT_EQ(is_stable, energy_eigenvalue(robot, ik.q, ik.pose, ik.wrenches) > 0)
-          << t << " margin " << ik.summary.stability_margin;
-      (is_stable ? stable : unstable) += 1;
+  const RobotParams<double> design = precurved_design(3, rng, 0.5, /*tapered=*/false);
+  // The design as drawn, then its rods tapered (tips 1.3 times as thick: the stress-free shape,
+  // hence the home, stays; the stiffness does not).
+  for (const double tip_ratio : {1.0, 1.3}) {
+    RobotParams<double> robot = design;
+    for (int i = 0; i < 3; ++i) {
+      robot.limb(i).q_min = -0.1;
+      robot.limb(i).q_max = 0.1;
+      Rod<double>& r = robot.limb(i).rod;
+      r.diameter_slope = r.diameter * (tip_ratio - 1.0) / r.length;
     }
+    SolverOptions options;
+    options.stable_inverse = false;
+    InverseSequence sequence(robot, options, PlatformLoad<double>(), SequenceMode::kPath);
+    const double direction = 75 * M_PI / 180;
+    int flip = -1, stable = 0, unstable = 0;
+    for (int k = 0; k <= 300 && (flip < 0 || k <= flip + 30); ++k) {
+      const double t = k * 1e-4;
+      const InverseSolution& ik =
+          sequence.solve({t * std::cos(direction), t * std::sin(direction), 0.0});
+      ASSERT_TRUE(is_equilibrium(ik.summary))
+          << tip_ratio << " " << t << " " << to_string(ik.summary.status);
+      const bool is_stable = ik.summary.stability == Stability::kStable;
+      if (flip < 0 && !is_stable) flip = k;
+      // Not at the fold itself: the discrete energy model's own fold lies O(1 / N^2) away.
+      if ((flip < 0 && k % 20 == 0) ||
+          (flip >= 0 && (k == flip + 10 || k == flip + 20 || k == flip + 30))) {
+        EXPECT_EQ(is_stable, energy_eigenvalue(robot, ik.q, ik.pose, ik.wrenches) > 0)
+            << tip_ratio << " " << t << " margin " << ik.summary.stability_margin;
+        (is_stable ? stable : unstable) += 1;
+      }
+    }
+    ASSERT_GE(flip, 0) << "no fold on the line, tips " << tip_ratio;
+    EXPECT_GE(unstable, 2) << tip_ratio;
+    std::printf(
+        "[ shaped ] stability vs energy: %d drawn equilibria; along a line (tips %.1f times as "
+        "thick), the check turns unstable at %.1f mm, %d stable and %d unstable points agree\n",
+        drawn, tip_ratio, flip * 0.1, stable, unstable);
   }
-  ASSERT_GE(flip, 0) << "no fold on the line";
-  EXPECT_GE(unstable, 2);
-  std::printf(
-      "[ precurved ] stability vs energy: %d drawn equilibria; along a line, the check turns "
-      "unstable at %.1f mm, %d stable and %d unstable points agree\n",
-      drawn, flip * 0.1, stable, unstable);
 }
 
 }  // namespace
