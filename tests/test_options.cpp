@@ -13,6 +13,7 @@
 
 #include "pcr/calib/accuracy.hpp"
 #include "pcr/calib/calibrator.hpp"
+#include "pcr/calib/method.hpp"
 #include "pcr/calib/sampling.hpp"
 #include "pcr/calib/sensitivity.hpp"
 #include "pcr/calib/virtual_robot.hpp"
@@ -79,6 +80,13 @@ std::vector<Field> all_fields() {
       field(C::kFunctionTolerance, &C::function_tolerance),
       field(C::kIntermediateFunctionTolerance, &C::intermediate_function_tolerance),
       field(C::kRobustScale, &C::robust_scale),
+      field(SquarePath::kSide, &SquarePath::side),
+      field(SquarePath::kTheta, &SquarePath::theta),
+      field(SquarePath::kNumPoses, &SquarePath::num_poses),
+      field(CirclePath::kDiameter, &CirclePath::diameter),
+      field(CirclePath::kTheta, &CirclePath::theta),
+      field(CirclePath::kNumPoses, &CirclePath::num_poses),
+      field(PlatformLoad<double>::kMoment, &PlatformLoad<double>::moment),
   };
   // The effects are a nested struct: VirtualRobotOptions names them with their prefix.
   for (auto [range, member] : {std::pair{UnmodelledEffects::kMisalignmentHalfWidth,
@@ -91,6 +99,34 @@ std::vector<Field> all_fields() {
                         return o.is_valid(error);
                       }});
   }
+  // The options that carry a load check its moment; the effects name it with their prefix.
+  const OptionRange moment = PlatformLoad<double>::kMoment;
+  f.push_back(Field{moment, "", false, [](double v, std::string* error) {
+                      PathStepOptions o;
+                      o.load.moment = v;
+                      return o.is_valid(error);
+                    }});
+  f.push_back(Field{moment, "", false, [](double v, std::string* error) {
+                      SamplingOptions o;
+                      o.load.moment = v;
+                      return o.is_valid(error);
+                    }});
+  f.push_back(Field{moment, "effects.load.", false, [](double v, std::string* error) {
+                      VirtualRobotOptions o;
+                      o.effects.load.moment = v;
+                      return o.is_valid(error);
+                    }});
+  // The method's paths are nested: named as "square.num_poses".
+  f.push_back(Field{SquarePath::kNumPoses, "square.", true, [](double v, std::string* error) {
+                      MethodOptions o;
+                      o.square.num_poses = static_cast<int>(v);
+                      return o.is_valid(error);
+                    }});
+  f.push_back(Field{CirclePath::kNumPoses, "circle.", true, [](double v, std::string* error) {
+                      MethodOptions o;
+                      o.circle.num_poses = static_cast<int>(v);
+                      return o.is_valid(error);
+                    }});
   return f;
 }
 
@@ -104,6 +140,10 @@ TEST(Options, DefaultsAreValid) {
   EXPECT_TRUE(VirtualRobotOptions().is_valid(&error)) << error;
   EXPECT_TRUE(WorkspaceMapOptions().is_valid(&error)) << error;
   EXPECT_TRUE(CalibrationOptions().is_valid(&error)) << error;
+  EXPECT_TRUE(SquarePath().is_valid(&error)) << error;
+  EXPECT_TRUE(CirclePath().is_valid(&error)) << error;
+  EXPECT_TRUE(PlatformLoad<double>().is_valid(&error)) << error;
+  EXPECT_TRUE(MethodOptions().is_valid(&error)) << error;
   EXPECT_TRUE(sampling_solver_options().is_valid(&error)) << error;
   EXPECT_TRUE(calibration_solver_options().is_valid(&error)) << error;
 }
@@ -153,6 +193,37 @@ TEST(Options, TheMessageSaysTheRangeAndTheValue) {
   v.solver.tolerance = kNaN;  // a nested solver's field is named as it is
   EXPECT_FALSE(v.is_valid(&error));
   EXPECT_EQ(error, "tolerance: expected a number from 1e-16 to 0.001, got nan");
+}
+
+TEST(Options, VectorFieldsAreCheckedComponentByComponent) {
+  std::string error;
+  SquarePath square;
+  square.centre = Vector2<double>(0.0, 0.2);  // 200 mm: a centre in mm typed as m
+  EXPECT_FALSE(square.is_valid(&error));
+  EXPECT_EQ(error, "centre: expected a number from -0.1 to 0.1 (m), got 0.2");
+  CirclePath circle;
+  circle.centre = Vector2<double>(kNaN, 0.0);
+  EXPECT_FALSE(circle.is_valid(&error));
+  EXPECT_EQ(error, "centre: expected a number from -0.1 to 0.1 (m), got nan");
+  SamplingOptions sampling;
+  sampling.box_min = JointVector::Constant(3, -2e-3);
+  sampling.box_max = JointVector::Constant(3, 2e-3);
+  EXPECT_TRUE(sampling.is_valid(&error)) << error;
+  sampling.box_max(2) = 2.0;
+  EXPECT_FALSE(sampling.is_valid(&error));
+  EXPECT_EQ(error, "box_max: expected a number from -1 to 1 (m), got 2");
+  sampling.box_max(2) = 2e-3;
+  sampling.box_min(0) = -kInf;
+  EXPECT_FALSE(sampling.is_valid(&error));
+  EXPECT_EQ(error, "box_min: expected a number from -1 to 1 (m), got -inf");
+  PathStepOptions step;
+  step.load.force = Vector2<double>(kNaN, 0.0);
+  EXPECT_FALSE(step.is_valid(&error));
+  EXPECT_EQ(error, "force: not finite");
+  VirtualRobotOptions robot;
+  robot.effects.load.force = Vector2<double>(0.0, kInf);
+  EXPECT_FALSE(robot.is_valid(&error));
+  EXPECT_EQ(error, "effects.load.force: not finite");
 }
 
 TEST(Options, TheSolversRefuseInvalidOptions) {
@@ -214,6 +285,26 @@ TEST(Options, TheLibraryRefusesWhatIsValidRefuses) {
   command.step.solver.rod_steps = -1;
   refused([&] { command_path(robot.params, {Pose2<double>()}, command); },
           "command_path: rod_steps: expected");
+  command = PathCommandOptions();
+  command.step.load.moment = 2e3;
+  refused([&] { command_path(robot.params, {Pose2<double>()}, command); },
+          "command_path: moment: expected a number from -1000 to 1000 (N m), got 2000");
+  SquarePath square;
+  square.side = 1.0;
+  refused([&] { square_path(square); },
+          "square_path: side: expected a number from 1e-06 to 0.1 (m), got 1");
+  CirclePath circle;
+  circle.theta = 4.0;
+  refused([&] { circle_path(circle); }, "circle_path: theta: expected");
+  sampling = SamplingOptions();
+  sampling.box_min = JointVector::Constant(3, -2.0);
+  sampling.box_max = JointVector::Constant(3, 2e-3);
+  refused([&] { poisson_disc_sample(robot.params, sampling); },
+          "poisson_disc_sample: box_min: expected a number from -1 to 1 (m), got -2");
+  MethodOptions method;
+  method.circle.num_poses = 0;
+  refused([&] { run_method(robot, v, method); },
+          "run_method: circle.num_poses: expected a number from 1 to 100000, got 0");
 }
 
 }  // namespace

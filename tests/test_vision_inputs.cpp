@@ -445,6 +445,23 @@ TEST(VisionInputs, BoardSizeIsColsXRowsAndNothingElse) {
   }
 }
 
+TEST(VisionInputs, ACircleBeyondItsRangeIsRefusedByName) {
+  std::string error;
+  EXPECT_TRUE(RenderCircle().is_valid(&error)) << error;  // the paper's 100 mm wafer
+  const RenderCircle huge{Eigen::Vector2d::Zero(), 1.0};  // a radius of a metre: 2 m across
+  EXPECT_FALSE(huge.is_valid(&error));
+  EXPECT_EQ(error, "diameter: expected a number from 0 to 1 (m), got 2");
+  Scene scene;
+  scene.circles.push_back(huge);
+  try {
+    render_scene(scene, RenderOptions());
+    ADD_FAILURE() << "rendered a 2 m circle";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "render_scene: circle: diameter: expected a number from 0 to 1 (m), got 2");
+  }
+}
+
 // cv::calibrateCamera on rendered chessboards recovers the camera that rendered them.
 TEST(VisionInputs, ChessboardCalibrationRecoversTheCamera) {
   CameraModel cam;

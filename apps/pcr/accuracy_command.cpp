@@ -149,16 +149,17 @@ void register_accuracy_command(CLI::App& app) {
   pcr::cli::add_robot_option(*cmd, args->robot);
   cmd->add_option("--path", args->path, "square, circle, or a CSV file of poses (x,y,theta)")
       ->capture_default_str();
+  // The square's ranges are the circle's (CirclePath::kDiameter is kSide's).
   cmd->add_option("--size", args->size, "square side or circle diameter (m; default 2 mm / 3 mm)")
-      ->check(within(1e-6, 0.1, "m"));
+      ->check(within(pcr::SquarePath::kSide));
   cmd->add_option("--centre", args->centre, "path centre x,y (m, in W; default 0,0)")
       ->delimiter(',')
-      ->check(within(-0.1, 0.1, "m"));
+      ->check(within(pcr::SquarePath::kCentre));
   cmd->add_option("--theta", args->theta, "constant platform orientation (rad)")
-      ->check(within(-M_PI, M_PI, "rad"))
+      ->check(within(pcr::SquarePath::kTheta))
       ->capture_default_str();
   cmd->add_option("--count", args->count, "poses on the path (default 40 square, 36 circle)")
-      ->check(within(1, 100000));
+      ->check(within(pcr::SquarePath::kNumPoses));
   cmd->add_option("--repeat", args->repeat, "ISO 9283 cycles per pose")
       ->check(within(pcr::AccuracyOptions::kRepeat))
       ->capture_default_str();

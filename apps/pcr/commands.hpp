@@ -149,7 +149,7 @@ struct SolveArguments {
   void add_to(CLI::App& command) {
     command.add_option("--force", force, "external force on the platform, fx,fy (N, in W)");
     command.add_option("--moment", moment, "external moment on the platform, mz (N m)")
-        ->check(within(-1e3, 1e3, "N m"));
+        ->check(within(PlatformLoad<double>::kMoment));
     command
         .add_option(
             "--steps", steps,

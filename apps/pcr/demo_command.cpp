@@ -595,7 +595,7 @@ void register_demo_command(CLI::App& app) {
       ->check(pcr::cli::within(pcr::AccuracyOptions::kRepeat))
       ->capture_default_str();
   cmd->add_option("--poses", args->path_poses, "poses per trajectory")
-      ->check(CLI::Range(4, 100000))
+      ->check(pcr::cli::within(pcr::SquarePath::kNumPoses))
       ->capture_default_str();
   cmd->add_option("--effects", args->effects,
                   "unmodelled effects of the virtual robot: misalignments (beta, gamma), diameters "

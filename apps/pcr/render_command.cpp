@@ -60,7 +60,7 @@ void register_render_command(CLI::App& app) {
   cmd->add_flag("!--no-rods", args->rods, "do not draw the rods nor the platform outline");
   cmd->add_option("--wafer-diameter", args->wafer,
                   "platform outline: wafer circle centred on P (m, 0 = none)")
-      ->check(within(0.0, 1.0, "m"))
+      ->check(within(pcr::vision::RenderCircle::kDiameter))
       ->capture_default_str();
   cmd->add_option("--chessboard", args->chessboard,
                   "also draw a chessboard of COLSxROWS inner corners (for pcr camera)");

@@ -113,7 +113,7 @@ void register_sample_command(CLI::App& app) {
   cmd->add_option("--box", args->box,
                   "joint sub-box: min,max for all joints, or min1,max1,...,minn,maxn (m)")
       ->delimiter(',')
-      ->check(within(-1.0, 1.0, "m"));
+      ->check(within(pcr::SamplingOptions::kBox));
   cmd->add_option("--strain-limit", args->strain_limit, "max bending strain")
       ->check(within(pcr::kStrainLimitRange))
       ->capture_default_str();

@@ -140,7 +140,7 @@ void register_workspace_command(CLI::App& app) {
       "of a reachable pose fails.");
   pcr::cli::add_robot_option(*cmd, args->robot);
   cmd->add_option("--samples", args->samples, "number of random joint vectors")
-      ->check(CLI::Range(0, 10000000))
+      ->check(pcr::cli::within(pcr::kWorkspaceSamplesRange))
       ->capture_default_str();
   cmd->add_option("--seed", args->seed, "random seed")->capture_default_str();
   cmd->add_option("--steps", args->steps,

@@ -150,6 +150,11 @@ inline ForwardSolution as_forward_solution(const InverseSolution& ik);
 /// CLI, Python, the calibration, the sampler) gives the same verdict.
 inline bool within_stroke(const RobotParams<double>& robot, const JointVector& q);
 
+/// How many random joint vectors of the stroke box a round trip of FK and IK over it solves (pcr
+/// workspace --samples; the library has no such loop): ten million round trips is already a long
+/// run, beyond is a typo.
+inline constexpr OptionRange kWorkspaceSamplesRange{"samples", 0, 1e7};
+
 /// Seeds of a solution's other equilibria at the same input (joints or pose), per rod.
 inline constexpr int kBuckledSeedsPerRod = 4;
 

@@ -9,8 +9,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
 #include <type_traits>
 
+#include "pcr/option_range.hpp"
 #include "pcr/robot.hpp"
 #include "pcr/rod.hpp"
 #include "pcr/scalar_traits.hpp"
@@ -51,6 +53,19 @@ struct PlatformLoad {
   template <class U>
   PlatformLoad<U> cast() const {
     return PlatformLoad<U>{force.template cast<U>(), U(moment)};
+  }
+
+  /// A kilonewton metre on a robot of this scale is a unit typo (N mm typed as N m).
+  static constexpr OptionRange kMoment{"moment", -1e3, 1e3, "N m"};
+  /// Whether the force is finite and the moment in its range; if not, *error (when given) names
+  /// the field with `prefix` ("effects.load." when nested). The options that carry a load check
+  /// it with theirs; the solvers take any load.
+  bool is_valid(std::string* error = nullptr, const char* prefix = "") const {
+    if (!force.allFinite()) {
+      if (error != nullptr) *error = std::string(prefix) + "force: not finite";
+      return false;
+    }
+    return kMoment.check(moment, error, prefix);
   }
 };
 

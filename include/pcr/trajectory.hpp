@@ -8,6 +8,7 @@
 // live in pcr/calib/accuracy.hpp.
 
 #include <cmath>
+#include <string>
 
 #include "pcr/kinematics.hpp"
 
@@ -29,6 +30,19 @@ struct SquarePath {
   double rotation = 0.0;             ///< rad, of the square's sides with respect to W
   double theta = 0.0;                ///< rad, constant platform orientation
   int num_poses = 40;
+
+  // The documented ranges of the fields (is_valid), as pcr accuracy takes them: a path beyond a
+  // decimetre is a unit typo (mm typed as m) no robot of this scale reaches.
+  static constexpr OptionRange kSide{"side", 1e-6, 0.1, "m"};
+  static constexpr OptionRange kCentre{"centre", -0.1, 0.1, "m"};  ///< each of x and y
+  static constexpr OptionRange kTheta{"theta", -M_PI, M_PI, "rad"};
+  static constexpr OptionRange kNumPoses{"num_poses", 1, 100000};
+  /// As SolverOptions::is_valid, naming the field with `prefix` ("square." when nested).
+  bool is_valid(std::string* error = nullptr, const char* prefix = "") const {
+    return kSide.check(side, error, prefix) && kCentre.check(centre.x(), error, prefix) &&
+           kCentre.check(centre.y(), error, prefix) && kTheta.check(theta, error, prefix) &&
+           kNumPoses.check(num_poses, error, prefix);
+  }
 
   /// The pose at `fraction` of the perimeter (wrapped into [0, 1)).
   Pose2<double> at(double fraction) const noexcept {
@@ -58,6 +72,19 @@ struct CirclePath {
   double start_angle = 0.0;                ///< rad, polar angle of the first pose about the centre
   double theta = 0.0;                      ///< rad, constant platform orientation
   int num_poses = 36;
+
+  /// The square's ranges: pcr accuracy's --size is a side or a diameter.
+  static constexpr OptionRange kDiameter{"diameter", SquarePath::kSide.lo, SquarePath::kSide.hi,
+                                         "m"};
+  static constexpr OptionRange kCentre = SquarePath::kCentre;
+  static constexpr OptionRange kTheta = SquarePath::kTheta;
+  static constexpr OptionRange kNumPoses = SquarePath::kNumPoses;
+  /// As SquarePath::is_valid.
+  bool is_valid(std::string* error = nullptr, const char* prefix = "") const {
+    return kDiameter.check(diameter, error, prefix) && kCentre.check(centre.x(), error, prefix) &&
+           kCentre.check(centre.y(), error, prefix) && kTheta.check(theta, error, prefix) &&
+           kNumPoses.check(num_poses, error, prefix);
+  }
 
   Pose2<double> at(double fraction) const noexcept {
     const double phi = start_angle + 2.0 * M_PI * (fraction - std::floor(fraction));
@@ -107,9 +134,10 @@ struct PathStepOptions {
   /// When the warm-started solve fails, try a cold start from home (the reference branch).
   bool cold_start_fallback = true;
 
-  /// As SolverOptions::is_valid, for these fields and the solver's.
+  /// As SolverOptions::is_valid, for these fields, the solver's and the load's.
   bool is_valid(std::string* error = nullptr) const {
-    return kStrainLimitRange.check(strain_limit, error) && solver.is_valid(error);
+    return kStrainLimitRange.check(strain_limit, error) && solver.is_valid(error) &&
+           load.is_valid(error);
   }
 };
 

@@ -194,9 +194,9 @@ Eigen::Matrix<double, N, 1> to_vector(const py::handle& object, const char* name
 /// ValueError with the library's message: "step: expected a number from 1e-06 to 0.01 (m), got 0".
 double in_range(double value, const OptionRange& range);
 
-/// A scalar argument the library has no range for (a pose, a load): finite, and within [lo, hi]
-/// when they are given; else ValueError "moment: expected a finite number (N m), got nan"
-/// (`unit` "" for a dimensionless one), as in_range words it.
+/// A scalar argument the library has no range for (a pose, a path's rotation): finite, and within
+/// [lo, hi] when they are given; else ValueError "rotation: expected a finite number (rad), got
+/// nan" (`unit` "" for a dimensionless one), as in_range words it.
 inline double checked_number(double value, const char* name, const char* unit,
                              double lo = -std::numeric_limits<double>::infinity(),
                              double hi = std::numeric_limits<double>::infinity()) {
@@ -226,8 +226,8 @@ InputArray input_array(const py::handle& object, int columns, const char* what, 
 /// otherwise.
 Pose2<double> to_pose(const py::handle& object, const char* what);
 
-/// The platform load from Python arguments: force (2 finite numbers fx, fy in N), moment (N m).
-/// ValueError naming the argument otherwise.
+/// The platform load from Python arguments: force (2 finite numbers fx, fy in N), moment (N m,
+/// in PlatformLoad::kMoment). ValueError naming the argument otherwise.
 PlatformLoad<double> make_load(const py::handle& force, double moment);
 
 /// The default of a `force` argument: no force, (0.0, 0.0) N.

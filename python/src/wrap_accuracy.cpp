@@ -164,12 +164,12 @@ void wrap_accuracy(py::module_& m) {
       "square_path",
       [](double side, const py::object& centre, double rotation, double theta, int count) {
         SquarePath s;
-        s.side = checked_number(side, "side", "m");
+        s.side = side;
         s.centre = to_vector<2>(centre, "centre", "x, y in m");
         s.rotation = checked_number(rotation, "rotation", "rad");
-        s.theta = checked_number(theta, "theta", "rad");
+        s.theta = theta;
         s.num_poses = count;
-        return poses_matrix(square_path(s));
+        return poses_matrix(square_path(checked_options(s)));
       },
       py::arg("side") = kPaperSquareSide, py::kw_only(),
       py::arg("centre") = py::make_tuple(0.0, 0.0), py::arg("rotation") = 0.0,
@@ -181,12 +181,12 @@ void wrap_accuracy(py::module_& m) {
       "circle_path",
       [](double diameter, const py::object& centre, double start_angle, double theta, int count) {
         CirclePath c;
-        c.diameter = checked_number(diameter, "diameter", "m");
+        c.diameter = diameter;
         c.centre = to_vector<2>(centre, "centre", "x, y in m");
         c.start_angle = checked_number(start_angle, "start_angle", "rad");
-        c.theta = checked_number(theta, "theta", "rad");
+        c.theta = theta;
         c.num_poses = count;
-        return poses_matrix(circle_path(c));
+        return poses_matrix(circle_path(checked_options(c)));
       },
       py::arg("diameter") = kPaperCircleDiameter, py::kw_only(),
       py::arg("centre") = py::make_tuple(0.0, 0.0), py::arg("start_angle") = 0.0,

@@ -12,7 +12,7 @@ namespace pcr::python {
 
 PlatformLoad<double> make_load(const py::handle& force, double moment) {
   return PlatformLoad<double>{to_vector<2>(force, "force", "fx, fy in N"),
-                              checked_number(moment, "moment", "N m")};
+                              in_range(moment, PlatformLoad<double>::kMoment)};
 }
 
 namespace {

@@ -152,7 +152,7 @@ def test_force_and_moment_are_checked(robot):
            robot.home, force="ab")
     raises(ValueError, "force: expected 2 finite numbers (fx, fy in N), got None",
            robot.home, force=None)
-    raises(ValueError, "moment: expected a finite number (N m), got nan",
+    raises(ValueError, "moment: expected a number from -1000 to 1000 (N m), got nan",
            robot.forward, q, moment=NAN)
     # defaults, tuples, lists and arrays all work
     assert robot.forward(q).converged and robot.home().converged
@@ -192,7 +192,7 @@ def test_sensitivity_arguments_are_checked_up_front(robot):
            pcr.sensitivity, robot, step=1e-300)
     raises(ValueError, "step: expected a number from 1e-06 to 0.01 (m), got 0",
            pcr.sensitivity_configurations, robot, 0.0)
-    raises(ValueError, "moment: expected a finite number (N m), got inf",
+    raises(ValueError, "moment: expected a number from -1000 to 1000 (N m), got inf",
            pcr.sensitivity, robot, moment=math.inf)
     raises(ValueError, "force: expected 2 finite numbers (fx, fy in N), got 1 number (0)",
            pcr.sensitivity, robot, force=[0])
@@ -208,7 +208,8 @@ def test_calibration_numbers_are_checked(robot):
            pcr.square_path, centre=(0, 0, 0))
     raises(ValueError, "centre: expected 2 finite numbers (x, y in m), got (0, nan)",
            pcr.circle_path, centre=(0, NAN))
-    raises(ValueError, "side: expected a finite number (m), got nan", pcr.square_path, NAN)
+    raises(ValueError, "side: expected a number from 1e-06 to 0.1 (m), got nan",
+           pcr.square_path, NAN)
     raises(ValueError, "start_angle: expected a finite number (rad), got nan",
            pcr.circle_path, start_angle=NAN)
     raises(ValueError, "strain_limit: expected a number from 1e-06 to 0.1, got nan",
@@ -223,6 +224,18 @@ def test_calibration_numbers_are_checked(robot):
            pcr.platform_parameter_jacobian, robot, [0, 0, 0], force=(NAN, 0))
     # a moment without a force is applied, not dropped
     assert pcr.VirtualRobot(robot, moment=1e-4).load[1] == 1e-4
+
+
+@needs_calibration
+def test_paths_take_the_library_ranges():
+    raises(ValueError, "theta: expected a number from -3.14159 to 3.14159 (rad), got 4",
+           pcr.square_path, theta=4.0)
+    raises(ValueError, "diameter: expected a number from 1e-06 to 0.1 (m), got 0.2",
+           pcr.circle_path, 0.2)
+    raises(ValueError, "centre: expected a number from -0.1 to 0.1 (m), got -0.5",
+           pcr.circle_path, centre=(0.0, -0.5))
+    raises(ValueError, "num_poses: expected a number from 1 to 100000, got 100001",
+           pcr.square_path, count=100001)
 
 
 @needs_vision
@@ -259,6 +272,20 @@ def test_vision_vectors_and_numbers_are_checked(robot):
     (["accuracy"], "--strain-limit", 0.0,
      lambda robot: pcr.command_path(robot, pcr.square_path(), strain_limit=0.0),
      "strain_limit: expected a number from 1e-06 to 0.1, got 0"),
+    (["accuracy"], "--size", 0.5, lambda robot: pcr.square_path(0.5),
+     "side: expected a number from 1e-06 to 0.1 (m), got 0.5"),
+    (["accuracy"], "--centre", 0.2, lambda robot: pcr.square_path(centre=(0.2, 0.0)),
+     "centre: expected a number from -0.1 to 0.1 (m), got 0.2"),
+    (["accuracy"], "--count", 0, lambda robot: pcr.circle_path(count=0),
+     "num_poses: expected a number from 1 to 100000, got 0"),
+    (["demo", "--no-vision"], "--poses", 0,
+     lambda robot: pcr.run_method(robot, pcr.VirtualRobot(robot), square_poses=0),
+     "square.num_poses: expected a number from 1 to 100000, got 0"),
+    (["fk"], "--moment", 2000.0, lambda robot: robot.forward([0.0, 0.0, 0.0], moment=2000.0),
+     "moment: expected a number from -1000 to 1000 (N m), got 2000"),
+    (["sample", "--output", "s.csv"], "--box", 2.0,
+     lambda robot: pcr.poisson_disc_sample(robot, count=3, box_min=[2.0] * 3, box_max=[2.0] * 3),
+     "box_min: expected a number from -1 to 1 (m), got 2"),
 ])
 def test_the_cli_and_python_refuse_what_the_library_refuses(cli, robot, tmp_path, command,
                                                             option, value, call, message):

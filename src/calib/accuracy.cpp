@@ -15,10 +15,7 @@ namespace {
 
 template <class Path>
 std::vector<Pose2<double>> path_poses(const Path& spec, const char* name) {
-  if (spec.num_poses < 1) {
-    throw InputError(std::string(name) + ": num_poses must be >= 1, got " +
-                     std::to_string(spec.num_poses));
-  }
+  require_valid(spec, name);
   std::vector<Pose2<double>> out(static_cast<std::size_t>(spec.num_poses));
   fill_path(spec, out.data(), spec.num_poses);
   return out;

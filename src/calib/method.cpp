@@ -84,6 +84,7 @@ CalibratedModel parse_calibrated_model(const std::string& name) {
 bool MethodOptions::is_valid(std::string* error) const {
   return (!sensitivity || sensitivity_options.is_valid(error)) && sampling.is_valid(error) &&
          kValidationCount.check(validation_count, error) && calibration.is_valid(error) &&
+         square.is_valid(error, "square.") && circle.is_valid(error, "circle.") &&
          accuracy.is_valid(error) && (!workspace_map || map.is_valid(error));
 }
 

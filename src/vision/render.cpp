@@ -107,6 +107,7 @@ std::vector<Eigen::Vector2d> tag_corner_pixels(const Scene& scene, const RenderT
 
 GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
   require_valid(opt, "render_scene");
+  for (const RenderCircle& c : scene.circles) require_valid(c, "render_scene: circle");
   const CameraModel& cam = scene.camera;
   if (cam.width <= 0 || cam.height <= 0) throw std::invalid_argument("render_scene: empty camera");
   Painter painter{scene, opt, {}};

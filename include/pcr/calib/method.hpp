@@ -71,7 +71,8 @@ struct MethodOptions {
   std::function<void(MethodStage, const MethodResult&)> on_stage_end;
 
   static constexpr OptionRange kValidationCount{"validation_count", 1, 100000};
-  /// As SolverOptions::is_valid, over every stage's options (named by their fields).
+  /// As SolverOptions::is_valid, over every stage's options (named by their fields; the paths'
+  /// as "square.num_poses").
   bool is_valid(std::string* error = nullptr) const;
 };
 

@@ -110,13 +110,25 @@ struct SamplingOptions {
   /// The D-optimal design weighs the rows by the noise: it may not be zero.
   static constexpr OptionRange kNoisePosition{"noise_position", 1e-12, 0.01, "m"};
   static constexpr OptionRange kNoiseAngle{"noise_angle", 1e-12, 0.1, "rad"};
-  /// As SolverOptions::is_valid, for these fields and the solver's (the box is checked against
-  /// the robot's strokes by the sampler).
+  /// Each bound of box_min and box_max: beyond a metre, a unit typo (mm typed as m).
+  static constexpr OptionRange kBox{"box", -1, 1, "m"};
+  /// As SolverOptions::is_valid, for these fields, the solver's and the load's (the box is also
+  /// checked against the robot's strokes by the sampler).
   bool is_valid(std::string* error = nullptr) const {
     return kCount.check(count, error) && kMinDistance.check(min_distance, error) &&
            kStrainLimitRange.check(strain_limit, error) && kAttempts.check(attempts, error) &&
            kCandidates.check(candidates, error) && kNoisePosition.check(noise_position, error) &&
-           kNoiseAngle.check(noise_angle, error) && solver.is_valid(error);
+           kNoiseAngle.check(noise_angle, error) && box_is_valid(box_min, "box_min", error) &&
+           box_is_valid(box_max, "box_max", error) && solver.is_valid(error) &&
+           load.is_valid(error);
+  }
+  /// Whether every bound of `box` lies in kBox; the message names `field` ("box_max").
+  static bool box_is_valid(const JointVector& box, const char* field, std::string* error) {
+    const OptionRange range{field, kBox.lo, kBox.hi, kBox.unit};
+    for (Eigen::Index i = 0; i < box.size(); ++i) {
+      if (!range.check(box(i), error)) return false;
+    }
+    return true;
   }
 };
 

@@ -33,10 +33,10 @@ struct SensitivityOptions {
   /// Below, the configurations collapse onto the centre (a table of zeros); above, they leave
   /// the strokes of a robot of the paper's size.
   static constexpr OptionRange kStep{"step", 1e-6, 0.01, "m"};
-  /// As SolverOptions::is_valid, for the step and the solver (the centre is checked against the
-  /// robot's strokes by sensitivity_configurations).
+  /// As SolverOptions::is_valid, for the step, the solver and the load (the centre is checked
+  /// against the robot's strokes by sensitivity_configurations).
   bool is_valid(std::string* error = nullptr) const {
-    return kStep.check(step, error) && solver.is_valid(error);
+    return kStep.check(step, error) && solver.is_valid(error) && load.is_valid(error);
   }
 };
 

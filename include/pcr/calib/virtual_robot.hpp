@@ -46,17 +46,11 @@ struct UnmodelledEffects {
 
   static constexpr OptionRange kMisalignmentHalfWidth{"misalignment_half_width", 0, 0.1, "rad"};
   static constexpr OptionRange kDiameterHalfWidth{"diameter_half_width", 0, 1e-3, "m"};
-  /// As SolverOptions::is_valid; the load is any finite one.
+  /// As SolverOptions::is_valid, for these fields and the load's.
   bool is_valid(std::string* error = nullptr) const {
-    if (!kMisalignmentHalfWidth.check(misalignment_half_width, error, "effects.") ||
-        !kDiameterHalfWidth.check(diameter_half_width, error, "effects.")) {
-      return false;
-    }
-    if (!load.force.allFinite() || !std::isfinite(load.moment)) {
-      if (error != nullptr) *error = "effects.load: not finite";
-      return false;
-    }
-    return true;
+    return kMisalignmentHalfWidth.check(misalignment_half_width, error, "effects.") &&
+           kDiameterHalfWidth.check(diameter_half_width, error, "effects.") &&
+           load.is_valid(error, "effects.load.");
   }
 };
 

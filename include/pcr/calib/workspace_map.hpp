@@ -49,10 +49,11 @@ struct WorkspaceMapOptions {
   static constexpr OptionRange kTheta{"theta", -2 * M_PI, 2 * M_PI, "rad"};
   /// 4000 x 4000 points is 16 million IK solves, minutes of work: beyond, a typo.
   static constexpr OptionRange kGrid{"grid", 2, 4000};
-  /// As SolverOptions::is_valid, for these fields and the solver's (the range, given or from the
-  /// strokes, is checked by workspace_map).
+  /// As SolverOptions::is_valid, for these fields, the solver's and the load's (the range, given
+  /// or from the strokes, is checked by workspace_map).
   bool is_valid(std::string* error = nullptr) const {
-    return kTheta.check(theta, error) && kGrid.check(grid, error) && solver.is_valid(error);
+    return kTheta.check(theta, error) && kGrid.check(grid, error) && solver.is_valid(error) &&
+           load.is_valid(error);
   }
 };
 

@@ -40,6 +40,12 @@ struct RenderCircle {
   double radius_m{0.05};
   double width_m{300e-6};
   float intensity{0.25f};
+
+  /// Of the circle, 2 radius_m (pcr render --wafer-diameter, where 0 draws none): a metre covers
+  /// any platform; beyond, a unit typo (mm typed as m).
+  static constexpr OptionRange kDiameter{"diameter", 0, 1, "m"};
+  /// As pcr::SolverOptions::is_valid.
+  bool is_valid(std::string* error = nullptr) const { return kDiameter.check(2 * radius_m, error); }
 };
 
 /// A chessboard with `cols` x `rows` inner corners; its corner (0, 0) at `pose`, squares along +x,
@@ -92,7 +98,7 @@ struct RenderOptions {
   }
 };
 
-/// Throws InputError for options out of their ranges.
+/// Throws InputError for options or circles out of their ranges.
 GrayImage render_scene(const Scene& scene, const RenderOptions& options);
 
 /// Ground-truth pixel coordinates of a tag's corners (same order as TagDetection::corners).
