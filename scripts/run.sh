@@ -31,9 +31,10 @@ APT_PACKAGES=(
   python3 python3-dev python3-venv python3-pip
 )
 # Python packages of the project virtual environment (.venv); pybind11's minimum is checked below.
-# dask, distributed, pandas and pyarrow are pcr.study's (the [study] extra).
+# dask, distributed, pandas and pyarrow are pcr.study's (the [study] extra); nbclient, nbformat
+# and ipykernel run the example notebook in the tests (python/tests/test_notebook.py).
 PIP_PACKAGES=('pybind11>=2.12' numpy pytest scikit-build-core matplotlib dask distributed pandas
-  pyarrow)
+  pyarrow nbclient nbformat ipykernel)
 
 JOBS=${PCR_JOBS:-$(nproc)}
 VENV=$ROOT/.venv
@@ -169,15 +170,16 @@ run_demo() {
   build_main "${targets[@]}"
   log "Running ${MAIN_JOB[*]} $*"
   "${MAIN_JOB[@]}" "$@"
-  # The plots (matplotlib, through the Python package built in build/python).
+  # The figures, drawn from the demo's files by the Python package built in build/python
+  # (matplotlib): $out/figures/*.png and $out/figures.md, which report.md links to.
   local out=pcr-demo arg previous=
   for arg in "$@"; do
     [[ $previous == --output ]] && out=$arg
     [[ $arg == --output=* ]] && out=${arg#--output=}
     previous=$arg
   done
-  log "Plotting into $out/plots"
-  PYTHONPATH=$ROOT/build/python MPLBACKEND=Agg "$VENV/bin/python" python/examples/demo_plots.py "$out"
+  log "Drawing the figures into $out/figures"
+  PYTHONPATH=$ROOT/build/python MPLBACKEND=Agg "$VENV/bin/python" -m pcr.plot "$out"
 }
 
 run_tests() {

@@ -78,8 +78,9 @@ TEST(Demo, RefusesSomeoneElsesDirectory) {
   EXPECT_FALSE(fs::exists(out / "report.json"));
 }
 
-// Without the measurement (--no-vision) nothing had made images/ when the maps were written there:
-// the run failed at its very end, without a report. The stages are numbered from one list.
+// Without the measurement (--no-vision) nothing makes images/: the run writes its report and the
+// map's data all the same (the figures are drawn from it by Python, not here). The stages are
+// numbered from one list.
 TEST(Demo, NoVisionRunIntoAFreshDirectoryWritesItsReport) {
   const pcr::test::ScratchDirectory scratch("demo");
   const fs::path out = scratch.path() / "fresh";
@@ -96,9 +97,15 @@ TEST(Demo, NoVisionRunIntoAFreshDirectoryWritesItsReport) {
   EXPECT_TRUE(fs::exists(out / "report.md"));
   EXPECT_TRUE(fs::exists(out / "report.json"));
   const nlohmann::json report = read_json(out / "report.json");
-  for (const auto& image : report["workspace"]["images"]) {
-    EXPECT_TRUE(fs::exists(out / image.get<std::string>())) << image;
+  for (const auto& file : report["workspace"]["files"]) {
+    EXPECT_TRUE(fs::exists(out / file.get<std::string>())) << file;
   }
+  EXPECT_FALSE(fs::exists(out / "images"));
+  // The figures are Python's (python -m pcr.plot writes figures.md): the report links to them.
+  std::ifstream md(out / "report.md");
+  std::stringstream report_md;
+  report_md << md.rdbuf();
+  EXPECT_NE(report_md.str().find("[figures.md](figures.md)"), std::string::npos);
   // Stages [1/N] to [N/N], none beyond.
   const std::string text = progress.str();
   const std::size_t last = text.rfind("\n[");

@@ -292,8 +292,8 @@ std::string accuracy_section(const pcr::MethodResult& result, const DemoArgs& ar
          "its noise) and mapped to W with each model's identified extrinsics, as in the paper.\n";
 }
 
-/// Where the identified robot can work at theta = 0: the map of `pcr map` (CSV) and, with the
-/// vision library, heat maps of the stability margin, the singularity and the strain.
+/// Where the identified robot can work at theta = 0: the map of `pcr map` (CSV). Its figures are
+/// drawn from the CSV by Python (`python -m pcr.plot`, into figures.md): data here, not pictures.
 std::string workspace_section(const pcr::MethodResult& result, const fs::path& out, json& report) {
   const pcr::WorkspaceMap& map = *result.map;
   const int n = result.identified.params.num_limbs;
@@ -312,34 +312,6 @@ std::string workspace_section(const pcr::MethodResult& result, const fs::path& o
     if (p.stable) max_3sigma = std::max(max_3sigma, p.position_3sigma);
   }
   const pcr::RotationRange& rotation = result.rotation_range;
-  std::vector<std::string> images;
-#ifdef PCR_HAS_VISION
-  // Over the reachable points; log scales for quantities that span decades.
-  const auto field = [&](const char* name, auto value) {
-    std::vector<double> values(map.points.size(), std::numeric_limits<double>::quiet_NaN());
-    double lo = HUGE_VAL, hi = -HUGE_VAL;
-    for (std::size_t k = 0; k < values.size(); ++k) {
-      if (!map.points[k].reachable) continue;
-      values[k] = value(map.points[k]);
-      if (std::isfinite(values[k])) {
-        lo = std::min(lo, values[k]);
-        hi = std::max(hi, values[k]);
-      }
-    }
-    if (!(hi > lo)) return;
-    // The measurement, when it ran, made the directory; without it (--no-vision) it is made here.
-    fs::create_directories(out / "images");
-    const std::string file = std::string("images/map-") + name + ".png";
-    pcr::vision::write_heat_map_png(values, map.nx, map.ny, lo, hi, (out / file).string());
-    images.push_back(file);
-  };
-  field("stability-margin", [](const pcr::WorkspaceMapPoint& p) {
-    return std::copysign(std::log10(1.0 + std::abs(p.stability_margin)), p.stability_margin);
-  });
-  field("singularity", [](const pcr::WorkspaceMapPoint& p) { return std::log10(p.singularity); });
-  field("max-strain", [](const pcr::WorkspaceMapPoint& p) { return p.max_strain; });
-  field("position-3sigma", [](const pcr::WorkspaceMapPoint& p) { return p.position_3sigma; });
-#endif
   report["workspace"] = {{"theta", map.theta},
                          {"grid", map.nx},
                          {"range_m", {map.x_min, map.x_max, map.y_min, map.y_max}},
@@ -351,8 +323,7 @@ std::string workspace_section(const pcr::MethodResult& result, const fs::path& o
                          {"max_position_3sigma_m", max_3sigma},
                          {"rotation_range_at_centre_rad", {rotation.theta_min, rotation.theta_max}},
                          {"seconds", map.seconds},
-                         {"files", {"map-identified.csv"}},
-                         {"images", images}};
+                         {"files", {"map-identified.csv"}}};
   char text[1024];
   std::snprintf(
       text, sizeof text,
@@ -366,9 +337,9 @@ std::string workspace_section(const pcr::MethodResult& result, const fs::path& o
       map.nx, map.ny, map.x_min * 1e3, map.x_max * 1e3, map.y_min * 1e3, map.y_max * 1e3,
       map.seconds, map.reachable_area * 1e6, map.stable_area * 1e6, unstable, reachable,
       min_singularity, rotation.theta_min, rotation.theta_max, max_3sigma * 1e9);
-  std::string md = text;
-  for (const std::string& image : images) md += "\n![" + image + "](" + image + ")\n";
-  return md;
+  return std::string(text) +
+         "\nThe maps (predicted error, stability margin, singularity, strain, with the workspace "
+         "border and the robot's home): [figures.md](figures.md).\n";
 }
 
 /// Table 3 and the stages, with the fit not chosen when both were tried.
@@ -468,7 +439,9 @@ void run_demo(const DemoArgs& args) {
       "# pcr demo: the method of Mauze et al. (2021) on the built-in virtual robot\n\n";
   md += "Seed " + std::to_string(args.seed) + ", unmodelled effects: " +
         (args.effects.empty() ? std::string("none") : CLI::detail::join(args.effects, ", ")) +
-        ". Units: um and urad in the tables, SI in every file. Files: see report.json.\n\n";
+        ". Units: um and urad in the tables, SI in every file. Files: see report.json. Figures: "
+        "[figures.md](figures.md), drawn from these files by `python -m pcr.plot DIR` (which "
+        "`scripts/run.sh demo` runs).\n\n";
 
   // The virtual robot: a truth drawn from the design inside the paper's uncertainty intervals,
   // true extrinsics, the paper's repeatability as measurement noise.

@@ -2,6 +2,7 @@
 import glob
 import os
 import shutil
+import subprocess
 
 import matplotlib
 import pytest
@@ -42,3 +43,16 @@ def cli():
 @pytest.fixture
 def robot():
     return pcr.Robot.default()
+
+
+@pytest.fixture(scope="session")
+def demo_output(cli, tmp_path_factory):
+    """A small `pcr demo` output directory (no vision; few configurations, cycles and poses)."""
+    if " demo " not in subprocess.run([cli, "--help"], capture_output=True, text=True).stdout:
+        pytest.skip("pcr demo is not built (it needs pcr::calib)")
+    out = tmp_path_factory.mktemp("demo") / "out"
+    result = subprocess.run([cli, "demo", "--quiet", "--no-vision", "--output", str(out),
+                             "--calibration", "20", "--validation", "4", "--repeat", "3",
+                             "--poses", "4"], capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    return out

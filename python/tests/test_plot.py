@@ -72,3 +72,182 @@ def test_plot_trajectory_accuracy(tmp_path):
     check_png(tmp_path / "traj.png")
     with pytest.raises(ValueError):
         pcr.plot.plot_trajectory_accuracy(commanded, attained[:3])
+
+
+# ---- figures from files: units, colour bars against the data, titles, the demo's figures -----
+
+def texts(fig):
+    """Every string the figure shows: titles, labels, legends, texts, colour bar labels."""
+    out = [t.get_text() for t in fig.findobj(matplotlib.text.Text)]
+    return "\n".join(out)
+
+
+MAP_COLUMNS = ("x,y,theta,reachable,stable,status,q1,q2,q3,max_strain,stability_margin,"
+               "singularity,position_3sigma,orientation_3sigma,worst_position,worst_orientation")
+
+
+def small_map(path, nx=14, ny=12):
+    """A `pcr map` CSV: reachable inside a disc, an unstable patch, two positions without an
+    equilibrium (IK singular), a predicted error spanning decades; rows in a shuffled order."""
+    x, y = np.meshgrid(np.linspace(-6e-3, 7e-3, nx), np.linspace(-5e-3, 6e-3, ny))
+    r = np.hypot(x, y) / 5e-3
+    reachable = r < 1
+    stable = ~((x > 2e-3) & (y > 2e-3))
+    found = np.ones_like(r, bool)
+    found[-1, -2:] = False
+    rows = []
+    for k in np.random.default_rng(1).permutation(x.size):
+        j, i = divmod(k, nx)
+        v = (lambda a: a if found[j, i] else np.nan)
+        rows.append([x[j, i], y[j, i], 0.0, int(reachable[j, i] and found[j, i]),
+                     int(stable[j, i] and found[j, i]),
+                     "converged" if reachable[j, i] else ("out_of_range" if found[j, i]
+                                                          else "singular"),
+                     v(1e-3), v(-1e-3), v(0.0), v(0.002 + 0.001 * r[j, i]),
+                     v((1.0 if stable[j, i] else -1.0) * 100 * (2 - r[j, i] / 2)),
+                     v(1e-3 / (1 + 10 * r[j, i] ** 2)), v(2e-8 * (1 + 30 * r[j, i] ** 3)),
+                     v(1e-6 * (1 + r[j, i])), np.nan, np.nan])
+    with open(path, "w") as f:
+        f.write(MAP_COLUMNS + "\n")
+        for row in rows:
+            f.write(",".join(str(c) for c in row) + "\n")
+    return path
+
+
+def test_read_map_makes_the_grid_from_any_row_order(tmp_path):
+    m = pcr.plot.read_map(small_map(tmp_path / "map.csv"))
+    assert m["x"].shape == (14,) and m["y"].shape == (12,) and np.all(np.diff(m["x"]) > 0)
+    assert m["reachable"].dtype == bool and m["reachable"].shape == (12, 14)
+    assert m["status"][-1, -1] == "singular" and np.isnan(m["max_strain"][-1, -1])
+    j, i = 3, 5
+    assert m["position_3sigma"][j, i] == pytest.approx(
+        2e-8 * (1 + 30 * (np.hypot(m["x"][i], m["y"][j]) / 5e-3) ** 3))
+    with pytest.raises(ValueError, match="grid"):
+        pcr.plot.read_map({"x": [0.0, 1.0, 1.0], "y": [0.0, 0.0, 1.0], "theta": [0.0] * 3})
+
+
+def test_plot_map_shows_the_data_with_units_marks_and_home(robot, tmp_path):
+    csv = small_map(tmp_path / "map.csv")
+    m = pcr.plot.read_map(csv)
+    fig = pcr.plot.plot_map(csv, "position_3sigma", robot, path=tmp_path / "p3.png")
+    check_png(tmp_path / "p3.png")
+    ax, bar = fig.axes
+    assert "(mm)" in ax.get_xlabel() and "(mm)" in ax.get_ylabel() and ax.get_aspect() == 1.0
+    assert "µm" in bar.get_ylabel()
+    mesh = ax.collections[0]
+    values = m["position_3sigma"][np.isfinite(m["max_strain"])] * 1e6  # every equilibrium
+    assert isinstance(mesh.norm, matplotlib.colors.LogNorm)  # 2.5 decades
+    assert mesh.norm.vmin == pytest.approx(values.min()) and mesh.norm.vmax == pytest.approx(
+        values.max())
+    shown = texts(fig)
+    assert robot.name in ax.get_title() and "3σ position error" in ax.get_title()
+    for mark in ("workspace border", "outside the stroke", "unstable", "no equilibrium (IK: "
+                 "singular)", "home (q = 0)"):
+        assert mark in shown, mark
+    # Home is drawn where FK puts the platform at q = 0.
+    home = robot.forward(np.zeros(robot.num_limbs)).pose
+    marker = [line for line in ax.get_lines() if line.get_label().startswith("home")][0]
+    assert marker.get_xdata()[0] == pytest.approx(home.x * 1e3)
+
+    # A linear scale when the values span less than a decade; the margin of stable ones only.
+    fig = pcr.plot.plot_map(m, "max_strain", name="my robot")
+    mesh = fig.axes[0].collections[0]
+    strain = m["max_strain"][np.isfinite(m["max_strain"])] * 100
+    assert type(mesh.norm) is matplotlib.colors.Normalize
+    assert (mesh.norm.vmin, mesh.norm.vmax) == pytest.approx((strain.min(), strain.max()))
+    assert "%" in fig.axes[1].get_ylabel() and fig.axes[0].get_title().startswith("my robot: ")
+    fig = pcr.plot.plot_map(m, "stability_margin")
+    margin = m["stability_margin"][m["stable"] & np.isfinite(m["max_strain"])]
+    assert fig.axes[0].collections[0].norm.vmin == pytest.approx(margin.min()) and margin.min() > 0
+    with pytest.raises(ValueError, match="no value"):
+        pcr.plot.plot_map(m, "worst_position")
+    with pytest.raises(ValueError, match="quantity"):
+        pcr.plot.plot_map(m, "colour")
+    before = csv.read_bytes()
+    with pytest.raises(ValueError, match="input"):
+        pcr.plot.plot_map(csv, "singularity", path=csv)
+    assert csv.read_bytes() == before
+
+
+def test_trajectory_errors_are_magnified_by_the_printed_factor(tmp_path):
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    commanded = np.column_stack([1.5e-3 * np.cos(t), 1.5e-3 * np.sin(t), np.zeros_like(t)])
+    error = 2e-6 * np.column_stack([np.cos(2 * t), np.sin(3 * t), 1e-1 * np.sin(t)])
+    fig = pcr.plot.plot_trajectory_accuracy(commanded, commanded + error, name="bot",
+                                            label="circle, test", path=tmp_path / "c.png")
+    check_png(tmp_path / "c.png")
+    ax_path, ax_p, ax_t = fig.axes
+    arrows = ax_path.collections[0]
+    k = 1 / arrows.scale
+    largest = np.hypot(error[:, 0], error[:, 1]).max()
+    assert 0.05 * 3e-3 <= k * largest <= 0.15 * 3e-3  # about a tenth of the path
+    assert f"× {k:,.0f}".replace(",", " ") in texts(fig)
+    assert np.allclose(arrows.U, error[:, 0] * 1e3) and np.allclose(arrows.V, error[:, 1] * 1e3)
+    assert ax_path.get_aspect() == 1.0 and "(mm)" in ax_path.get_xlabel()
+    assert "(µm)" in ax_p.get_ylabel() and "(µrad)" in ax_t.get_ylabel()
+    assert np.allclose(ax_p.get_lines()[0].get_ydata(), np.hypot(error[:, 0], error[:, 1]) * 1e6)
+    assert fig.texts[0].get_text().startswith("bot: circle, test")
+    fig = pcr.plot.plot_trajectory_accuracy(commanded, commanded + error, magnification=300)
+    assert fig.axes[0].collections[0].scale == pytest.approx(1 / 300) and "× 300" in texts(fig)
+    # Cycles per pose: the barycentres are compared, the repeatability shown; nm when small.
+    cycles = commanded[:, None, :] + 1e-9 * np.random.default_rng(2).normal(size=(24, 5, 3))
+    fig = pcr.plot.plot_trajectory_accuracy(commanded, cycles)
+    assert "(nm)" in fig.axes[1].get_ylabel() and "repeatability RP_l" in texts(fig)
+
+
+def test_trajectory_from_the_accuracy_csv(tmp_path):
+    rows = ["pose,x_c,y_c,theta_c,x_bar,y_bar,theta_bar,cycles,ap_x,ap_y,ap_p,ap_theta,l_bar,"
+            "s_l,rp_l,s_theta,rp_theta"]
+    for k, (x, y) in enumerate([(-1e-3, -1e-3), (1e-3, -1e-3), (1e-3, 1e-3), (-1e-3, 1e-3)]):
+        rows.append(f"{k},{x},{y},0,{x + 3e-9 * k},{y - 1e-9},{2e-7 * k},3,0,0,0,0,0,0,"
+                    f"{2e-8 + 1e-9 * k},0,0")
+    (tmp_path / "a.csv").write_text("\n".join(rows) + "\n")
+    fig = pcr.plot.plot_trajectory_accuracy(tmp_path / "a.csv")
+    e_p = np.hypot(3e-9 * np.arange(4), 1e-9)
+    assert np.allclose(fig.axes[1].get_lines()[0].get_ydata(), e_p * 1e9)
+    assert np.allclose(fig.axes[1].get_lines()[1].get_ydata(), (2e-8 + 1e-9 * np.arange(4)) * 1e9)
+
+
+def test_calibration_errors_from_the_demo_csv(tmp_path):
+    lines = ["set,configuration,model,e_p,e_theta"]
+    for s, count in (("calibration", 6), ("validation", 3)):
+        for model, scale in (("nominal", 1e-5), ("identified", 1e-8)):
+            lines += [f"{s},{j},{model},{scale * (j + 1)},{scale * 30}" for j in reversed(range(
+                count))]
+    (tmp_path / "e.csv").write_text("\n".join(lines) + "\n")
+    fig = pcr.plot.plot_calibration_errors(calibration=tmp_path / "e.csv", name="bot")
+    assert len(fig.axes) == 4 and fig.texts[0].get_text().startswith("bot: ")
+    assert "(µm)" in fig.axes[0].get_ylabel() and "(µrad)" in fig.axes[1].get_ylabel()
+    nominal = fig.axes[0].get_lines()[0]
+    assert np.allclose(nominal.get_ydata(), 1e-5 * np.arange(1, 7) * 1e6)
+    assert len(fig.axes[2].get_lines()[1].get_ydata()) == 3
+
+
+def test_demo_figures_and_their_page(demo_output, tmp_path):
+    import shutil
+    import subprocess
+    import sys
+
+    d = tmp_path / "demo"
+    shutil.copytree(demo_output, d)
+    r = subprocess.run([sys.executable, "-m", "pcr.plot", str(d)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    names = {"robot", "calibration-errors", "accuracy-square-nominal", "accuracy-square-identified",
+             "accuracy-circle-nominal", "accuracy-circle-identified", "map-position-3sigma",
+             "map-stability-margin", "map-singularity", "map-max-strain"}
+    assert {p.stem for p in (d / "figures").glob("*.png")} == names
+    for p in (d / "figures").glob("*.png"):
+        check_png(p)
+    page = (d / "figures.md").read_text()
+    for name in names:
+        assert f"(figures/{name}.png)" in page
+    # The map's colour bar covers the CSV's values over the positions with an equilibrium.
+    m = pcr.plot.read_map(d / "map-identified.csv")
+    fig = pcr.plot.plot_map(d / "map-identified.csv", "position_3sigma", d / "identified.json")
+    values = m["position_3sigma"][np.isfinite(m["max_strain"])] * 1e6
+    norm = fig.axes[0].collections[0].norm
+    assert (norm.vmin, norm.vmax) == pytest.approx((values.min(), values.max()))
+    assert "femto-3pf (identified)" in fig.axes[0].get_title()
+    r = subprocess.run([sys.executable, "-m", "pcr.plot", str(tmp_path)], capture_output=True,
+                       text=True)
+    assert r.returncode == 2 and "not a `pcr demo` output" in r.stderr

@@ -355,3 +355,34 @@ def test_the_command_lists_the_built_in_studies():
         script = os.path.join(os.path.dirname(sys.executable), "pcr-study")
         r = subprocess.run([script, "list"], capture_output=True, text=True)
         assert r.returncode == 0 and "configurations: " in r.stdout
+
+
+def test_the_plots_speak_in_words_and_units():
+    from pcr.study._plot import factors_figure, outcome_label, sensitivity_figure
+
+    assert outcome_label("table3.identified_model_validation_set.e_p_m.mean") == (
+        "mean position error e_p, identified model, validation set", 1e6, "µm")
+    assert outcome_label("accuracy.circle.nominal.ap_theta_abs.max") == (
+        "max orientation accuracy |AP_θ| on the circle, nominal model", 1e6, "µrad")
+    definition = study.Study.from_toml(SMALL, "small.toml")
+    rng = np.random.default_rng(5)
+    levels = np.repeat([80e-6, 320e-6], 10)
+    table = pd.DataFrame({"mount_tolerance": levels, "failure": [None] * 19 + ["sampling: x"],
+                          "parameters.A_x[0].error": rng.normal(0, 1e-6, 20)})
+    outcomes = list(study._plot.DEFAULT_OUTCOMES)
+    for o in outcomes:
+        table[o] = levels * 1e-3 * np.exp(rng.normal(0, 0.1, 20))
+    fig = factors_figure(table, definition, outcomes)
+    axes = fig.axes
+    assert len(axes) == len(outcomes)
+    labels = [" ".join(ax.get_ylabel().split()) for ax in axes]
+    assert labels[0] == "mean position error e_p, identified model, validation set (µm)"
+    assert "(µrad)" in labels[2] and not any("." in label.split("(")[0] for label in labels)
+    assert axes[0].get_xlabel().startswith("mount tolerance: half-width of the mount positions")
+    assert [t.get_text() for t in axes[0].get_xticklabels()] == ["80 µm", "320 µm"]
+    median = np.median(table.loc[table["mount_tolerance"] == 80e-6, outcomes[0]]) * 1e6
+    assert any(np.allclose(line.get_ydata(), median) for line in axes[0].get_lines())  # in µm
+    assert "robot the paper's (default)" in fig.texts[0].get_text()
+    assert "failed trials: 0, 1" in axes[0].get_title()
+    fig, _, _ = sensitivity_figure(table, definition, outcomes[0])
+    assert "mean position error e_p, identified model" in fig.texts[0].get_text()

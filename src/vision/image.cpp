@@ -211,45 +211,4 @@ void write_png(const GrayImage& image, const std::string& path, int bits) {
   file.commit();
 }
 
-void write_heat_map_png(const std::vector<double>& values, int nx, int ny, double lo, double hi,
-                        const std::string& path, int scale) {
-  if (nx < 1 || ny < 1 || scale < 1 || values.size() != static_cast<std::size_t>(nx) * ny ||
-      !(hi > lo)) {
-    throw std::invalid_argument("write_heat_map_png: " + path + ": bad grid or range");
-  }
-  const auto at = [&](int i, int j) { return values[static_cast<std::size_t>(j) * nx + i]; };
-  cv::Mat grey(ny, nx, CV_8U);
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i < nx; ++i) {
-      const double v = std::isfinite(at(i, j)) ? (at(i, j) - lo) / (hi - lo) : 0.0;
-      grey.at<std::uint8_t>(ny - 1 - j, i) =
-          static_cast<std::uint8_t>(std::lround(255.0 * std::clamp(v, 0.0, 1.0)));
-    }
-  }
-  cv::Mat colour;
-  cv::applyColorMap(grey, colour, cv::COLORMAP_VIRIDIS);
-  const cv::Vec3b white(255, 255, 255), black(0, 0, 0);
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i < nx; ++i) {
-      const bool inside = std::isfinite(at(i, j));
-      bool border = false;
-      for (const auto& [di, dj] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
-        const int u = i + di, v = j + dj;
-        if (u >= 0 && u < nx && v >= 0 && v < ny && std::isfinite(at(u, v)) != inside) {
-          border = border || inside;
-        }
-      }
-      if (!inside) colour.at<cv::Vec3b>(ny - 1 - j, i) = white;
-      if (border) colour.at<cv::Vec3b>(ny - 1 - j, i) = black;
-    }
-  }
-  cv::Mat out;
-  cv::resize(colour, out, cv::Size(nx * scale, ny * scale), 0, 0, cv::INTER_NEAREST);
-  OutputFile file(path, OutputFile::Writer::kExternal, ".png");
-  if (!cv::imwrite(file.temp_path(), out)) {
-    throw std::runtime_error(path + ": cannot write the image");
-  }
-  file.commit();
-}
-
 }  // namespace pcr::vision

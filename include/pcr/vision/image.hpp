@@ -44,10 +44,4 @@ GrayImage read_image(const std::string& path);
 /// Writes a PNG with 8 or 16 bits per pixel (temporary file, then renamed).
 void write_png(const GrayImage& image, const std::string& path, int bits = 8);
 
-/// A scalar field on an nx x ny grid (values[j * nx + i], row j = 0 at the bottom) as a colour PNG
-/// (OpenCV's viridis from lo to hi, clamped), `scale` pixels per cell; NaN cells are white and the
-/// border between NaN and finite cells is drawn black (a map's workspace boundary).
-void write_heat_map_png(const std::vector<double>& values, int nx, int ny, double lo, double hi,
-                        const std::string& path, int scale = 3);
-
 }  // namespace pcr::vision

@@ -3,12 +3,13 @@ over the trials of each level), the factors ranked by the share of the outcome's
 explain, and the parameters ranked by how their identification error follows the outcome."""
 from __future__ import annotations
 
-import io
 import os
+import textwrap
 
 import numpy as np
 
-from ._store import read_results, read_study, write_atomically
+from .._files import write_atomically
+from ._store import read_results, read_study
 
 DEFAULT_OUTCOMES = ("table3.identified_model_validation_set.e_p_m.mean",
                     "table3.nominal_model_validation_set.e_p_m.mean",
@@ -16,13 +17,59 @@ DEFAULT_OUTCOMES = ("table3.identified_model_validation_set.e_p_m.mean",
                     "accuracy.square.identified.ap_p.mean")
 
 
-def _scale(column):
-    """Display unit of an outcome: (factor, label) for um or urad."""
-    if column.endswith((".e_p_m.mean", ".e_p_m.max")) or ".ap_p." in column or ".rp_l." in column:
-        return 1e6, "um"
-    if "theta" in column:
-        return 1e6, "urad"
-    return 1.0, ""
+_QUANTITIES = {  # an outcome's quantity -> (words, factor from SI, display unit)
+    "e_p_m": ("position error e_p", 1e6, "µm"),
+    "e_theta_rad": ("orientation error e_θ", 1e6, "µrad"),
+    "ap_p": ("position accuracy AP_p", 1e6, "µm"),
+    "ap_theta_abs": ("orientation accuracy |AP_θ|", 1e6, "µrad"),
+    "rp_l": ("position repeatability RP_l", 1e6, "µm"),
+    "rp_theta": ("orientation repeatability RP_θ", 1e6, "µrad"),
+    "failed": ("configurations FK failed on", 1.0, "count"),
+    "branch_mismatches": ("configurations on another branch", 1.0, "count"),
+}
+
+
+_OTHERS = {
+    "configurations.calibration": ("calibration configurations", 1.0, "count"),
+    "configurations.validation": ("validation configurations", 1.0, "count"),
+    "configurations.unreachable": ("configurations not measured (no stable equilibrium)", 1.0,
+                                   "count"),
+    "calibration.iterations": ("calibration iterations", 1.0, "count"),
+    "calibration.load_identified": ("platform load identified", 1.0, "1: yes"),
+}
+
+
+def outcome_label(column):
+    """(words, factor from SI, display unit) of an outcome column:
+    'table3.identified_model_validation_set.e_p_m.mean' -> ('mean position error e_p,
+    identified model, validation set', 1e6, 'µm')."""
+    parts = column.split(".")
+    if parts[0] == "table3" and len(parts) >= 3 and parts[2] in _QUANTITIES:
+        words, factor, unit = _QUANTITIES[parts[2]]
+        model, _, which = parts[1].partition("_model_")
+        stat = parts[3] + " " if len(parts) > 3 else ""
+        return f"{stat}{words}, {model} model, {which.replace('_set', '')} set", factor, unit
+    if parts[0] == "accuracy" and len(parts) == 5 and parts[3] in _QUANTITIES:
+        words, factor, unit = _QUANTITIES[parts[3]]
+        return f"{parts[4]} {words} on the {parts[1]}, {parts[2]} model", factor, unit
+    if column in _OTHERS:
+        return _OTHERS[column]
+    if parts[0] == "time" or column == "time_s":
+        return "time" + (f": {parts[1][:-2]}" if len(parts) == 2 else ""), 1.0, "s"
+    return column, 1.0, ""
+
+
+def _axis_label(column):
+    words, _, unit = outcome_label(column)
+    return textwrap.fill(f"{words} ({unit})" if unit else words, 34)
+
+
+def _factor_axis(name):
+    """A factor's axis label: its name in words and the first clause of its description."""
+    from ._trial import FACTORS
+
+    doc = FACTORS[name].doc.split(";")[0] if name in FACTORS else ""
+    return name.replace("_", " ") + (f": {doc}" if doc else "")
 
 
 def _factor_label(name, value):
@@ -30,10 +77,17 @@ def _factor_label(name, value):
 
     unit = FACTORS[name].unit
     if unit == "m" and isinstance(value, float):
-        return f"{value * 1e6:g} um"
+        return f"{value * 1e6:g} µm"
     if unit == "rad" and isinstance(value, float):
         return f"{value * 1e3:g} mrad"
     return f"{value:g} {unit}".strip() if isinstance(value, float) else str(value)
+
+
+def _robots(study):
+    """The study's robot(s), for the titles."""
+    robots = study.levels.get("robot") or [study.factors.get("robot", "default")]
+    return ", ".join("the paper's (default)" if r == "default" else os.path.basename(str(r))
+                     for r in robots)
 
 
 def sensitivity(table, outcome, factors):
@@ -75,10 +129,59 @@ def parameter_ranking(table, outcome):
     return frame.sort_values("spearman", ascending=False, ignore_index=True)
 
 
-def _save(fig, path):
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100)
-    write_atomically(path, buffer.getvalue())
+def factors_figure(table, study, outcomes):
+    """Each outcome (a row) against each varied factor (a column): a box per level over its
+    successful trials (log scale when all are positive), in words and display units."""
+    from ..plot._common import new_figure, plain_ticks
+
+    factors = list(study.levels) or ["replicate"]
+    ok = table[table["failure"].isna()]
+    fig = new_figure((4.6 * len(factors) + 1.4, 3.3 * len(outcomes) + 0.4))
+    axes = fig.subplots(len(outcomes), len(factors), squeeze=False)
+    for j, f in enumerate(factors):
+        levels = study.levels.get(f, sorted(table[f].unique()))
+        for i, o in enumerate(outcomes):
+            _, scale, _ = outcome_label(o)
+            data = [ok.loc[ok[f] == v, o].dropna().to_numpy() * scale for v in levels]
+            ax = axes[i][j]
+            ax.boxplot([d if len(d) else [np.nan] for d in data], whis=(5, 95), showfliers=True)
+            ax.set_xticks(range(1, len(levels) + 1),
+                          [_factor_label(f, v) for v in levels], fontsize=8)
+            if all(len(d) and np.all(d > 0) for d in data):
+                ax.set_yscale("log")
+                plain_ticks(ax.yaxis, *ax.get_ylim())
+            failed = [int((table[f] == v).sum() - len(d)) for v, d in zip(levels, data)]
+            if any(failed):
+                ax.set_title("failed trials: " + ", ".join(map(str, failed)), fontsize=8)
+            ax.set_xlabel(textwrap.fill(_factor_axis(f), 60), fontsize=8)
+            ax.set_ylabel(_axis_label(o), fontsize=8)
+            ax.grid(True, axis="y", alpha=0.3)
+    fig.suptitle(f"study {study.name}, robot {_robots(study)}: {len(table)} trials\n"
+                 f"(boxes 25-75 %, whiskers 5-95 % of the successful trials)", fontsize=11)
+    return fig
+
+
+def sensitivity_figure(table, study, outcome):
+    """The factors ranked by eta^2 of log10(outcome) and the parameters by the Spearman
+    correlation of their |error| with it."""
+    from ..plot._common import new_figure
+
+    ranking = sensitivity(table, outcome, list(study.levels) or ["replicate"])
+    parameters = parameter_ranking(table, outcome)
+    fig = new_figure((11, 0.3 * max(len(parameters[:15]), 4) + 2.4))
+    a, b = fig.subplots(1, 2)
+    a.barh([f.replace("_", " ") for f in ranking["factor"][::-1]], ranking["eta_squared"][::-1])
+    a.set_xlim(0, 1)
+    a.set_xlabel("share of the variance of log10(outcome), η²")
+    a.set_title("factors", fontsize=10)
+    top = parameters[:15]
+    b.barh(top["parameter"][::-1], top["spearman"][::-1])
+    b.set_xlim(-1, 1)
+    b.set_xlabel("Spearman correlation of |error| with the outcome")
+    b.set_title("parameters (error against the truth)", fontsize=10)
+    fig.suptitle(f"study {study.name}, robot {_robots(study)}: what sets the\n"
+                 f"{outcome_label(outcome)[0]}", fontsize=11)
+    return fig, ranking, parameters
 
 
 def plot(directory, output=None, outcomes=None):
@@ -87,10 +190,12 @@ def plot(directory, output=None, outcomes=None):
     factors' eta^2 and the parameters' ranking for the first outcome) and summary.csv (count,
     failures and quantiles of every outcome per level). Returns the written paths."""
     try:
-        import matplotlib.pyplot as plt
+        import matplotlib  # noqa: F401
     except ModuleNotFoundError as e:
         raise ModuleNotFoundError("pcr-study plot needs matplotlib: pip install "
                                   "'./python[study]'", name="matplotlib") from e
+    from ..plot._common import save
+
     table = read_results(directory)
     if table.empty:
         raise ValueError(f"{directory}: no finished trial to plot yet")
@@ -102,53 +207,10 @@ def plot(directory, output=None, outcomes=None):
     factors = list(study.levels) or ["replicate"]
     output = os.fspath(output) if output is not None else os.path.join(directory, "_plots")
     os.makedirs(output, exist_ok=True)
-    ok = table[table["failure"].isna()]
-    written = []
-
-    fig, axes = plt.subplots(len(outcomes), len(factors), squeeze=False,
-                             figsize=(4.5 * len(factors) + 1, 3.2 * len(outcomes)))
-    for j, f in enumerate(factors):
-        levels = study.levels.get(f, sorted(table[f].unique()))
-        for i, o in enumerate(outcomes):
-            scale, unit = _scale(o)
-            data = [ok.loc[ok[f] == v, o].dropna().to_numpy() * scale for v in levels]
-            ax = axes[i][j]
-            ax.boxplot([d if len(d) else [np.nan] for d in data], whis=(5, 95), showfliers=True)
-            ax.set_xticks(range(1, len(levels) + 1),
-                          [_factor_label(f, v) for v in levels], fontsize=8)
-            if all(len(d) and np.all(d > 0) for d in data):
-                ax.set_yscale("log")
-            failed = [int((table[f] == v).sum() - len(d)) for v, d in zip(levels, data)]
-            if any(failed):
-                ax.set_title("failed: " + ", ".join(map(str, failed)), fontsize=8)
-            ax.set_xlabel(f)
-            ax.set_ylabel(f"{o.split('.', 1)[1] if '.' in o else o}\n({unit})", fontsize=8)
-            ax.grid(True, axis="y", alpha=0.3)
-    fig.suptitle(f"study {study.name}: {len(table)} trials (boxes 25-75 %, whiskers 5-95 %)")
-    fig.tight_layout()
-    path = os.path.join(output, "factors.png")
-    _save(fig, path)
-    plt.close(fig)
-    written.append(path)
-
-    ranking = sensitivity(table, outcomes[0], factors)
-    parameters = parameter_ranking(table, outcomes[0])
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 0.3 * max(len(parameters[:15]), 4) + 2))
-    a.barh(ranking["factor"][::-1], ranking["eta_squared"][::-1])
-    a.set_xlim(0, 1)
-    a.set_xlabel("share of the variance of log10(outcome) (eta^2)")
-    a.set_title("factors", fontsize=10)
-    top = parameters[:15]
-    b.barh(top["parameter"][::-1], top["spearman"][::-1])
-    b.set_xlim(-1, 1)
-    b.set_xlabel("Spearman correlation of |error| with the outcome")
-    b.set_title("parameters (error against the truth)", fontsize=10)
-    fig.suptitle(outcomes[0])
-    fig.tight_layout()
-    path = os.path.join(output, "sensitivity.png")
-    _save(fig, path)
-    plt.close(fig)
-    written.append(path)
+    written = [os.path.join(output, "factors.png"), os.path.join(output, "sensitivity.png")]
+    save(factors_figure(table, study, outcomes), written[0], dpi=100)
+    fig, ranking, parameters = sensitivity_figure(table, study, outcomes[0])
+    save(fig, written[1], dpi=100)
 
     text = "# factors: eta^2 of log10(" + outcomes[0] + ")\n" + ranking.to_csv(index=False)
     text += "# parameters: Spearman correlation of |error| with it\n"

@@ -9,39 +9,18 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 import uuid
 
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from .._files import write_atomically
 from ._definition import Study
 from ._trial import FACTORS
 
 MANIFEST = "_study.json"
 _KEYS = [("trial", pa.int64()), ("replicate", pa.int64()), ("seed", pa.int64())]
 _ARROW = {str: pa.string(), float: pa.float64(), int: pa.int64()}
-
-
-def write_atomically(path, data):
-    """Writes bytes to `path` through a temporary file in its directory and a rename; refuses to
-    replace anything but a regular file."""
-    if os.path.islink(path) or (os.path.lexists(path) and not os.path.isfile(path)):
-        raise FileExistsError(f"{path}: exists and is not a regular file; not replaced")
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", dir=directory)
-    try:
-        umask = os.umask(0)
-        os.umask(umask)
-        os.fchmod(fd, 0o666 & ~umask)  # mkstemp's 0600 would make results private
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
 
 
 def _digests(robots):
