@@ -40,12 +40,13 @@ inline int& exit_status() {
   return status;
 }
 
-/// The documented range of a numeric option: a finite number (CLI11's PositiveNumber and
-/// NonNegativeNumber let NaN through) in [lo, hi]; CLI11's error names the option, this the value
-/// and the range. `unit` is printed after the bounds.
-inline CLI::Validator within(double lo, double hi, const std::string& unit = "") {
-  const std::string range =
-      "[" + format_double(lo) + ", " + format_double(hi) + "]" + (unit.empty() ? "" : " " + unit);
+/// The library's range of an option (pcr/option_range.hpp): a finite number (CLI11's
+/// PositiveNumber and NonNegativeNumber let NaN through) in [lo, hi], its bounds printed as the
+/// library prints them; CLI11's error names the option, this the value and the range.
+inline CLI::Validator within(const OptionRange& option) {
+  const double lo = option.lo, hi = option.hi;
+  const std::string range = "[" + OptionRange::text(lo) + ", " + OptionRange::text(hi) + "]" +
+                            (*option.unit == '\0' ? "" : std::string(" ") + option.unit);
   return CLI::Validator(
       [lo, hi, range](std::string& text) -> std::string {
         char* end = nullptr;
@@ -57,11 +58,6 @@ inline CLI::Validator within(double lo, double hi, const std::string& unit = "")
         return std::string();
       },
       "in " + range);
-}
-
-/// The library's range of an option (pcr/option_range.hpp): the same bounds, the same unit.
-inline CLI::Validator within(const OptionRange& range) {
-  return within(range.lo, range.hi, range.unit);
 }
 
 /// Adds the common `--robot FILE` option (empty: the built-in default robot).

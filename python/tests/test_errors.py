@@ -228,8 +228,8 @@ def test_calibration_numbers_are_checked(robot):
 
 @needs_calibration
 def test_paths_take_the_library_ranges():
-    raises(ValueError, "theta: expected a number from -3.14159 to 3.14159 (rad), got 4",
-           pcr.square_path, theta=4.0)
+    raises(ValueError, "theta: expected a number from -3.141592653589793 to 3.141592653589793 "
+           "(rad), got 4", pcr.square_path, theta=4.0)
     raises(ValueError, "diameter: expected a number from 1e-06 to 0.1 (m), got 0.2",
            pcr.circle_path, 0.2)
     raises(ValueError, "centre: expected a number from -0.1 to 0.1 (m), got -0.5",
@@ -276,6 +276,8 @@ def test_vision_vectors_and_numbers_are_checked(robot):
      "side: expected a number from 1e-06 to 0.1 (m), got 0.5"),
     (["accuracy"], "--centre", 0.2, lambda robot: pcr.square_path(centre=(0.2, 0.0)),
      "centre: expected a number from -0.1 to 0.1 (m), got 0.2"),
+    (["accuracy"], "--theta", 4.0, lambda robot: pcr.square_path(theta=4.0),
+     "theta: expected a number from -3.141592653589793 to 3.141592653589793 (rad), got 4"),
     (["accuracy"], "--count", 0, lambda robot: pcr.circle_path(count=0),
      "num_poses: expected a number from 1 to 100000, got 0"),
     (["demo", "--no-vision"], "--poses", 0,
