@@ -1,5 +1,6 @@
 """pcr.study: study definitions, trials, a real 2-worker LocalCluster, stop and resume, failed
 trials as rows, the plots and the pcr-study command."""
+import json
 import math
 import os
 import signal
@@ -216,6 +217,48 @@ def test_a_study_runs_on_two_workers_into_parquet(small):
                             int(row["seed"]))
     assert again["accuracy.circle.identified.ap_p.mean"] == \
         row["accuracy.circle.identified.ap_p.mean"]
+
+
+def test_a_study_runs_on_a_scheduler_and_workers_started_as_commands(small, tmp_path):
+    """As on a cluster without Slurm: `dask scheduler` and `dask worker ADDRESS` started as their
+    own processes, and `pcr-study run --scheduler tcp://...` giving the LocalCluster's table."""
+    definition, table, _ = small
+    path = tmp_path / "small.toml"
+    path.write_text(SMALL)
+    address_file = tmp_path / "scheduler.json"
+    log = open(tmp_path / "dask.log", "w")
+    scheduler = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+         "--port", "0", "--dashboard-address", ":0", "--scheduler-file", str(address_file)],
+        stdout=log, stderr=subprocess.STDOUT)
+    workers = None
+    try:
+        deadline = time.monotonic() + 60
+        while not address_file.exists() and time.monotonic() < deadline:
+            assert scheduler.poll() is None, (tmp_path / "dask.log").read_text()
+            time.sleep(0.1)
+        address = json.loads(address_file.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        workers = subprocess.Popen(
+            [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "2",
+             "--nthreads", "1", "--no-dashboard", "--local-directory", str(tmp_path)],
+            stdout=log, stderr=subprocess.STDOUT)
+        out = tmp_path / "remote"
+        r = subprocess.run(_command("run", str(path), "--output", str(out), "--scheduler",
+                                    address, "--quiet"),
+                           capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr + (tmp_path / "dask.log").read_text()
+        remote = study.read_results(out)
+        pd.testing.assert_frame_equal(_without_times(remote), _without_times(table))
+    finally:
+        for process in (workers, scheduler):
+            if process is not None:
+                process.terminate()
+                try:
+                    process.wait(timeout=30)
+                except subprocess.TimeoutExpired:
+                    process.kill()
+        log.close()
 
 
 def test_a_stopped_study_resumes_to_the_uninterrupted_table(small, tmp_path):
