@@ -154,9 +154,8 @@ std::vector<std::pair<std::string, const Iso9283Result*>> named_rows(const py::h
   return out;
 }
 
-}  // namespace
-
-void wrap_accuracy(py::module_& m) {
+/// The paper's square and circle paths, and paths from CSV.
+void bind_paths(py::module_& m) {
   m.attr("PAPER_SQUARE_SIDE") = kPaperSquareSide;
   m.attr("PAPER_CIRCLE_DIAMETER") = kPaperCircleDiameter;
 
@@ -201,7 +200,10 @@ void wrap_accuracy(py::module_& m) {
       py::arg("path"),
       "A path from CSV (columns x,y,theta in m, m, rad) -> (N, 3). FileNotFoundError when it "
       "does not exist, ValueError naming the file and line.");
+}
 
+/// command_path: IK along a path.
+void bind_command_path(py::module_& m) {
   m.def(
       "command_path",
       [](const RobotDescription& model, const py::object& path, double strain_limit,
@@ -225,7 +227,10 @@ void wrap_accuracy(py::module_& m) {
       "(N, n) m, poses (N, 3) (theta solved when n = 2), max_strain (N,), iterations (N,). "
       "ValueError 'pose k (x, y, theta): reason' at the first pose out of the workspace, the "
       "strokes or the strain limit. Releases the GIL.");
+}
 
+/// pcr.Iso9283Result: per-pose arrays and the Table 4 summary.
+void bind_iso9283_result(py::module_& m) {
   py::class_<Iso9283Result>(m, "Iso9283Result",
                             "ISO 9283 pose accuracy and repeatability of a path: per-pose arrays "
                             "(N,) or (N, 3) and the Table 4 summary (SI units).")
@@ -329,7 +334,10 @@ void wrap_accuracy(py::module_& m) {
                std::to_string(r.ap_p.max * 1e6) + " um, mean " + std::to_string(r.ap_p.mean * 1e6) +
                " um)";
       });
+}
 
+/// iso9283, iso9283_table, iso9283_json: the statistics and Table 4.
+void bind_iso9283(py::module_& m) {
   m.def(
       "iso9283",
       [](const py::object& commanded, const py::object& attained) {
@@ -350,7 +358,10 @@ void wrap_accuracy(py::module_& m) {
   m.def(
       "iso9283_json", [](const py::object& rows) { return iso9283_json(named_rows(rows)); },
       py::arg("rows"), "Like iso9283_table, as JSON (SI units).");
+}
 
+/// pcr.AccuracyEvaluation and evaluate_on_virtual_robot.
+void bind_accuracy_evaluation(py::module_& m) {
   py::class_<AccuracyEvaluation>(m, "AccuracyEvaluation",
                                  "A path commanded by a model and run on a virtual robot.")
       .def_property_readonly(
@@ -402,7 +413,10 @@ void wrap_accuracy(py::module_& m) {
       "paper's way, gauge invariant), 'true' with the virtual robot's true ones. force/moment: "
       "a known load the model commands with (the virtual robot applies its own). Returns an "
       "AccuracyEvaluation (commanded, q, attained (N, R, 3), iso). Releases the GIL.");
+}
 
+/// load_measured_csv, measured_to_csv: measured poses as CSV.
+void bind_measured_csv(py::module_& m) {
   m.def(
       "load_measured_csv",
       [](const std::filesystem::path& path) {
@@ -420,6 +434,17 @@ void wrap_accuracy(py::module_& m) {
       },
       py::arg("commanded"), py::arg("attained"),
       "The measured poses CSV text (the format load_measured_csv reads).");
+}
+
+}  // namespace
+
+void wrap_accuracy(py::module_& m) {
+  bind_paths(m);
+  bind_command_path(m);
+  bind_iso9283_result(m);
+  bind_iso9283(m);
+  bind_accuracy_evaluation(m);
+  bind_measured_csv(m);
 }
 
 }  // namespace pcr::python

@@ -223,19 +223,8 @@ py::object inverse(const RobotDescription& robot, const py::object& pose_in,
   return py::cast(std::move(batch));
 }
 
-}  // namespace
-
-ForwardSolution as_forward(const Solution& s) {
-  ForwardSolution out;
-  out.q = s.q;
-  out.pose = s.pose;
-  out.wrenches = s.wrenches;
-  out.summary = s.summary;
-  if (!s.inverse) out.jacobian = s.jacobian;
-  return out;
-}
-
-void wrap_kinematics(py::module_& m) {
+/// pcr.SolveStatus.
+void bind_solve_status(py::module_& m) {
   py::enum_<SolveStatus>(m, "SolveStatus", "Outcome of a kinematics solve.")
       .value("converged", SolveStatus::kConverged)
       .value("max_iterations", SolveStatus::kMaxIterations)
@@ -246,7 +235,10 @@ void wrap_kinematics(py::module_& m) {
       .value("unstable", SolveStatus::kUnstable)
       .value("unsupported", SolveStatus::kUnsupported)
       .value("invalid_input", SolveStatus::kInvalidInput);
+}
 
+/// pcr.SolverOptions: the Newton shooting settings.
+void bind_solver_options(py::module_& m) {
   auto solver_options =
       py::class_<SolverOptions>(m, "SolverOptions",
                                 "Newton shooting settings (pcr/kinematics.hpp).")
@@ -294,7 +286,10 @@ void wrap_kinematics(py::module_& m) {
           .def_readwrite("max_arclength_steps", &SolverOptions::max_arclength_steps,
                          "points a pseudo-arclength trace may solve");
   def_value_semantics(solver_options);
+}
 
+/// pcr.Solution: one solved configuration.
+void bind_solution(py::module_& m) {
   py::class_<Solution>(m, "Solution",
                        "One solved configuration. When the solve failed (converged is False; for "
                        "IK also out_of_range is a valid equilibrium) q/pose/wrenches are NaN.")
@@ -404,7 +399,10 @@ void wrap_kinematics(py::module_& m) {
             s.inverse = state[6].cast<bool>();
             return s;
           }));
+}
 
+/// pcr.BatchResult: the arrays of a batch.
+void bind_batch_result(py::module_& m) {
   py::class_<BatchResult>(m, "BatchResult",
                           "Results of a batch, one row per input row. Rows that failed have NaN "
                           "values (FK keeps its input q, IK its input pose).")
@@ -442,7 +440,10 @@ void wrap_kinematics(py::module_& m) {
                         fields_from_tuple(batch_fields(b), state, "BatchResult");
                         return b;
                       }));
+}
 
+/// Robot.forward, inverse, home and with_home_at, added to the class wrap_robot registered.
+void bind_robot_kinematics(py::module_& m) {
   auto robot = py::reinterpret_borrow<py::class_<RobotDescription>>(m.attr("Robot"));
   robot
       .def("forward", &forward, py::arg("q"), py::kw_only(), py::arg("warm_start") = py::none(),
@@ -497,6 +498,26 @@ void wrap_kinematics(py::module_& m) {
           "measured home pose ^W T_P (a Pose, m and rad): of the homes of every pattern of bow "
           "sides, the one nearest (a pre-stressed robot, n >= 4, has several; n <= 3: a copy). "
           "ValueError when no home solves. Releases the GIL.");
+}
+
+}  // namespace
+
+ForwardSolution as_forward(const Solution& s) {
+  ForwardSolution out;
+  out.q = s.q;
+  out.pose = s.pose;
+  out.wrenches = s.wrenches;
+  out.summary = s.summary;
+  if (!s.inverse) out.jacobian = s.jacobian;
+  return out;
+}
+
+void wrap_kinematics(py::module_& m) {
+  bind_solve_status(m);
+  bind_solver_options(m);
+  bind_solution(m);
+  bind_batch_result(m);
+  bind_robot_kinematics(m);
 }
 
 }  // namespace pcr::python

@@ -162,9 +162,8 @@ auto rod_setter(double RodFields::*field) {
   return [field](Owner& owner, double v) { owner.rod.*field = v; };
 }
 
-}  // namespace
-
-void wrap_robot(py::module_& m) {
+/// pcr.Pose: a planar pose that also reads as [x, y, theta].
+void bind_pose(py::module_& m) {
   py::class_<Pose2<double>>(m, "Pose",
                             "A planar pose ^A T_B: x, y (m) and theta (rad) of frame B in frame A.")
       .def(py::init([](double x, double y, double theta) {
@@ -210,7 +209,10 @@ void wrap_robot(py::module_& m) {
           },
           py::arg("dtype") = py::none(), py::arg("copy") = py::none(),
           "numpy.asarray(pose): [x, y, theta] (m, m, rad)");
+}
 
+/// compose_poses: Pose's product over rows of arrays.
+void bind_compose_poses(py::module_& m) {
   m.def(
       "compose_poses",
       [](const py::object& a_in, const py::object& b_in) -> py::object {
@@ -240,7 +242,10 @@ void wrap_robot(py::module_& m) {
       py::arg("a"), py::arg("b"),
       "Row-wise SE(2) product ^A T_B * ^B T_C (Pose's product) of (N, 3) or (3,) arrays (x m, y "
       "m, theta rad); a single pose broadcasts over the other's rows.");
+}
 
+/// pcr.Limb: one limb's parameters.
+void bind_limb(py::module_& m) {
   auto limb =
       py::class_<LimbParams<double>>(
           m, "Limb", "One limb (rod + actuator), notation of Mauze et al. 2021 Fig. 3.")
@@ -337,7 +342,10 @@ void wrap_robot(py::module_& m) {
             return s.str();
           });
   def_value_semantics(limb);
+}
 
+/// pcr.Extrinsics: the measurement frames of Eq. 5.
+void bind_extrinsics(py::module_& m) {
   auto extrinsics =
       py::class_<Extrinsics<double>>(
           m, "Extrinsics", "Measurement extrinsics (Eq. 5): ^W T_P = camera * ^Se T_M * pattern.")
@@ -351,7 +359,10 @@ void wrap_robot(py::module_& m) {
                py::arg("world_T_platform"),
                "^Se T_M that the camera sees for a platform pose ^W T_P.");
   def_value_semantics(extrinsics);
+}
 
+/// pcr.LimbUncertainty: one limb's half-widths.
+void bind_limb_uncertainty(py::module_& m) {
   auto limb_uncertainty =
       py::class_<LimbUncertainty>(
           m, "LimbUncertainty", "Half-widths of one limb's uncertainty intervals (SI units, rad).")
@@ -380,7 +391,10 @@ void wrap_robot(py::module_& m) {
           .def_property("precurvature", rod_field<LimbUncertainty>(&RodUncertainty::precurvature),
                         rod_setter<LimbUncertainty>(&RodUncertainty::precurvature), "1/m");
   def_value_semantics(limb_uncertainty);
+}
 
+/// pcr.Uncertainty: the robot's half-widths.
+void bind_uncertainty(py::module_& m) {
   auto uncertainty =
       py::class_<RobotUncertainty>(
           m, "Uncertainty",
@@ -416,7 +430,10 @@ void wrap_robot(py::module_& m) {
               },
               py::return_value_policy::reference_internal, "on extrinsics.pattern (m, m, rad)");
   def_value_semantics(uncertainty);
+}
 
+/// pcr.Robot: the description, its files and its parts (references into it).
+void bind_robot_description(py::module_& m) {
   py::class_<RobotDescription>(m, "Robot",
                                "A planar parallel continuum robot: the pcr-robot JSON description "
                                "(docs/formats.md). SI units.")
@@ -490,6 +507,18 @@ void wrap_robot(py::module_& m) {
       .def("__repr__", [](const RobotDescription& r) {
         return "<pcr.Robot '" + r.name + "' with " + std::to_string(r.params.num_limbs) + " limbs>";
       });
+}
+
+}  // namespace
+
+void wrap_robot(py::module_& m) {
+  bind_pose(m);
+  bind_compose_poses(m);
+  bind_limb(m);
+  bind_extrinsics(m);
+  bind_limb_uncertainty(m);
+  bind_uncertainty(m);
+  bind_robot_description(m);
 }
 
 }  // namespace pcr::python

@@ -97,9 +97,8 @@ py::array_t<float> render(const Scene& scene, int supersampling, double blur, do
   return to_array(image);
 }
 
-}  // namespace
-
-void wrap_vision(py::module_& m) {
+/// pcr.Camera and load_camera: the pinhole camera and its OpenCV YAML.
+void bind_camera(py::module_& m) {
   py::class_<CameraModel>(m, "Camera",
                           "Pinhole camera with OpenCV's distortion model (k1 k2 p1 p2 [k3 ...]).")
       .def(py::init([](int width, int height, const Eigen::Matrix3d& K,
@@ -150,7 +149,10 @@ void wrap_vision(py::module_& m) {
       py::arg("path"),
       "Reads an OpenCV camera YAML. FileNotFoundError when it does not exist, ValueError naming "
       "the file and the field.");
+}
 
+/// pcr.MountLayout, load_mounts, default_mounts: where the tags sit on the rods.
+void bind_mount_layout(py::module_& m) {
   py::class_<MountLayout>(m, "MountLayout",
                           "Where each rod mount's tag is and how its clamp sits on it (the "
                           "pcr-mounts JSON format).")
@@ -203,7 +205,10 @@ void wrap_vision(py::module_& m) {
       "value.");
   m.def("default_mounts", &default_mounts,
         "The default robot's layout (data/mounts-femto-3pf.json).");
+}
 
+/// read_image, write_png: images as float32 (H, W) arrays in [0, 1].
+void bind_image_io(py::module_& m) {
   m.def(
       "read_image",
       [](const std::filesystem::path& path) { return to_array(read_image(input_path(path))); },
@@ -220,7 +225,10 @@ void wrap_vision(py::module_& m) {
       },
       py::arg("path"), py::arg("image"), py::arg("bits") = 8,
       "Writes a (H, W) array in [0, 1] as an 8- or 16-bit grey PNG (temp file, then renamed).");
+}
 
+/// mount_tags, render_robot, render_chessboard: synthetic images, as `pcr render`.
+void bind_render(py::module_& m) {
   m.def(
       "mount_tags",
       [](const RobotDescription& robot, const MountLayout& layout, const py::object& platform,
@@ -293,7 +301,10 @@ void wrap_vision(py::module_& m) {
       "A synthetic image of a chessboard (cols x rows inner corners, `square` m) lying in the "
       "work plane with its centre at board_pose (x, y, theta), as `pcr render --chessboard`; "
       "the camera and the options as render_robot. For calibrate_camera.");
+}
 
+/// pcr.RobotMeasurement and measure_robot: A, alpha, B, beta from one image.
+void bind_robot_measurement(py::module_& m) {
   py::class_<RobotMeasurement>(m, "RobotMeasurement",
                                "A, alpha, B, beta of each limb measured from one image, in the "
                                "design's W and P (rigid registration), with half-widths.")
@@ -357,6 +368,10 @@ void wrap_vision(py::module_& m) {
       "RobotMeasurement. `source` names the "
       "image in error messages (ValueError for a missing marker, a size mismatch). Releases "
       "the GIL.");
+}
+
+/// pcr.SweepResult and measure_sweep: an actuator's direction from a sweep of images.
+void bind_sweep(py::module_& m) {
   py::class_<SweepResult>(m, "SweepResult",
                           "One actuator's direction from its proximal tag over a sweep of images.")
       .def_readonly("gamma", &SweepResult::gamma, "actuator misalignment: line angle - alpha (rad)")
@@ -405,7 +420,10 @@ void wrap_vision(py::module_& m) {
       "least-squares line through the tag centres -> SweepResult. Also stores gamma and its "
       "half-width in home.limbs[limb], which measured_description() then uses. Releases the "
       "GIL.");
+}
 
+/// pcr.CameraCalibration and calibrate_camera: intrinsics from chessboard images.
+void bind_camera_calibration(py::module_& m) {
   py::class_<CalibrationResult>(m, "CameraCalibration", "cv::calibrateCamera over chessboards.")
       .def_readonly("camera", &CalibrationResult::camera, "the calibrated Camera")
       .def_readonly("rms_px", &CalibrationResult::rms_px, "reprojection error (px)")
@@ -429,10 +447,26 @@ void wrap_vision(py::module_& m) {
       "with cols x rows inner corners and `square` (m) squares, as `pcr camera` -> "
       "CameraCalibration (at least 3 images with a board; FileNotFoundError for a missing "
       "file, ValueError naming the files otherwise). Releases the GIL.");
+}
 
+/// measured_description: a design with its measured values -> Robot.
+void bind_measured_description(py::module_& m) {
   m.def("measured_description", &measured_description, py::arg("design"), py::arg("measurement"),
         "`design` with the measured A, alpha, B, beta (gamma when swept) and an uncertainty "
         "section with the measured half-widths -> Robot.");
+}
+
+}  // namespace
+
+void wrap_vision(py::module_& m) {
+  bind_camera(m);
+  bind_mount_layout(m);
+  bind_image_io(m);
+  bind_render(m);
+  bind_robot_measurement(m);
+  bind_sweep(m);
+  bind_camera_calibration(m);
+  bind_measured_description(m);
 }
 
 }  // namespace pcr::python
