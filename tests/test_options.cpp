@@ -73,6 +73,7 @@ std::vector<Field> all_fields() {
       field(VirtualRobotOptions::kNoiseAngle, &VirtualRobotOptions::noise_angle),
       field(WorkspaceMapOptions::kTheta, &WorkspaceMapOptions::theta),
       field(WorkspaceMapOptions::kGrid, &WorkspaceMapOptions::grid),
+      field(WorkspaceMapOptions::kThreads, &WorkspaceMapOptions::threads),
       field(C::kOrientationWeight, &C::orientation_weight),
       field(C::kResidualScale, &C::residual_scale),
       field(C::kMaxIterations, &C::max_iterations),

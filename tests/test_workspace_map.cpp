@@ -5,11 +5,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <sstream>
 #include <vector>
 
 #include "pcr/calib/workspace_map.hpp"
 #include "pcr/csv_io.hpp"
+#include "pcr/robot_io.hpp"
 #include "random_robots.hpp"
 
 namespace pcr {
@@ -32,7 +34,8 @@ constexpr bool kSanitized = false;
 // is reachable on the map or next to a reachable cell (a pose at |theta| <= delta lies up to the
 // platform's radius times delta, ~0.1 mm here, from the theta = 0 slice), and each reachable cell
 // is next to a scanned one, away from the scan's own sampling gaps at the border.
-void expect_map_matches_a_scan(const RobotParams<double>& robot, bool every_point_stable) {
+void expect_map_matches_a_scan(const RobotParams<double>& robot, bool every_point_stable,
+                               int levels = 61) {
   WorkspaceMapOptions options;
   options.grid = 48;
   const WorkspaceMap map = workspace_map(robot, options);
@@ -43,7 +46,6 @@ void expect_map_matches_a_scan(const RobotParams<double>& robot, bool every_poin
   std::vector<int> scanned(map.points.size(), 0);
   // The scan fills the joint grid outwards from home, each configuration solved by plain Newton
   // from a solved neighbour (0.35 mm away): what FK reaches from home within the stroke box.
-  const int levels = 61;
   const double delta = 0.003;
   SolverOptions scan_options;
   scan_options.continuation = false;
@@ -142,6 +144,119 @@ TEST(WorkspaceMap, ReachableRegionOfPrecurvedRodsMatchesAnFkScan) {
     limb.beta = free_tip.theta;
   }
   expect_map_matches_a_scan(robot, false);
+}
+
+// The default robot with a stroke of +-60 mm, six times its own
+// (robots/femto-3pf-long-stroke.json): at theta = 0 more than half of the map lies beyond the
+// branch's folds, where the flood leaves points unvisited, and a region of it is reached only by
+// unstable equilibria.
+RobotParams<double> long_stroke_robot() {
+  const RobotParams<double> robot =
+      load_robot(std::string(PCR_SOURCE_DIR) + "/robots/femto-3pf-long-stroke.json").params;
+  for (int i = 0; i < robot.num_limbs; ++i) EXPECT_EQ(robot.limb(i).q_max, 0.06);
+  return robot;
+}
+
+// Random points of the long-stroke map against IK from home with the solver's whole budget (the
+// branch followed, as the map does): where that finds an equilibrium within the stroke, the map
+// has one at the point or a neighbour (the border is located to about a cell).
+TEST(WorkspaceMap, LongStrokeMapAgreesWithColdIkAtRandomPoints) {
+  const RobotParams<double> robot = long_stroke_robot();
+  WorkspaceMapOptions options;
+  options.grid = kSanitized ? 10 : 40;
+  const WorkspaceMap map = workspace_map(robot, options);
+  SolverOptions on_branch;
+  on_branch.stable_inverse = false;
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> column(0, map.nx - 1), row(0, map.ny - 1);
+  const auto at = [&](int i, int j) -> const WorkspaceMapPoint& {
+    return map.points[static_cast<std::size_t>(j * map.nx + i)];
+  };
+  int cold_reachable = 0;
+  for (int trial = 0; trial < (kSanitized ? 4 : 60); ++trial) {
+    const int i = column(rng), j = row(rng);
+    const WorkspaceMapPoint& p = at(i, j);
+    const InverseSolution cold =
+        inverse_kinematics(robot, Pose2<double>{p.x, p.y, map.theta}, on_branch);
+    if (cold.summary.converged()) {
+      ++cold_reachable;
+      bool near = false;
+      for (int v = std::max(0, j - 1); v <= std::min(map.ny - 1, j + 1); ++v) {
+        for (int u = std::max(0, i - 1); u <= std::min(map.nx - 1, i + 1); ++u) {
+          near = near || at(u, v).reachable;
+        }
+      }
+      EXPECT_TRUE(near) << "IK from home reaches (" << p.x << ", " << p.y << ")";
+    }
+  }
+  if (!kSanitized) EXPECT_GT(cold_reachable, 10);
+}
+
+bool same_value(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+
+// Random robots (the paper's intervals around the default design, strokes of 10 to 60 mm each way,
+// orientations within 0.1 rad): the map on 1, 2 and 3 threads is the same to the last bit.
+TEST(WorkspaceMap, IsTheSameWhateverTheNumberOfThreads) {
+  std::mt19937_64 rng(20261128);
+  std::uniform_real_distribution<double> stroke(0.01, 0.06), theta(-0.1, 0.1);
+  for (int trial = 0; trial < (kSanitized ? 1 : 3); ++trial) {
+    RobotParams<double> robot = testing::perturbed(femto_3pf(), rng);
+    for (int i = 0; i < robot.num_limbs; ++i) {
+      const double s = stroke(rng);
+      robot.limb(i).q_min = -s;
+      robot.limb(i).q_max = s;
+    }
+    WorkspaceMapOptions options;
+    options.grid = kSanitized ? 8 : 16;
+    options.theta = theta(rng);
+    options.threads = 1;
+    const WorkspaceMap one = workspace_map(robot, options);
+    for (int threads : {2, 3}) {
+      options.threads = threads;
+      const WorkspaceMap many = workspace_map(robot, options);
+      ASSERT_EQ(many.points.size(), one.points.size());
+      for (std::size_t k = 0; k < one.points.size(); ++k) {
+        const WorkspaceMapPoint &a = one.points[k], &b = many.points[k];
+        EXPECT_TRUE(a.visited == b.visited && a.reachable == b.reachable && a.stable == b.stable &&
+                    a.status == b.status && same_value(a.max_strain, b.max_strain) &&
+                    same_value(a.stability_margin, b.stability_margin))
+            << "trial " << trial << ", " << threads << " threads, point " << k;
+        for (int i = 0; i < robot.num_limbs; ++i) EXPECT_TRUE(same_value(a.q(i), b.q(i)));
+      }
+      EXPECT_EQ(many.reachable_area, one.reachable_area);
+    }
+  }
+}
+
+// Points the flood never visited lie beyond the branch's border: IK from home with the solver's
+// whole budget (continuation down to 1/1024 of the path, the branch followed as the map does)
+// finds no equilibrium at any of them.
+TEST(WorkspaceMap, NoEquilibriumAtUnvisitedPoints) {
+  const RobotParams<double> robot = long_stroke_robot();
+  WorkspaceMapOptions options;
+  options.grid = kSanitized ? 10 : 40;
+  const WorkspaceMap map = workspace_map(robot, options);
+  std::vector<std::size_t> unvisited;
+  for (std::size_t k = 0; k < map.points.size(); ++k) {
+    if (!map.points[k].visited) unvisited.push_back(k);
+  }
+  ASSERT_GT(unvisited.size(), map.points.size() / 4);
+  std::mt19937_64 rng(7);
+  std::shuffle(unvisited.begin(), unvisited.end(), rng);
+  unvisited.resize(std::min<std::size_t>(unvisited.size(), kSanitized ? 3 : 60));
+  SolverOptions on_branch;
+  on_branch.stable_inverse = false;
+  for (std::size_t k : unvisited) {
+    const WorkspaceMapPoint& p = map.points[k];
+    EXPECT_FALSE(p.reachable || p.stable || std::isfinite(p.q(0)));
+    const InverseSolution cold =
+        inverse_kinematics(robot, Pose2<double>{p.x, p.y, map.theta}, on_branch);
+    EXPECT_FALSE(is_equilibrium(cold.summary))
+        << "an equilibrium at unvisited (" << p.x << ", " << p.y << "): q " << cold.q.transpose();
+  }
+  std::ostringstream out;
+  write_workspace_map_csv(map, 3, out);
+  EXPECT_NE(out.str().find(",unvisited,"), std::string::npos);
 }
 
 // By the default robot's 120 degree symmetry, equal joints turn the platform about its centre:

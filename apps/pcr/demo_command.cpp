@@ -329,7 +329,7 @@ std::string workspace_section(const pcr::MethodResult& result, const fs::path& o
       text, sizeof text,
       "Identified robot at theta = 0, %d x %d positions over x [%.2f, %.2f] mm, y [%.2f, %.2f] "
       "mm (map-identified.csv, %.2f s): reachable within the stroke %.2f mm^2, of which stable "
-      "%.2f mm^2 (%d of %d reachable points only by an unstable equilibrium); smallest "
+      "%.2f mm^2 (%d of %d reachable points on an unstable equilibrium); smallest "
       "reciprocal condition number of the scaled FK Jacobian there %.3g. Rotation range at the "
       "centre: [%.4f, %.4f] rad. Predicted 3-sigma position error of what the camera measures, "
       "from "

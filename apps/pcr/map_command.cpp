@@ -15,6 +15,7 @@ struct MapArguments {
   std::string robot, output, range;
   double theta = 0;
   int grid = 200;
+  int threads = 0;
   std::string rotation_at, covariance, frame = "measurement";
   bool worst_case = false;
   pcr::cli::SolveArguments solve;
@@ -46,6 +47,7 @@ void run_map(const MapArguments& args) {
   WorkspaceMapOptions options;
   options.theta = args.theta;
   options.grid = args.grid;
+  options.threads = args.threads;
   options.solver = args.solve.options();
   options.load = args.solve.load();
   if (!args.range.empty()) {
@@ -95,7 +97,7 @@ void run_map(const MapArguments& args) {
   OutputFile file(args.output);
   write_workspace_map_csv(map, n, file.stream());
   file.commit();
-  int reachable = 0, unstable = 0, stable = 0;
+  int reachable = 0, unstable = 0, stable = 0;  // unstable: reachable, not stable
   for (const WorkspaceMapPoint& p : map.points) {
     reachable += p.reachable ? 1 : 0;
     stable += p.reachable && p.stable ? 1 : 0;
@@ -108,7 +110,8 @@ void run_map(const MapArguments& args) {
             << format_double(map.seconds) << " s\n"
             << "pcr map: " << reachable << " reachable (" << format_double(map.reachable_area * 1e6)
             << " mm^2), " << stable << " of them stable (" << format_double(map.stable_area * 1e6)
-            << " mm^2), " << unstable << " reachable only by an unstable equilibrium\n";
+            << " mm^2), " << unstable
+            << " of them on an unstable equilibrium of the branch the map follows\n";
 }
 
 }  // namespace
@@ -117,8 +120,10 @@ void register_map_command(CLI::App& app) {
   auto args = std::make_shared<MapArguments>();
   CLI::App* map = app.add_subcommand(
       "map",
-      "Workspace map at a fixed orientation: IK over a grid of platform positions (warm-started "
-      "along it) -> CSV x,y,theta,reachable,stable,status,q1..qn,max_strain,stability_margin,"
+      "Workspace map at a fixed orientation: IK over a grid of platform positions (each "
+      "warm-started "
+      "from a solved neighbour, outward from home) -> CSV "
+      "x,y,theta,reachable,stable,status,q1..qn,max_strain,stability_margin,"
       "singularity,position_3sigma,orientation_3sigma,worst_position,worst_orientation; the "
       "reachable and stable areas on stderr. --rotation-range x,y prints the interval of theta "
       "reachable (stable, within the stroke) at one position instead.");
@@ -143,6 +148,11 @@ void register_map_command(CLI::App& app) {
       ->check(CLI::IsMember({"measurement", "platform"}));
   map->add_flag("--worst-case", args->worst_case,
                 "worst-case errors over the robot's uncertainty intervals (no covariance needed)");
+  map->add_option("--threads", args->threads,
+                  "threads that solve the map (0: one per core); the map is the same whatever "
+                  "their number")
+      ->check(pcr::cli::within(pcr::WorkspaceMapOptions::kThreads))
+      ->capture_default_str();
   map->add_option("--output", args->output, "output CSV (default: stdout)");
   args->solve.add_to(*map);
   map->callback([args] { run_map(*args); });

@@ -7,7 +7,7 @@ namespace pcr::python {
 py::dict workspace_map_dict(const WorkspaceMap& map, int n) {
   const auto nx = static_cast<py::ssize_t>(map.nx), ny = static_cast<py::ssize_t>(map.ny);
   py::array_t<double> xs(nx), ys(ny), q({ny, nx, static_cast<py::ssize_t>(n)});
-  py::array_t<bool> reachable({ny, nx}), stable({ny, nx});
+  py::array_t<bool> visited({ny, nx}), reachable({ny, nx}), stable({ny, nx});
   py::array_t<int> status({ny, nx});
   const char* names[] = {"max_strain",       "stability_margin",   "singularity",
                          "position_3sigma",  "orientation_3sigma", "worst_position",
@@ -19,9 +19,10 @@ py::dict workspace_map_dict(const WorkspaceMap& map, int n) {
   for (py::ssize_t j = 0; j < ny; ++j) {
     for (py::ssize_t i = 0; i < nx; ++i) {
       const WorkspaceMapPoint& p = map.points[static_cast<std::size_t>(j * nx + i)];
+      visited.mutable_at(j, i) = p.visited;
       reachable.mutable_at(j, i) = p.reachable;
       stable.mutable_at(j, i) = p.stable;
-      status.mutable_at(j, i) = static_cast<int>(p.status);
+      status.mutable_at(j, i) = p.visited ? static_cast<int>(p.status) : -1;
       for (int k = 0; k < n; ++k) q.mutable_at(j, i, k) = p.q(k);
       const double values[] = {p.max_strain,       p.stability_margin,   p.singularity,
                                p.position_3sigma,  p.orientation_3sigma, p.worst_position,
@@ -33,6 +34,7 @@ py::dict workspace_map_dict(const WorkspaceMap& map, int n) {
   d["x"] = xs;
   d["y"] = ys;
   d["theta"] = map.theta;
+  d["visited"] = visited;
   d["reachable"] = reachable;
   d["stable"] = stable;
   d["status_code"] = status;
@@ -49,8 +51,9 @@ void wrap_workspace_map(py::module_& m) {
       "workspace_map",
       [](const RobotDescription& robot, double theta, int grid,
          const std::optional<std::array<double, 4>>& range, const py::object& force, double moment,
-         const std::optional<SolverOptions>& solver) {
+         const std::optional<SolverOptions>& solver, int threads) {
         WorkspaceMapOptions o;
+        o.threads = threads;
         o.theta = theta;
         o.grid = grid;
         o.range = range;
@@ -66,12 +69,15 @@ void wrap_workspace_map(py::module_& m) {
       },
       py::arg("robot"), py::kw_only(), py::arg("theta") = 0.0, py::arg("grid") = 200,
       py::arg("range") = py::none(), py::arg("force") = no_force(), py::arg("moment") = 0.0,
-      py::arg("options") = py::none(),
+      py::arg("options") = py::none(), py::arg("threads") = 0,
       "Workspace map at orientation theta (rad): IK over a grid x grid of platform positions "
       "(range = (x_min, x_max, y_min, y_max) m; default: the positions an FK scan of the stroke "
-      "box reaches, a tenth wider), warm-started along it. Returns a dict: x (grid,), y (grid,), "
-      "theta, and (grid, grid) arrays indexed [iy, ix]: reachable (an equilibrium within the "
-      "stroke), stable, status_code, q (grid, grid, n) m, max_strain, stability_margin, "
+      "box reaches, a tenth wider), each warm-started from a solved neighbour, outward from home, "
+      "on `threads` threads (0: one per core; the map does not depend on them). Returns a dict: "
+      "x (grid,), y (grid,), theta, and (grid, grid) arrays indexed [iy, ix]: visited (IK was "
+      "run there; not where no solved neighbour led), reachable (an equilibrium within the "
+      "stroke), stable, status_code (a SolveStatus value, -1 where not visited), q (grid, grid, "
+      "n) m, max_strain, stability_margin, "
       "singularity, position_3sigma, orientation_3sigma, worst_position, worst_orientation (NaN "
       "without a covariance); reachable_area, stable_area (m^2), seconds. Releases the GIL.");
 

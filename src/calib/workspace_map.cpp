@@ -2,11 +2,16 @@
 #include "pcr/calib/workspace_map.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <exception>
+#include <mutex>
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <system_error>
+#include <thread>
 #include <utility>
 
 #include "pcr/csv_io.hpp"
@@ -38,39 +43,237 @@ InverseSolution solve_from_neighbours(const RobotParams<double>& robot, const Po
   return best;
 }
 
+/// Runs task(k) for k in [0, count) on up to `threads` threads, the caller's among them, each
+/// taking the next k when it is done with one (a failed solve costs a hundred converged ones).
+/// Rethrows the first exception a task threw, once every thread has stopped.
+template <class Task>
+void parallel_for(std::size_t count, int threads, const Task& task) {
+  const auto workers = std::min(count, static_cast<std::size_t>(std::max(threads, 1)));
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  const auto work = [&] {
+    for (std::size_t k = next++; k < count; k = next++) {
+      try {
+        task(k);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+        next = count;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < workers; ++t) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;  // no more threads to be had: the ones running take the rest
+    }
+  }
+  work();
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+/// Threads to run on: `threads`, or one per core when 0.
+int thread_count(int threads) {
+  return threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+/// The solves of workspace_map: waves of points, each wave the unvisited neighbours of the points
+/// the wave before solved, warm-started from them.
+class MapFlood {
+ public:
+  MapFlood(const RobotParams<double>& robot, const WorkspaceMapOptions& options, WorkspaceMap& map)
+      : robot_(robot),
+        options_(options),
+        map_(map),
+        threads_(thread_count(options.threads)),
+        slot_(map.points.size(), -1) {
+    // The map follows its branch: where it turns unstable the point says so (stable false), and
+    // the flood goes on along it, as rotation_range does.
+    cold_options_ = options.solver;
+    cold_options_.stable_inverse = false;
+    // A neighbour lies a cell away: its warm start converges in a few iterations unless a fold
+    // lies between, where Newton crawls. There the solve stops early (a point one neighbour does
+    // not reach is left to the others): the budget that makes the border cost a few converged
+    // solves per point instead of a hundred.
+    neighbour_options_ = cold_options_;
+    SolverOptions& o = neighbour_options_;
+    o.max_iterations = std::min(o.max_iterations, 8);
+    o.max_line_search = std::min(o.max_line_search, 4);
+    o.max_continuation_steps = std::min(o.max_continuation_steps, 16);
+    o.min_continuation_step = std::max(o.min_continuation_step, 1.0 / 16);
+  }
+
+  void run() {
+    const ForwardSolution home = home_solution(robot_, cold_options_, options_.load);
+    if (usable_as_warm_start(home.summary)) flood(solve_cold({nearest_point(home.pose)}));
+    std::vector<std::size_t> lattice;
+    const int levels_x = std::min(kSeedLattice, map_.nx),
+              levels_y = std::min(kSeedLattice, map_.ny);
+    for (int b = 0; b < levels_y; ++b) {
+      for (int a = 0; a < levels_x; ++a) {
+        const std::size_t k =
+            index(static_cast<int>(std::lround(1.0 * a * (map_.nx - 1) / (levels_x - 1))),
+                  static_cast<int>(std::lround(1.0 * b * (map_.ny - 1) / (levels_y - 1))));
+        if (!map_.points[k].visited) lattice.push_back(k);
+      }
+    }
+    flood(solve_cold(lattice));
+  }
+
+ private:
+  /// The solved points of a wave and their solutions.
+  struct Wave {
+    std::vector<std::size_t> points;
+    std::vector<InverseSolution> solutions;
+  };
+
+  std::size_t index(int i, int j) const {
+    return static_cast<std::size_t>(j) * static_cast<std::size_t>(map_.nx) +
+           static_cast<std::size_t>(i);
+  }
+  Pose2<double> pose(std::size_t k) const {
+    return Pose2<double>{map_.points[k].x, map_.points[k].y, options_.theta};
+  }
+  std::size_t nearest_point(const Pose2<double>& at) const {
+    const auto nearest = [](double v, double lo, double hi, int count) {
+      return static_cast<int>(std::clamp(std::lround((v - lo) / (hi - lo) * (count - 1)), 0L,
+                                         static_cast<long>(count - 1)));
+    };
+    return index(nearest(at.x, map_.x_min, map_.x_max, map_.nx),
+                 nearest(at.y, map_.y_min, map_.y_max, map_.ny));
+  }
+  /// The four neighbours of point k in a fixed order (left, right, below, above; the grid's size
+  /// where there is none), so that the warm start a point gets does not depend on the threads.
+  std::array<std::size_t, 4> neighbours(std::size_t k) const {
+    const auto nx = static_cast<std::size_t>(map_.nx), size = map_.points.size();
+    const std::size_t i = k % nx;
+    return {i > 0 ? k - 1 : size, i + 1 < nx ? k + 1 : size, k >= nx ? k - nx : size,
+            k + nx < size ? k + nx : size};
+  }
+
+  void record(std::size_t k, const InverseSolution& s) {
+    WorkspaceMapPoint& p = map_.points[k];
+    p.visited = true;
+    p.status = s.summary.status;
+    const bool equilibrium = is_equilibrium(s.summary);
+    if (!equilibrium) return;
+    p.q = s.q;
+    p.reachable = within_stroke(robot_, s.q);
+    p.stable = s.summary.stability == Stability::kStable;
+    p.max_strain = s.summary.max_strain;
+    p.stability_margin = s.summary.stability_margin;
+    p.singularity = s.summary.singularity;
+    if (options_.accuracy) options_.accuracy(s, p);
+  }
+
+  /// Marks the points visited, solves them with `solve(k, point)` in parallel, and returns the
+  /// wave of those that can warm-start their neighbours.
+  template <class Solve>
+  Wave solve_wave(std::vector<std::size_t> points, const Solve& solve) {
+    for (std::size_t k : points) map_.points[k].visited = true;
+    std::vector<InverseSolution> solutions(points.size());
+    parallel_for(points.size(), threads_, [&](std::size_t w) {
+      solutions[w] = solve(points[w]);
+      record(points[w], solutions[w]);
+    });
+    Wave wave;
+    for (std::size_t w = 0; w < points.size(); ++w) {
+      if (!usable_as_warm_start(solutions[w].summary)) continue;
+      wave.points.push_back(points[w]);
+      wave.solutions.push_back(std::move(solutions[w]));
+    }
+    return wave;
+  }
+
+  Wave solve_cold(std::vector<std::size_t> points) {
+    return solve_wave(std::move(points), [&](std::size_t k) {
+      return inverse_kinematics(robot_, pose(k), cold_options_, options_.load);
+    });
+  }
+
+  void flood(Wave wave) {
+    const std::size_t none = map_.points.size();
+    while (!wave.points.empty()) {
+      std::vector<std::size_t> next;
+      for (std::size_t w = 0; w < wave.points.size(); ++w) {
+        slot_[wave.points[w]] = static_cast<std::ptrdiff_t>(w);
+        for (std::size_t k : neighbours(wave.points[w])) {
+          if (k != none && !map_.points[k].visited) {
+            map_.points[k].visited = true;
+            next.push_back(k);
+          }
+        }
+      }
+      Wave solved = solve_wave(std::move(next), [&](std::size_t k) {
+        std::array<const InverseSolution*, 2> warm{nullptr, nullptr};
+        std::size_t found = 0;
+        for (std::size_t m : neighbours(k)) {
+          if (m != none && slot_[m] >= 0 && found < warm.size()) {
+            warm[found++] = &wave.solutions[static_cast<std::size_t>(slot_[m])];
+          }
+        }
+        return solve_from_neighbours(robot_, pose(k), warm[0], warm[1], neighbour_options_,
+                                     options_.load);
+      });
+      for (std::size_t k : wave.points) slot_[k] = -1;
+      wave = std::move(solved);
+    }
+  }
+
+  const RobotParams<double>& robot_;
+  const WorkspaceMapOptions& options_;
+  WorkspaceMap& map_;
+  int threads_;
+  SolverOptions cold_options_, neighbour_options_;
+  std::vector<std::ptrdiff_t> slot_;  ///< a point's place in the current wave, -1 if not in it
+};
+
 }  // namespace
 
 std::array<double, 4> stroke_pose_box(const RobotParams<double>& robot, int levels,
                                       const SolverOptions& options,
-                                      const PlatformLoad<double>& load) {
+                                      const PlatformLoad<double>& load, int threads) {
   const int n = robot.num_limbs;
-  if (n < 2 || n > kMaxLimbs || levels < 2) {
+  if (n < 2 || n > kMaxLimbs || levels < 2 || levels > 1000) {
     throw std::invalid_argument("stroke_pose_box: needs 2 to " + std::to_string(kMaxLimbs) +
-                                " limbs and at least 2 levels");
+                                " limbs and 2 to 1000 levels");
   }
-  std::array<double, 4> box{HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL};
-  ForwardSequence sequence(robot, options, load);
-  std::vector<int> index(static_cast<std::size_t>(n), 0);
-  JointVector q(n);
-  for (;;) {
-    for (int i = 0; i < n; ++i) {
-      const LimbParams<double>& limb = robot.limb(i);
-      q(i) = limb.q_min +
-             (limb.q_max - limb.q_min) * index[static_cast<std::size_t>(i)] / (levels - 1);
-    }
-    const ForwardSolution& fk = sequence.solve(q);
-    if (is_equilibrium(fk.summary)) {
+  std::size_t count = 1;
+  for (int i = 0; i < n; ++i) count *= static_cast<std::size_t>(levels);
+  // Each configuration solved as cold (from home, once per thread): the box does not depend on
+  // the order, and every thread takes every workers-th configuration so that the corners' long
+  // paths spread over them.
+  const int workers = std::max(1, std::min(thread_count(threads), static_cast<int>(count)));
+  std::vector<std::array<double, 4>> boxes(static_cast<std::size_t>(workers),
+                                           {HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL});
+  parallel_for(boxes.size(), workers, [&](std::size_t w) {
+    ForwardSequence sequence(robot, options, load);
+    std::array<double, 4>& box = boxes[w];
+    JointVector q(n);
+    for (std::size_t c = w; c < count; c += boxes.size()) {
+      std::size_t digits = c;  // the configuration's level per joint
+      for (int i = 0; i < n; ++i) {
+        const LimbParams<double>& limb = robot.limb(i);
+        const auto level = static_cast<double>(digits % static_cast<std::size_t>(levels));
+        digits /= static_cast<std::size_t>(levels);
+        q(i) = limb.q_min + (limb.q_max - limb.q_min) * level / (levels - 1);
+      }
+      const ForwardSolution& fk = sequence.solve(q);
+      if (!is_equilibrium(fk.summary)) continue;
       box[0] = std::min(box[0], fk.pose.x);
       box[1] = std::max(box[1], fk.pose.x);
       box[2] = std::min(box[2], fk.pose.y);
       box[3] = std::max(box[3], fk.pose.y);
     }
-    int i = 0;  // the next index vector, odometer order
-    while (i < n && ++index[static_cast<std::size_t>(i)] == levels) {
-      index[static_cast<std::size_t>(i)] = 0;
-      ++i;
-    }
-    if (i == n) break;
+  });
+  std::array<double, 4> box = boxes[0];
+  for (const std::array<double, 4>& b : boxes) {
+    box = {std::min(box[0], b[0]), std::max(box[1], b[1]), std::min(box[2], b[2]),
+           std::max(box[3], b[3])};
   }
   if (!(box[0] <= box[1])) {
     throw std::runtime_error("stroke_pose_box: no configuration of the stroke box was solved");
@@ -107,7 +310,7 @@ WorkspaceMap workspace_map(const RobotParams<double>& robot, const WorkspaceMapO
   if (options.range) {
     range = *options.range;
   } else {
-    range = stroke_pose_box(robot, 7, options.solver, options.load);
+    range = stroke_pose_box(robot, 7, options.solver, options.load, options.threads);
     const double mx = 0.1 * (range[1] - range[0]), my = 0.1 * (range[3] - range[2]);
     range = {range[0] - mx, range[1] + mx, range[2] - my, range[3] + my};
   }
@@ -125,44 +328,18 @@ WorkspaceMap workspace_map(const RobotParams<double>& robot, const WorkspaceMapO
   map.y_min = range[2];
   map.y_max = range[3];
   map.points.resize(static_cast<std::size_t>(map.nx) * static_cast<std::size_t>(map.ny));
-
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<InverseSolution> previous_row(static_cast<std::size_t>(map.nx));
-  std::vector<InverseSolution> row(static_cast<std::size_t>(map.nx));
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (int j = 0; j < map.ny; ++j) {
-    const double y = map.y_min + (map.y_max - map.y_min) * j / (map.ny - 1);
-    const InverseSolution* neighbour = nullptr;
-    for (int k = 0; k < map.nx; ++k) {
-      const int i = j % 2 == 0 ? k : map.nx - 1 - k;  // serpentine
-      const auto ui = static_cast<std::size_t>(i);
-      const double x = map.x_min + (map.x_max - map.x_min) * i / (map.nx - 1);
-      const InverseSolution* above = j > 0 ? &previous_row[ui] : nullptr;
-      row[ui] = solve_from_neighbours(robot, Pose2<double>{x, y, options.theta}, neighbour, above,
-                                      options.solver, options.load);
-      const InverseSolution& s = row[ui];
-      neighbour = &s;
-      WorkspaceMapPoint& p =
-          map.points[static_cast<std::size_t>(j) * static_cast<std::size_t>(map.nx) + ui];
-      p.x = x;
-      p.y = y;
-      p.status = s.summary.status;
-      const bool equilibrium = is_equilibrium(s.summary);
-      p.q = equilibrium ? s.q : JointVector::Constant(n, nan);
-      p.reachable = equilibrium && within_stroke(robot, s.q);
-      p.stable = equilibrium && s.summary.stability == Stability::kStable;
-      if (equilibrium) {
-        p.max_strain = s.summary.max_strain;
-        p.stability_margin = s.summary.stability_margin;
-        p.singularity = s.summary.singularity;
-        if (options.accuracy) options.accuracy(s, p);
-      }
-      if (p.reachable) map.reachable_area += 1;
-      if (p.reachable && p.stable) map.stable_area += 1;
-    }
-    std::swap(previous_row, row);
+  for (std::size_t k = 0; k < map.points.size(); ++k) {
+    map.points[k].x = map.x(static_cast<int>(k % static_cast<std::size_t>(map.nx)));
+    map.points[k].y = map.y(static_cast<int>(k / static_cast<std::size_t>(map.nx)));
+    map.points[k].q = JointVector::Constant(n, std::numeric_limits<double>::quiet_NaN());
   }
+  const auto start = std::chrono::steady_clock::now();
+  MapFlood(robot, options, map).run();
   map.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (const WorkspaceMapPoint& p : map.points) {
+    if (p.reachable) map.reachable_area += 1;
+    if (p.reachable && p.stable) map.stable_area += 1;
+  }
   map.reachable_area *= map.cell_area();
   map.stable_area *= map.cell_area();
   return map;
@@ -229,7 +406,7 @@ void write_workspace_map_csv(const WorkspaceMap& map, int num_limbs, std::ostrea
     csv.add(map.theta);
     csv.add(p.reachable ? 1 : 0);
     csv.add(p.stable ? 1 : 0);
-    csv.add(to_string(p.status));
+    csv.add(p.visited ? to_string(p.status) : "unvisited");
     for (int i = 0; i < num_limbs; ++i) csv.add(p.q(i));
     csv.add(p.max_strain);
     csv.add(p.stability_margin);
