@@ -46,6 +46,25 @@ def test_workspace_maps(robot, tmp_path):
 
 
 @pytest.mark.skipif(not pcr.has_calibration, reason="pcr::calib not built")
+def test_a_long_stroke_map_leaves_points_beyond_the_border_unvisited(tmp_path):
+    import pathlib
+    robot = pcr.Robot.load(pathlib.Path(__file__).parents[2] / "robots"
+                           / "femto-3pf-long-stroke.json")
+    one = pcr.workspace_map(robot, grid=14, threads=1)
+    two = pcr.workspace_map(robot, grid=14, threads=2)
+    for key in ("visited", "reachable", "stable", "status_code", "q", "max_strain"):
+        np.testing.assert_array_equal(one[key], two[key])  # NaNs in the same places
+    unvisited = ~one["visited"]
+    assert unvisited.sum() > 14 * 14 // 4
+    assert np.all(one["status_code"][unvisited] == -1)
+    assert not one["reachable"][unvisited].any() and np.isnan(one["q"][unvisited]).all()
+    with pytest.raises(ValueError, match="threads"):
+        pcr.workspace_map(robot, grid=4, threads=-1)
+    pcr.plot.plot_workspace_maps(robot, result=one, path=tmp_path / "maps.png")
+    check_png(tmp_path / "maps.png")
+
+
+@pytest.mark.skipif(not pcr.has_calibration, reason="pcr::calib not built")
 def test_plot_workspace(robot, tmp_path):
     ws = pcr.workspace(robot, theta=0.0, resolution=9)
     assert ws["reachable"][4, 4]  # the centre (home) is reachable

@@ -130,8 +130,8 @@ def plot_map(source, quantity="position_3sigma", robot=None, *, name=None, log=N
         statuses = sorted(set(np.asarray(m["status"])[~found])) if "status" in m else []
         ax.pcolormesh(x, y, np.where(found, np.nan, 1.0), cmap=ListedColormap(["0.6"]),
                       shading="nearest")
-        handles.append(Patch(color="0.6", label="no equilibrium (IK: "
-                             + (", ".join(statuses) if statuses else "failed") + ")"))
+        handles.append(Patch(color="0.6", label=textwrap.fill(
+            "no equilibrium (IK: " + (", ".join(statuses) if statuses else "failed") + ")", 40)))
     if reach.any() and not reach.all():
         ax.contour(x, y, reach.astype(float), levels=[0.5], colors="k", linewidths=1.5)
     if robot is not None:
