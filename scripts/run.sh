@@ -29,12 +29,17 @@ APT_PACKAGES=(
   libeigen3-dev libceres-dev libopencv-dev libapriltag-dev libsundials-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
   python3 python3-dev python3-venv python3-pip
+  slurmctld slurmd slurm-client munge
 )
+# slurmctld, slurmd, slurm-client and munge: the one-node Slurm cluster on which the tests run a
+# study through dask-jobqueue's SLURMCluster (python/tests/test_cluster.py, ctest label cluster);
+# the test starts its own daemons and stops them (it needs none of the packages' services).
 # Python packages of the project virtual environment (.venv); pybind11's minimum is checked below.
 # dask, distributed, pandas and pyarrow are pcr.study's (the [study] extra); nbclient, nbformat
-# and ipykernel run the example notebook in the tests (python/tests/test_notebook.py).
+# and ipykernel run the example notebook in the tests (python/tests/test_notebook.py);
+# dask-jobqueue is SLURMCluster, for test_cluster.py.
 PIP_PACKAGES=('pybind11>=2.12' numpy pytest scikit-build-core matplotlib dask distributed pandas
-  pyarrow nbclient nbformat ipykernel)
+  pyarrow nbclient nbformat ipykernel dask-jobqueue)
 
 JOBS=${PCR_JOBS:-$(nproc)}
 VENV=$ROOT/.venv

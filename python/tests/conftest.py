@@ -18,6 +18,12 @@ def pytest_report_header(config):
     return f"pcr {pcr.__version__} from {os.path.dirname(pcr.__file__)}"
 
 
+def pytest_configure(config):
+    # ctest runs the marked tests apart (python/CMakeLists.txt): -m cluster, and -m "not cluster"
+    config.addinivalue_line("markers", "cluster: starts a one-node Slurm cluster on this machine "
+                            "(root, the slurm-wlm and munge packages: test_cluster.py)")
+
+
 
 def _find_cli():
     path = os.environ.get("PCR_CLI")
