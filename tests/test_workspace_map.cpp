@@ -240,7 +240,9 @@ TEST(WorkspaceMap, NoEquilibriumAtUnvisitedPoints) {
   for (std::size_t k = 0; k < map.points.size(); ++k) {
     if (!map.points[k].visited) unvisited.push_back(k);
   }
-  ASSERT_GT(unvisited.size(), map.points.size() / 4);
+  // More than a quarter of the map at 40 x 40; at the sanitizers' 10 x 10 the 9 x 9 lattice of
+  // seeds, solved cold, visits most points.
+  ASSERT_GT(unvisited.size(), kSanitized ? 0 : map.points.size() / 4);
   std::mt19937_64 rng(7);
   std::shuffle(unvisited.begin(), unvisited.end(), rng);
   unvisited.resize(std::min<std::size_t>(unvisited.size(), kSanitized ? 3 : 60));
