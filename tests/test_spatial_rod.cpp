@@ -78,8 +78,9 @@ TEST(Quaternion, RotationMatchesEigenForAnyScale) {
     // rotation_of divides by |h|^2: any non-zero scale gives the same rotation.
     for (double scale : {1.0, 1.0 + 1e-6, 0.3, 7.0}) {
       const Matrix3d R = rotation_of<double>(scale * h);
-      EXPECT_LT((R - expected).cwiseAbs().maxCoeff(), 1e-15) << i << " scale " << scale;
-      EXPECT_LT((R.transpose() * R - Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-15);
+      // A few roundings apart (GCC and Clang evaluate the products in different orders).
+      EXPECT_LT((R - expected).cwiseAbs().maxCoeff(), 4e-15) << i << " scale " << scale;
+      EXPECT_LT((R.transpose() * R - Matrix3d::Identity()).cwiseAbs().maxCoeff(), 4e-15);
     }
   }
 }
