@@ -9,4 +9,5 @@
 #include "pcr/scalar_traits.hpp"
 #include "pcr/se2.hpp"
 #include "pcr/shooting.hpp"
+#include "pcr/spatial/cosserat_rod.hpp"
 #include "pcr/trajectory.hpp"

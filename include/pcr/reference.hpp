@@ -10,6 +10,7 @@
 //
 // integrated by CVODE's variable-order, variable-step multistep methods at tight tolerances, and
 // the forward kinematics of pcr/kinematics.hpp solved on the residual those integrations give.
+// The spatial Cosserat rod of pcr/spatial/cosserat_rod.hpp has its CVODE integration too.
 // These serve to measure the discretisation error of the fixed-step RK4 core and as the
 // "best available" answer; they allocate and may throw, so they are not for the real-time loop.
 // SUNDIALS headers never appear here.
@@ -22,6 +23,7 @@
 #include "pcr/robot.hpp"
 #include "pcr/rod.hpp"
 #include "pcr/shooting.hpp"
+#include "pcr/spatial/cosserat_rod.hpp"
 
 namespace pcr {
 
@@ -65,6 +67,21 @@ RodState<double> integrate_rod_reference(const RodState<double>& start, const Ro
 std::vector<RodState<double>> sample_rod_reference(
     const RodState<double>& start, const Rod<double>& rod, const std::vector<double>& arc_lengths,
     const ReferenceOptions& options = ReferenceOptions());
+
+/// Integrates one spatial rod (pcr/spatial/cosserat_rod.hpp: the same equations and sign
+/// convention) over [0, rod.length] from its proximal state under gravity (m/s^2) with CVODE.
+/// An independent integration of the orientation: CVODE carries the rotation matrix itself
+/// (R' = R [u]x, 9 states, never re-orthonormalised: it leaves SO(3) only by CVODE's error), not
+/// the core's quaternion, and n(s) = n(0) - f s in closed form; the base quaternion is turned into
+/// R, and the tip's R into a quaternion, by Eigen's Quaternion, not by the core's rotation_of and
+/// quaternion_of. The tip's orientation is a unit quaternion of either sign: compare rotations.
+/// ReferenceOptions::absolute_tolerance scales with L for p, 1 for R and
+/// max(EI / L, |m(0)|, |n(0)| L, |f| L^2) for m. Throws std::invalid_argument on non-finite
+/// input, a zero quaternion, or a non-positive length, diameter, E or G (or negative density),
+/// and std::runtime_error when CVODE fails.
+SpatialRodState<double> integrate_spatial_rod_reference(
+    const SpatialRodState<double>& base, const SpatialRod<double>& rod,
+    const Vector3<double>& gravity, const ReferenceOptions& options = ReferenceOptions());
 
 /// The scaled shooting residual of pcr::shooting_residual (closure of each rod, Eq. 2, then the
 /// platform equilibrium, Eq. 4), with every rod integrated by CVODE. Returns the largest bending

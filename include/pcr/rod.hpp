@@ -44,6 +44,12 @@ T bending_stiffness(const T& young_modulus, const T& diameter) {
   return young_modulus * T(M_PI / 64.0) * d2 * d2;
 }
 
+/// Area of a circular section, pi d^2 / 4 (m^2), d in m.
+template <class T>
+T section_area(const T& diameter) {
+  return T(M_PI / 4.0) * diameter * diameter;
+}
+
 /// One rod as the model sees it: its constitutive law, its geometry and the parameters a
 /// calibration may identify. A circular section of diameter d(s) = d + d' s: uniform (d' = 0,
 /// the paper's rods) or tapered (a ground or etched rod), so EI(s) = E pi d(s)^4 / 64 and
@@ -69,7 +75,7 @@ struct Rod {
   }
   /// EA at the proximal end (N): the kinematics takes the rods as inextensible, the stability
   /// check (pcr/stability.hpp) needs their axial compliance.
-  T axial_stiffness() const { return young_modulus * T(M_PI / 4.0) * diameter * diameter; }
+  T axial_stiffness() const { return young_modulus * section_area(diameter); }
   /// u*(s) (1/m).
   T intrinsic_curvature(const T& s) const { return precurvature + precurvature_slope * s; }
   /// The angle the stress-free rod's tangent turns through from 0 to s: u0 s + u1 s^2 / 2 (rad).
