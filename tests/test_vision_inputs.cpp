@@ -18,8 +18,10 @@
 namespace pcr::vision {
 namespace {
 
+// One scratch file per test and name: ctest runs this binary's tests as parallel processes.
 std::string tmp(const std::string& name) {
-  return std::string(PCR_BINARY_DIR) + "/test_vision_inputs_" + name;
+  return std::string(PCR_BINARY_DIR) + "/test_vision_inputs_" +
+         ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" + name;
 }
 
 MountLayout layout() {
