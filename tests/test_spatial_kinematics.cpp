@@ -624,6 +624,49 @@ TEST(SpatialKinematics, RandomRobotsMatchCvode) {
   EXPECT_LE(cold_failures, 1);
 }
 
+// ---- Inverse kinematics -------------------------------------------------------------------------
+
+TEST(SpatialKinematics, InverseOfForwardRecoversTheJoints) {
+  std::mt19937_64 rng(71);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  double worst = 0;
+  int mixed_tested = 0;
+  for (int trial = 0; trial < 10; ++trial) {
+    // The reference robot, then six-rod robots with both attachments and both actuations.
+    const SpatialRobotParams<double> robot =
+        trial < 5 ? continuum_stewart_gough() : mixed_robot(rng, 6);
+    const SpatialJointVector q0 = equal_joints(6, 0.005);
+    const SpatialForwardSolution start = spatial_forward_kinematics(robot, q0);
+    if (!start.summary.converged()) {
+      // The cold-start limitation of RandomRobotsMatchCvode: not IK's to test.
+      ASSERT_GE(trial, 5);
+      std::printf("IK trial %d: no cold FK start\n", trial);
+      continue;
+    }
+    mixed_tested += trial >= 5;
+    SpatialJointVector q(6);
+    for (int i = 0; i < 6; ++i) q(i) = q0(i) + 0.01 * u(rng);
+    const SpatialForwardSolution fk = spatial_forward_kinematics(robot, q, start);
+    ASSERT_TRUE(fk.summary.converged()) << "trial " << trial;
+    const SpatialInverseSolution ik = spatial_inverse_kinematics(robot, fk.pose, start);
+    ASSERT_TRUE(ik.summary.converged()) << "trial " << trial << " " << to_string(ik.summary.status);
+    const double error = (ik.q - q).lpNorm<Eigen::Infinity>();
+    worst = std::max(worst, error);
+    EXPECT_LT(error, 1e-9) << "trial " << trial;
+    std::printf(
+        "IK of FK, |dq| %.1f mm: joints within %.1e m, %d evaluations, %d continuation "
+        "steps\n",
+        (q - q0).norm() * 1e3, error, ik.summary.residual_evaluations,
+        ik.summary.continuation_steps);
+  }
+  std::printf("IK(FK(q)) = q: worst %.2e m (%d mixed robots)\n", worst, mixed_tested);
+  EXPECT_GE(mixed_tested, 2);
+  EXPECT_EQ(spatial_inverse_kinematics(mixed_robot(rng, 5), SpatialPose<double>(),
+                                       SpatialForwardSolution())
+                .summary.status,
+            SolveStatus::kUnsupported);
+}
+
 TEST(SpatialKinematics, RejectsBadInput) {
   const SpatialRobotParams<double> robot = continuum_stewart_gough();
   EXPECT_EQ(spatial_forward_kinematics(robot, equal_joints(5, 0)).summary.status,
