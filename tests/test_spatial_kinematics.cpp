@@ -4,6 +4,9 @@
 // steps use central-difference Jacobians, the platform's balance recomputed from CVODE rods,
 // central differences of the residual, and the planar core's FK (pcr::forward_kinematics).
 
+// Eigen asserts on any heap allocation while set_is_malloc_allowed(false), in builds with
+// assertions (SolvesNeverAllocate; operator new is counted in every build).
+#define EIGEN_RUNTIME_NO_MALLOC
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -14,6 +17,7 @@
 #include <random>
 #include <vector>
 
+#include "allocation_counter.hpp"
 #include "pcr/kinematics.hpp"
 #include "pcr/reference.hpp"
 #include "pcr/robot.hpp"
@@ -665,6 +669,27 @@ TEST(SpatialKinematics, InverseOfForwardRecoversTheJoints) {
                                        SpatialForwardSolution())
                 .summary.status,
             SolveStatus::kUnsupported);
+}
+
+TEST(SpatialKinematics, SolvesNeverAllocate) {
+  // Neither operator new nor Eigen's aligned malloc, in cold and warm FK and in IK.
+  const SpatialRobotParams<double> robot = continuum_stewart_gough();
+  const SpatialJointVector q0 = equal_joints(6, 0.005);
+  SpatialJointVector q1 = q0;
+  q1(0) += 0.002;
+  q1(3) -= 0.001;
+  g_allocations = 0;
+  g_counting = true;
+  Eigen::internal::set_is_malloc_allowed(false);
+  const SpatialForwardSolution cold = spatial_forward_kinematics(robot, q0);
+  const SpatialForwardSolution warm = spatial_forward_kinematics(robot, q1, cold);
+  const SpatialInverseSolution ik = spatial_inverse_kinematics(robot, warm.pose, cold);
+  Eigen::internal::set_is_malloc_allowed(true);
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_TRUE(cold.summary.converged());
+  EXPECT_TRUE(warm.summary.converged());
+  EXPECT_TRUE(ik.summary.converged());
 }
 
 TEST(SpatialKinematics, RejectsBadInput) {
