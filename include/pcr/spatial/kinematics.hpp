@@ -1,7 +1,8 @@
 #pragma once
 // Forward kinematics of a spatial parallel continuum robot (pcr/spatial/robot.hpp) by Newton
-// shooting, the spatial counterpart of pcr/kinematics.hpp. Header-only, Eigen only, no heap, no
-// exceptions, a bounded number of iterations; numerical outcomes are reported in a SolverSummary.
+// shooting, and inverse kinematics of a six-rod one, the spatial counterparts of
+// pcr/kinematics.hpp. Header-only, Eigen only, no heap, no exceptions, a bounded number of
+// iterations; numerical outcomes are reported in a SolverSummary.
 //
 // Unknowns (6 n + 6): each rod's proximal wrench (n, m)(0) (6, in W), then the platform pose:
 // its position (3, in W) and its orientation, a unit quaternion that Newton updates by a rotation
