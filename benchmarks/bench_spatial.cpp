@@ -1,13 +1,16 @@
 // Speed of the spatial Cosserat rod (pcr/spatial/cosserat_rod.hpp): the rods of one shooting
 // residual of a continuum Stewart-Gough robot (six rods), with and without the sensitivity a
-// Newton step needs, at the default step count and at half of it.
+// Newton step needs, at the default step count and at half of it; and warm FK and IK of the
+// reference robot (pcr/spatial/kinematics.hpp) along 1 mm joint steps.
 //   build/benchmarks/bench_spatial [--benchmark_repetitions=5 --benchmark_report_aggregates_only]
 #include <benchmark/benchmark.h>
 
 #include <array>
 #include <cmath>
+#include <vector>
 
 #include "pcr/spatial/cosserat_rod.hpp"
+#include "pcr/spatial/kinematics.hpp"
 
 namespace {
 
@@ -65,6 +68,76 @@ void BM_SixRodsWithSensitivity(benchmark::State& state) {
 BENCHMARK(BM_SixRodsWithSensitivity)
     ->Arg(kDefaultSpatialRodSteps)
     ->Arg(kDefaultSpatialRodSteps / 2);
+
+/// A closed path of the reference continuum Stewart-Gough robot in 1 mm joint steps: each rod's
+/// length q0 + 5 mm sin(2 pi k / 32 + phase_i) (5 mm x 2 pi / 32 = 0.98 mm per step) around the
+/// equal length that holds the platform 0.4 m up, with its FK solutions.
+struct SpatialPath {
+  static constexpr int kPoints = 32;
+  SpatialRobotParams<double> robot = continuum_stewart_gough();
+  std::vector<SpatialJointVector> q;
+  std::vector<SpatialForwardSolution> fk;
+
+  SpatialPath() {
+    const double q0 = 0.005285;
+    for (int k = 0; k < kPoints; ++k) {
+      SpatialJointVector joints(6);
+      for (int i = 0; i < 6; ++i) joints(i) = q0 + 0.005 * std::sin(2 * M_PI * k / kPoints + i);
+      q.push_back(joints);
+    }
+    fk.push_back(spatial_forward_kinematics(robot, q[0]));
+    for (int k = 1; k < kPoints; ++k)
+      fk.push_back(spatial_forward_kinematics(robot, q[k], fk.back()));
+  }
+};
+
+const SpatialPath& spatial_path() {
+  static const SpatialPath path;
+  return path;
+}
+
+/// Warm FK along the path, each solve from the previous solution.
+void BM_SpatialForwardWarm(benchmark::State& state) {
+  const SpatialPath& path = spatial_path();
+  SpatialForwardSolution previous = path.fk.back();
+  int k = 0;
+  long evaluations = 0, solves = 0, failures = 0;
+  for (auto _ : state) {
+    SpatialForwardSolution next = spatial_forward_kinematics(path.robot, path.q[k], previous);
+    benchmark::DoNotOptimize(next.pose.position.data());
+    evaluations += next.summary.residual_evaluations;
+    failures += next.summary.converged() ? 0 : 1;
+    ++solves;
+    previous = std::move(next);
+    k = (k + 1) % SpatialPath::kPoints;
+  }
+  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
+  state.counters["failures"] = static_cast<double>(failures);
+}
+BENCHMARK(BM_SpatialForwardWarm)->Unit(benchmark::kMicrosecond);
+
+/// Warm IK along the path's poses, each solve from the previous solution.
+void BM_SpatialInverseWarm(benchmark::State& state) {
+  const SpatialPath& path = spatial_path();
+  SpatialForwardSolution previous = path.fk.back();
+  int k = 0;
+  long evaluations = 0, solves = 0, failures = 0;
+  for (auto _ : state) {
+    const SpatialInverseSolution next =
+        spatial_inverse_kinematics(path.robot, path.fk[k].pose, previous);
+    benchmark::DoNotOptimize(next.q.data());
+    evaluations += next.summary.residual_evaluations;
+    failures += next.summary.converged() ? 0 : 1;
+    ++solves;
+    previous.pose = next.pose;
+    previous.q = next.q;
+    previous.wrenches = next.wrenches;
+    k = (k + 1) % SpatialPath::kPoints;
+  }
+  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
+  state.counters["failures"] = static_cast<double>(failures);
+}
+BENCHMARK(BM_SpatialInverseWarm)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
