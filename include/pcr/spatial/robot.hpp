@@ -117,7 +117,12 @@ struct SpatialRobotParams {
 /// through holes in the base and clamped to a 0.1 kg platform (its centre of mass at its origin)
 /// under gravity.
 ///
-/// Layout, an assumption (not checked against the paper's figures): the holes lie on circles of
+/// Layout: NOT yet the published one. Till's example of this robot (the hole pattern of Black,
+/// Till and Rucker 2018) puts a pair's holes 20 degrees apart in the base (the minor angle, rods
+/// at 120 k -+ 10 degrees) and 100 degrees apart in the platform (120 k -+ 50 degrees); the layout
+/// below has the two patterns the other way round (the robot upside down). With the published
+/// layout one IK of test_spatial_kinematics (joints 10 mm from the start) stops at its iteration
+/// limit: the swap waits for a more robust IK. The layout below: the holes lie on circles of
 /// radius 87 mm in the base (z = 0) and in the platform, in pairs 100 degrees apart (the major
 /// angle; 20 degrees between neighbouring pairs). The base pairs sit at +-50 degrees about 0, 120
 /// and 240 degrees; the platform's pattern is the same turned by 60 degrees. Rod i leaves the
