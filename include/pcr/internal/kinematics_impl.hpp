@@ -205,10 +205,7 @@ Solution solve_through_folds(ShootingProblem::Kind kind, const RobotParams<doubl
                              const PlatformLoad<double>& load, Visitor&& visit) {
   Solution solution;
   ShootingProblem problem(kind, robot, load, options);
-  if (options.rod_steps <= 0) {
-    problem.set_rod_steps(
-        std::min(std::max(warm.summary.rod_steps, options.min_rod_steps), options.max_rod_steps));
-  }
+  problem.set_rod_steps(starting_rod_steps(options, warm.summary.rod_steps));
   problem.set_input(u0);
   ShootingVector z = problem.pack(shooting_point(robot, warm));
   SolverSummary& summary = solution.summary;

@@ -296,7 +296,7 @@ inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
                                     SolveStatus status, ChordMatrix* carried) {
   for (int pass = 0; status == SolveStatus::kConverged && options.rod_steps <= 0; ++pass) {
     const double ratio = estimate_discretisation_error(problem, z, options, summary, carried);
-    const int needed = problem.rod_steps_for_error(ratio);
+    const int needed = rod_steps_for_error(options, problem.rod_steps(), ratio);
     const int start = problem.rod_steps();
     if (needed == start || pass == 4) break;
     const ShootingVector z_start = z;
@@ -307,7 +307,7 @@ inline SolveStatus refine_rod_steps(ShootingProblem& problem, ShootingVector& z,
       // count up (or down) the ladder one rung at a time instead.
       z = z_start;
       for (int steps = start; steps != needed;) {
-        steps = problem.rung_towards(steps, needed);
+        steps = rod_steps_rung_towards(options, steps, needed);
         problem.set_rod_steps(steps);
         refined = newton_solve(problem, z, options, summary, carried);
         if (refined.status != SolveStatus::kConverged) break;
@@ -327,10 +327,7 @@ inline SolveStatus solve_along_path(ShootingProblem& problem, const ShootingVect
                                     const ShootingVector& u1, ShootingVector& z,
                                     const SolverOptions& options, SolverSummary& summary,
                                     int start_steps, ChordMatrix* carried) {
-  if (options.rod_steps <= 0) {
-    problem.set_rod_steps(
-        std::min(std::max(start_steps, options.min_rod_steps), options.max_rod_steps));
-  }
+  problem.set_rod_steps(starting_rod_steps(options, start_steps));
   const SolveStatus status =
       solve_path_at_fixed_steps(problem, u0, u1, z, options, summary, carried);
   return refine_rod_steps(problem, z, options, summary, status, carried);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pcr/internal/rod_step_ladder.hpp"
 #include "pcr/robot.hpp"
 #include "pcr/shooting.hpp"
 #include "pcr/solver.hpp"
@@ -56,35 +57,6 @@ class ShootingProblem {
     return position <= share * options_.position_accuracy &&
            angle <= share * options_.angle_accuracy;
   }
-
-  /// The step count for a solution whose estimated error at the current count is `ratio` times
-  /// its target: the smallest on the ladder that meets the target (error ~ N^-4), but a lower
-  /// count only when it meets half the target, so that a sequence does not flip between two.
-  int rod_steps_for_error(double ratio) const {
-    if (options_.rod_steps > 0) return options_.rod_steps;
-    if (!std::isfinite(ratio)) return options_.max_rod_steps;
-    const auto rung_at_least = [&](double steps) {
-      int ladder = options_.min_rod_steps;
-      while (ladder < steps && ladder < options_.max_rod_steps) ladder = next_rung(ladder);
-      return std::min(ladder, options_.max_rod_steps);
-    };
-    if (ratio > 1.0) return std::max(steps_, rung_at_least(steps_ * std::pow(ratio, 0.25)));
-    return std::min(steps_, rung_at_least(steps_ * std::pow(2.0 * ratio, 0.25)));
-  }
-
-  /// The step count after `steps` on the ladder towards `target` (which is on the ladder).
-  int rung_towards(int steps, int target) const {
-    if (options_.rod_steps > 0 || steps == target) return target;
-    int ladder = options_.min_rod_steps, below = ladder;
-    while (ladder < std::max(steps, target) && ladder < options_.max_rod_steps) {
-      if (ladder < steps) below = ladder;
-      ladder = next_rung(ladder);
-      if (target > steps && ladder > steps) return std::min(ladder, target);
-    }
-    return std::max(below, target);
-  }
-
-  static int next_rung(int steps) { return steps % 3 == 0 ? steps / 3 * 4 : steps / 2 * 3; }
 
   int size() const { return kind_ == Kind::kForward ? 3 * n_ + 3 : 4 * n_ + (n_ == 2 ? 1 : 0); }
   int num_inputs() const { return kind_ == Kind::kForward ? n_ : 3; }

@@ -38,6 +38,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pcr/internal/rod_step_ladder.hpp"
 #include "pcr/shooting.hpp"
 #include "pcr/solver.hpp"
 #include "pcr/spatial/cosserat_rod.hpp"
@@ -372,6 +373,23 @@ struct SpatialForwardSolution {
 
 namespace internal {
 
+/// The largest |entry|, NaN when any is not finite (lpNorm<Infinity> can skip a NaN).
+template <class Derived>
+double spatial_max_norm(const Eigen::MatrixBase<Derived>& r) {
+  return r.allFinite() ? r.template lpNorm<Eigen::Infinity>()
+                       : std::numeric_limits<double>::quiet_NaN();
+}
+
+/// Whether a step dz moves a problem's outputs (Problem::output_change) by at most `share` of the
+/// accuracy targets.
+template <class Problem>
+bool output_change_within(const Problem& problem, const SpatialVector& dz,
+                          const SolverOptions& options, double share) {
+  double position, angle;
+  problem.output_change(dz, position, angle);
+  return position <= share * options.position_accuracy && angle <= share * options.angle_accuracy;
+}
+
 /// The forward shooting problem at fixed joints, on the manifold of the platform's orientation.
 class SpatialForwardProblem {
  public:
@@ -383,6 +401,7 @@ class SpatialForwardProblem {
 
   int size() const { return 6 * n_ + 6; }
   int rod_steps() const { return steps_; }
+  void set_rod_steps(int steps) { steps_ = steps; }
   const ShootingScale& scale() const { return scale_; }
   const SpatialRobotParams<double>& robot() const { return robot_; }
 
@@ -418,12 +437,10 @@ class SpatialForwardProblem {
     return D;
   }
 
-  /// Whether a step dz moves the platform by at most `share` of the accuracy targets.
-  bool output_change_within(const SpatialVector& dz, const SolverOptions& options,
-                            double share) const {
-    const double position = dz.segment<3>(6 * n_).lpNorm<Eigen::Infinity>() * scale_.length;
-    const double angle = dz.segment<3>(6 * n_ + 3).lpNorm<Eigen::Infinity>();
-    return position <= share * options.position_accuracy && angle <= share * options.angle_accuracy;
+  /// How far a step dz moves the platform: its largest coordinate (m) and turn (rad).
+  void output_change(const SpatialVector& dz, double& position, double& angle) const {
+    position = spatial_max_norm(dz.segment(6 * n_, 3)) * scale_.length;
+    angle = spatial_max_norm(dz.segment(6 * n_ + 3, 3));
   }
 
  private:
@@ -434,37 +451,44 @@ class SpatialForwardProblem {
   mutable SpatialRodState<double> tips_[kMaxSpatialRods];
 };
 
-inline double spatial_max_norm(const SpatialVector& r) {
-  return r.allFinite() ? r.lpNorm<Eigen::Infinity>() : std::numeric_limits<double>::quiet_NaN();
-}
-
 /// Damped Newton on the manifold from x (updated in place), as pcr::internal::newton_solve: a
 /// backtracking line search on |r|^2, chord steps with the last factorisation while they
 /// contract by 10 or more, and the simplified-Newton stopping rule (the last chord step taken
 /// unevaluated when it moves the pose by less than chord_output_share of the accuracy targets).
 /// A separate loop from the planar one: that one's matrices are sized for 6 planar limbs
 /// (21 unknowns), these for 8 spatial rods (54), and its steps add, these retract.
-/// On return, `lu` holds the factorisation of the last Jacobian evaluated. Problem: size(),
-/// retract(x, dz), evaluate(x, r, J*), output_change_within(dz, options, share)
+/// With `carried` (a factorised Jacobian of a nearby solution, as a warm start keeps), the first
+/// steps are chord steps with it: a warm solve then evaluates residuals only (a fifth of the cost
+/// of one with the rods' tangents) unless the chord steps stop contracting.
+/// On return, `lu` holds the factorisation of the last Jacobian evaluated (or the carried one).
+/// Problem: size(), retract(x, dz), evaluate(x, r, J*), output_change(dz, position, angle)
 /// (SpatialForwardProblem, SpatialInverseProblem).
 template <class Problem>
 SolveStatus spatial_newton(const Problem& problem, SpatialShootingPoint<double>& x,
                            const SolverOptions& options, int max_iterations, SolverSummary& summary,
                            Eigen::PartialPivLU<SpatialJacobian>& lu, double& initial_norm,
-                           double& final_norm) {
+                           double& final_norm,
+                           const Eigen::PartialPivLU<SpatialJacobian>* carried = nullptr) {
   constexpr double kWarmNorm = 1e-2;
   constexpr double kChordContraction = 0.1;
   constexpr double kRoundingFloor = 1e-9;
   SpatialVector r, r_trial, step;
   SpatialJacobian J, J_trial;
-  problem.evaluate(x, r, &J);
+  const bool chord = carried != nullptr && carried->rows() == problem.size();
+  problem.evaluate(x, r, chord ? nullptr : &J);
   ++summary.residual_evaluations;
   double norm = spatial_max_norm(r);
   initial_norm = final_norm = norm;
   if (!std::isfinite(norm)) return SolveStatus::kNonFinite;
-  bool factorised = false;  // lu holds the factorisation of J
-  bool lu_at_x = true;      // J (and lu once factorised) is the Jacobian at x
-  bool damped = false;      // J is singular: Levenberg steps instead of Newton's
+  if (chord && norm > kWarmNorm) {  // too far for chord steps: Newton from here
+    problem.evaluate(x, r, &J);
+    ++summary.residual_evaluations;
+  }
+  const bool chord_start = chord && norm <= kWarmNorm;
+  if (chord_start) lu = *carried;
+  bool factorised = chord_start;  // lu holds the factorisation of J (or the carried one)
+  bool lu_at_x = !chord_start;    // J (and lu once factorised) is the Jacobian at x
+  bool damped = false;            // J is singular: Levenberg steps instead of Newton's
   for (int iter = 0; iter <= max_iterations; ++iter) {
     if (norm <= options.tolerance) return SolveStatus::kConverged;
     if (iter == max_iterations) break;
@@ -562,7 +586,7 @@ SolveStatus spatial_newton(const Problem& problem, SpatialShootingPoint<double>&
       if (norm <= options.tolerance) continue;
       step = -lu.solve(r);
       if (contraction * norm <= options.tolerance ||
-          problem.output_change_within(contraction * step, options, options.chord_output_share)) {
+          output_change_within(problem, contraction * step, options, options.chord_output_share)) {
         x = problem.retract(x, step);
         ++summary.iterations;
         final_norm = contraction * norm;  // predicted
@@ -578,6 +602,67 @@ SolveStatus spatial_newton(const Problem& problem, SpatialShootingPoint<double>&
     }
   }
   return SolveStatus::kMaxIterations;
+}
+
+/// Estimates the discretisation error of a converged solution x of the N-step model (as the
+/// planar core's estimate_discretisation_error: RK4's residual error at N/2 steps is f = 2^4
+/// times that at N, so r_{N/2}(x) = (f - 1) e_N and the exact model's solution lies at
+/// x - J^-1 e_N), stores it in the summary and returns its ratio to the accuracy targets. `lu`:
+/// a factorised Jacobian near x (its direction matters, not its last digits).
+template <class Problem>
+double spatial_discretisation_error(Problem& problem, const SpatialShootingPoint<double>& x,
+                                    const Eigen::PartialPivLU<SpatialJacobian>& lu,
+                                    const SolverOptions& options, SolverSummary& summary) {
+  const int steps = problem.rod_steps();
+  const int half = std::max(1, steps / 2);
+  SpatialVector r_half;
+  problem.set_rod_steps(half);
+  problem.evaluate(x, r_half, nullptr);
+  problem.set_rod_steps(steps);
+  ++summary.residual_evaluations;  // at half the steps: half the cost of the others
+  const double f = std::pow(double(steps) / half, 4.0);
+  const SpatialVector dz = lu.solve(r_half / (f - 1.0));
+  problem.output_change(dz, summary.position_error_estimate, summary.angle_error_estimate);
+  const double position = summary.position_error_estimate / options.position_accuracy;
+  const double angle = summary.angle_error_estimate / options.angle_accuracy;
+  return std::isfinite(position) && std::isfinite(angle) ? std::max(position, angle)
+                                                         : std::numeric_limits<double>::infinity();
+}
+
+/// Solves a converged solution x again (from itself, with chord steps) at the RK4 step count its
+/// estimated discretisation error calls for (pcr/internal/rod_step_ladder.hpp), until the estimate
+/// meets the targets; near a fold, where the whole change of model is too much for Newton, one
+/// rung at a time. With a fixed options.rod_steps, nothing to do. `lu` as for spatial_newton.
+template <class Problem>
+SolveStatus spatial_refine_rod_steps(Problem& problem, SpatialShootingPoint<double>& x,
+                                     Eigen::PartialPivLU<SpatialJacobian>& lu,
+                                     const SolverOptions& options, SolverSummary& summary,
+                                     SolveStatus status) {
+  double initial_norm, final_norm;
+  for (int pass = 0; status == SolveStatus::kConverged && options.rod_steps <= 0; ++pass) {
+    const double ratio = spatial_discretisation_error(problem, x, lu, options, summary);
+    const int start = problem.rod_steps();
+    const int needed = rod_steps_for_error(options, start, ratio);
+    if (needed == start || pass == 4) break;
+    const SpatialShootingPoint<double> x_start = x;
+    const Eigen::PartialPivLU<SpatialJacobian> carried = lu;
+    problem.set_rod_steps(needed);
+    status = spatial_newton(problem, x, options, options.max_iterations, summary, lu, initial_norm,
+                            final_norm, &carried);
+    if (status != SolveStatus::kConverged) {
+      x = x_start;
+      for (int steps = start; steps != needed;) {
+        steps = rod_steps_rung_towards(options, steps, needed);
+        problem.set_rod_steps(steps);
+        const Eigen::PartialPivLU<SpatialJacobian> rung_carried = lu;
+        status = spatial_newton(problem, x, options, options.max_iterations, summary, lu,
+                                initial_norm, final_norm, &rung_carried);
+        if (status != SolveStatus::kConverged) break;
+      }
+    }
+    if (status == SolveStatus::kConverged) summary.final_residual_norm = final_norm;
+  }
+  return status;
 }
 
 /// Solves at joints q1 from the solution x at q0 (x updated): the whole step first, predicted
@@ -615,8 +700,9 @@ inline SolveStatus spatial_solve_path(SpatialForwardProblem& problem,
   SpatialShootingPoint<double> trial;
   predict(x0, dq, trial);
   set_q(trial, q1);
+  const auto carried = [&] { return warm.valid ? &warm.lu : nullptr; };
   SolveStatus status = spatial_newton(problem, trial, options, options.max_iterations, summary, lu,
-                                      initial_norm, final_norm);
+                                      initial_norm, final_norm, carried());
   summary.initial_residual_norm = initial_norm;
   summary.final_residual_norm = final_norm;
   if (status == SolveStatus::kConverged) {
@@ -639,7 +725,7 @@ inline SolveStatus spatial_solve_path(SpatialForwardProblem& problem,
     predict(last, (t_next - t) * dq, trial);
     set_q(trial, q0 + t_next * dq);
     status = spatial_newton(problem, trial, options, options.max_continuation_iterations, summary,
-                            lu, initial_norm, final_norm);
+                            lu, initial_norm, final_norm, carried());
     if (status == SolveStatus::kConverged) {
       last = trial;
       t = t_next;
@@ -674,16 +760,13 @@ inline void fill_solution(const SpatialForwardProblem& problem,
   out.summary.rod_steps = problem.rod_steps();
 }
 
-inline int spatial_rod_steps(const SolverOptions& options) {
-  return options.rod_steps > 0 ? options.rod_steps : kDefaultSpatialRodSteps;
-}
-
 }  // namespace internal
 
 /// Forward kinematics warm-started from a previous solution (the normal case in a control loop):
-/// its pose and wrenches predicted along the tangent to q, then Newton; if that fails, natural
-/// continuation from the warm start's q. RK4 steps per rod: options.rod_steps, or
-/// kDefaultSpatialRodSteps when 0 (no error estimate yet: the step count is fixed).
+/// its pose and wrenches predicted along the tangent to q, then chord steps with its factorised
+/// Jacobian (Newton's when they stop contracting); if that fails, natural continuation from the
+/// warm start's q. RK4 steps per rod: options.rod_steps, or, when 0, chosen from the solution's
+/// estimated discretisation error (spatial_refine_rod_steps), starting from the warm start's.
 inline SpatialForwardSolution spatial_forward_kinematics(
     const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
     const SpatialForwardSolution& warm_start, const SolverOptions& options = SolverOptions()) {
@@ -693,7 +776,8 @@ inline SpatialForwardSolution spatial_forward_kinematics(
     out.summary.status = SolveStatus::kInvalidInput;
     return out;
   }
-  internal::SpatialForwardProblem problem(robot, internal::spatial_rod_steps(options));
+  internal::SpatialForwardProblem problem(
+      robot, internal::starting_rod_steps(options, warm_start.summary.rod_steps));
   SpatialShootingPoint<double> x;
   x.pose = warm_start.pose;
   for (int i = 0; i < robot.num_rods; ++i) {
@@ -703,6 +787,8 @@ inline SpatialForwardSolution spatial_forward_kinematics(
   out.warm = warm_start.warm;
   out.summary.status =
       internal::spatial_solve_path(problem, x, warm_start.q, q, out.warm, options, out.summary);
+  out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
+                                                          out.summary, out.summary.status);
   internal::fill_solution(problem, x, out);
   return out;
 }
@@ -725,7 +811,7 @@ inline SpatialForwardSolution spatial_forward_kinematics(
     out.summary.status = SolveStatus::kInvalidInput;
     return out;
   }
-  internal::SpatialForwardProblem problem(robot, internal::spatial_rod_steps(options));
+  internal::SpatialForwardProblem problem(robot, internal::starting_rod_steps(options, 0));
   // A cold solve at q, then (if it fails) home and the path from it: both from straight rods, so
   // they are the same solve when q = 0.
   SolverOptions direct = options;
@@ -748,7 +834,8 @@ inline SpatialForwardSolution spatial_forward_kinematics(
       out.summary.status = cold;
     }
   }
-
+  out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
+                                                          out.summary, out.summary.status);
   internal::fill_solution(problem, x, out);
   return out;
 }
@@ -767,6 +854,8 @@ class SpatialInverseProblem {
         steps_(rod_steps) {}
 
   int size() const { return 7 * n_; }
+  int rod_steps() const { return steps_; }
+  void set_rod_steps(int steps) { steps_ = steps; }
 
   SpatialShootingPoint<double> retract(const SpatialShootingPoint<double>& x,
                                        const SpatialVector& dz) const {
@@ -796,10 +885,10 @@ class SpatialInverseProblem {
     }
   }
 
-  bool output_change_within(const SpatialVector& dz, const SolverOptions& options,
-                            double share) const {
-    return dz.segment(6 * n_, n_).lpNorm<Eigen::Infinity>() * scale_.length <=
-           share * options.position_accuracy;
+  /// How far a step dz moves the joints (m); IK has no angle output.
+  void output_change(const SpatialVector& dz, double& position, double& angle) const {
+    position = spatial_max_norm(dz.segment(6 * n_, n_)) * scale_.length;
+    angle = 0.0;
   }
 
  private:
@@ -840,7 +929,8 @@ inline SpatialInverseSolution spatial_inverse_kinematics(
     out.summary.status = SolveStatus::kInvalidInput;
     return out;
   }
-  const internal::SpatialInverseProblem problem(robot, internal::spatial_rod_steps(options));
+  internal::SpatialInverseProblem problem(
+      robot, internal::starting_rod_steps(options, start.summary.rod_steps));
   SpatialShootingPoint<double> last;
   last.pose = start.pose;
   for (int i = 0; i < n; ++i) {
@@ -891,7 +981,11 @@ inline SpatialInverseSolution spatial_inverse_kinematics(
   }
   out.summary.status = t >= 1.0 ? SolveStatus::kConverged : status;
   out.summary.path_fraction = t;
-  out.summary.rod_steps = internal::spatial_rod_steps(options);
+  if (out.summary.converged()) {
+    out.summary.status =
+        internal::spatial_refine_rod_steps(problem, last, lu, options, out.summary, status);
+  }
+  out.summary.rod_steps = problem.rod_steps();
   out.pose = last.pose;
   out.q.resize(n);
   for (int i = 0; i < n; ++i) {
