@@ -119,19 +119,17 @@ BENCHMARK(BM_SpatialForwardWarm)->Unit(benchmark::kMicrosecond);
 /// Warm IK along the path's poses, each solve from the previous solution.
 void BM_SpatialInverseWarm(benchmark::State& state) {
   const SpatialPath& path = spatial_path();
-  SpatialForwardSolution previous = path.fk.back();
+  SpatialInverseSolution previous =
+      spatial_inverse_kinematics(path.robot, path.fk.back().pose, path.fk.back());
   int k = 0;
   long evaluations = 0, solves = 0, failures = 0;
   for (auto _ : state) {
-    const SpatialInverseSolution next =
-        spatial_inverse_kinematics(path.robot, path.fk[k].pose, previous);
+    SpatialInverseSolution next = spatial_inverse_kinematics(path.robot, path.fk[k].pose, previous);
     benchmark::DoNotOptimize(next.q.data());
     evaluations += next.summary.residual_evaluations;
     failures += next.summary.converged() ? 0 : 1;
     ++solves;
-    previous.pose = next.pose;
-    previous.q = next.q;
-    previous.wrenches = next.wrenches;
+    previous = std::move(next);
     k = (k + 1) % SpatialPath::kPoints;
   }
   state.counters["evaluations"] = static_cast<double>(evaluations) / solves;

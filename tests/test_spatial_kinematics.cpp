@@ -671,6 +671,47 @@ TEST(SpatialKinematics, InverseOfForwardRecoversTheJoints) {
             SolveStatus::kUnsupported);
 }
 
+TEST(SpatialKinematics, InverseAlongAPathFromItsOwnSolutions) {
+  // IK warm-started from the previous IK solution along the FK poses of a closed joint path in
+  // ~1 mm steps (each rod q0 + 5 mm sin(2 pi k / 32 + i)), in order and then in a shuffled order
+  // (long jumps): the joints of the FK must come back.
+  const SpatialRobotParams<double> robot = continuum_stewart_gough();
+  constexpr int kPoints = 32;
+  std::vector<SpatialJointVector> q;
+  std::vector<SpatialForwardSolution> fk;
+  for (int k = 0; k < kPoints; ++k) {
+    SpatialJointVector joints(6);
+    for (int i = 0; i < 6; ++i) joints(i) = 0.005 + 0.005 * std::sin(2 * M_PI * k / kPoints + i);
+    q.push_back(joints);
+    fk.push_back(k == 0 ? spatial_forward_kinematics(robot, joints)
+                        : spatial_forward_kinematics(robot, joints, fk.back()));
+    ASSERT_TRUE(fk.back().summary.converged()) << "point " << k;
+  }
+  std::vector<int> order(2 * kPoints);
+  for (int k = 0; k < kPoints; ++k) order[k] = k + 1 < kPoints ? k + 1 : 0;
+  std::mt19937_64 rng(81);
+  for (int k = 0; k < kPoints; ++k) order[kPoints + k] = k;
+  std::shuffle(order.begin() + kPoints, order.end(), rng);
+  SpatialInverseSolution ik = spatial_inverse_kinematics(robot, fk[0].pose, fk[0]);
+  ASSERT_TRUE(ik.summary.converged());
+  double worst = 0;
+  int most_in_order = 0, most_shuffled = 0;
+  for (int j = 0; j < 2 * kPoints; ++j) {
+    const int k = order[j];
+    ik = spatial_inverse_kinematics(robot, fk[k].pose, ik);
+    ASSERT_TRUE(ik.summary.converged()) << "step " << j << " " << to_string(ik.summary.status);
+    const double error = (ik.q - q[k]).lpNorm<Eigen::Infinity>();
+    worst = std::max(worst, error);
+    EXPECT_LT(error, 1e-9) << "step " << j;
+    int& most = j < kPoints ? most_in_order : most_shuffled;
+    most = std::max(most, ik.summary.residual_evaluations);
+  }
+  std::printf(
+      "IK along the path from its own solutions: joints within %.2e m; at most %d evaluations "
+      "in order, %d shuffled\n",
+      worst, most_in_order, most_shuffled);
+}
+
 TEST(SpatialKinematics, SolvesNeverAllocate) {
   // Neither operator new nor Eigen's aligned malloc, in cold and warm FK and in IK.
   const SpatialRobotParams<double> robot = continuum_stewart_gough();
@@ -684,12 +725,14 @@ TEST(SpatialKinematics, SolvesNeverAllocate) {
   const SpatialForwardSolution cold = spatial_forward_kinematics(robot, q0);
   const SpatialForwardSolution warm = spatial_forward_kinematics(robot, q1, cold);
   const SpatialInverseSolution ik = spatial_inverse_kinematics(robot, warm.pose, cold);
+  const SpatialInverseSolution ik_warm = spatial_inverse_kinematics(robot, cold.pose, ik);
   Eigen::internal::set_is_malloc_allowed(true);
   g_counting = false;
   EXPECT_EQ(g_allocations.load(), 0);
   EXPECT_TRUE(cold.summary.converged());
   EXPECT_TRUE(warm.summary.converged());
   EXPECT_TRUE(ik.summary.converged());
+  EXPECT_TRUE(ik_warm.summary.converged());
 }
 
 TEST(SpatialKinematics, RejectsBadInput) {

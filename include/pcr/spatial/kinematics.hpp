@@ -195,6 +195,42 @@ inline Matrix3<double> mismatch_per_tip_turn(const Matrix3<double>& E) {
 
 }  // namespace internal
 
+/// The pose columns of the scaled Jacobian, d residual / d (p / L, delta) ((6 n + 6) x 6), in
+/// closed form from the rods' tip states (tip_of(i)): the forward problem's last six columns and
+/// the inverse problem's d residual / d pose, for its predictor.
+template <class TipOf>
+void spatial_pose_columns(const SpatialRobotParams<double>& robot,
+                          const SpatialShootingPoint<double>& point, const ShootingScale& scale,
+                          TipOf&& tip_of, Eigen::Ref<Eigen::MatrixXd> D) {
+  const int n = robot.num_rods;
+  const int balance = 6 * n;
+  D.setZero();
+  const Matrix3<double> R_P = point.pose.rotation();
+  const Matrix3<double> I = Matrix3<double>::Identity();
+  for (int i = 0; i < n; ++i) {
+    const SpatialLimbParams<double>& limb = robot.limb(i);
+    const SpatialRodState<double>& tip = tip_of(i);
+    const int w = 6 * i;
+    D.block<3, 3>(w, 0) = -I;
+    // d (-R_P exp([delta]x) B) = R_P [B]x delta.
+    D.block<3, 3>(w, 3) = R_P * cross_matrix(limb.B) / scale.length;
+    if (limb.attachment == SpatialAttachment::kClamped) {
+      const Matrix3<double> R_B = rotation_of(limb.tip_orientation);
+      const Matrix3<double> E = (R_P * R_B).transpose() * tip.rotation();
+      // R_target turns by R_B^T delta in its own frame: dE = -[R_B^T delta]x E, and the vee of
+      // the skew part of -[b]x E is -(tr(E) I - E) b / 2.
+      D.block<3, 3>(w + 3, 3) = -0.5 * (E.trace() * I - E) * R_B.transpose();
+    }
+    // d (R_P B x n) / d delta = [n]x R_P [B]x.
+    D.block<3, 3>(balance + 3, 3) +=
+        cross_matrix(tip.force) * R_P * cross_matrix(limb.B) / scale.moment();
+  }
+  // d (-(R_P c) x m g) / d delta = -[m g]x R_P [c]x.
+  const Vector3<double> weight = robot.platform_mass * robot.gravity;
+  D.block<3, 3>(balance + 3, 3) -=
+      cross_matrix(weight) * R_P * cross_matrix(robot.platform_centre_of_mass) / scale.moment();
+}
+
 /// The scaled Jacobian (6 n + 6 square) w.r.t. the scaled unknowns: the wrench columns
 /// (n / F, m / (F L)) from the tips' sensitivities, the pose columns (p / L, delta) in closed form.
 inline void spatial_jacobian_from_tips(const SpatialRobotParams<double>& robot,
@@ -204,12 +240,12 @@ inline void spatial_jacobian_from_tips(const SpatialRobotParams<double>& robot,
   using Index = SpatialRodIndex;
   const int n = robot.num_rods;
   const int pose = 6 * n;
-  J.setZero(6 * n + 6, 6 * n + 6);
+  J.resize(6 * n + 6, 6 * n + 6);
   const Matrix3<double> R_P = point.pose.rotation();
-  const Matrix3<double> I = Matrix3<double>::Identity();
   Eigen::Matrix<double, 1, 6> to_scaled;
   to_scaled << scale.force, scale.force, scale.force, scale.moment(), scale.moment(),
       scale.moment();
+  J.leftCols(pose).setZero();
   for (int i = 0; i < n; ++i) {
     const SpatialLimbParams<double>& limb = robot.limb(i);
     const SpatialRodState<double>& tip = tips[i].state;
@@ -219,18 +255,12 @@ inline void spatial_jacobian_from_tips(const SpatialRobotParams<double>& robot,
     const Vector3<double> arm = R_P * limb.B;
     const int w = 6 * i;
     J.block<3, 6>(w, w) = S.middleRows<3>(Index::kPosition) / scale.length;
-    J.block<3, 3>(w, pose) = -I;
-    // d (-R_P exp([delta]x) B) = R_P [B]x delta.
-    J.block<3, 3>(w, pose + 3) = R_P * cross_matrix(limb.B) / scale.length;
     if (limb.attachment == SpatialAttachment::kClamped) {
-      const Matrix3<double> R_B = rotation_of(limb.tip_orientation);
-      const Matrix3<double> E = (R_P * R_B).transpose() * tip.rotation();
+      const Matrix3<double> E =
+          (R_P * rotation_of(limb.tip_orientation)).transpose() * tip.rotation();
       J.block<3, 6>(w + 3, w) = internal::mismatch_per_tip_turn(E) *
                                 internal::body_turn_of_quaternion(tip.orientation) *
                                 S.middleRows<4>(Index::kOrientation);
-      // R_target turns by R_B^T delta in its own frame: dE = -[R_B^T delta]x E, and the vee of
-      // the skew part of -[b]x E is -(tr(E) I - E) b / 2.
-      J.block<3, 3>(w + 3, pose + 3) = -0.5 * (E.trace() * I - E) * R_B.transpose();
     } else {
       J.block<3, 6>(w + 3, w) = S.middleRows<3>(Index::kMoment) / scale.moment();
     }
@@ -238,14 +268,10 @@ inline void spatial_jacobian_from_tips(const SpatialRobotParams<double>& robot,
     J.block<3, 6>(pose + 3, w) =
         (cross_matrix(arm) * S.middleRows<3>(Index::kForce) + S.middleRows<3>(Index::kMoment)) /
         scale.moment();
-    // d (R_P B x n) / d delta = [n]x R_P [B]x.
-    J.block<3, 3>(pose + 3, pose + 3) +=
-        cross_matrix(tip.force) * R_P * cross_matrix(limb.B) / scale.moment();
   }
-  // d (-(R_P c) x m g) / d delta = -[m g]x R_P [c]x.
-  const Vector3<double> weight = robot.platform_mass * robot.gravity;
-  J.block<3, 3>(pose + 3, pose + 3) -=
-      cross_matrix(weight) * R_P * cross_matrix(robot.platform_centre_of_mass) / scale.moment();
+  spatial_pose_columns(
+      robot, point, scale, [&](int i) -> const SpatialRodState<double>& { return tips[i].state; },
+      J.middleCols(pose, 6));
 }
 
 /// d residual / d q_i (scaled residual per metre) from rod i's tip state. A translated clamp moves
@@ -873,16 +899,33 @@ class SpatialInverseProblem {
   /// rate of about that error (1e-9 at 256 steps) instead of a quadratic one.
   void evaluate(const SpatialShootingPoint<double>& x, SpatialVector& r, SpatialJacobian* J) const {
     SpatialResidualVector<double> residual;
-    SpatialRodState<double> tips[kMaxSpatialRods];
-    spatial_residual(robot_, x, scale_, steps_, residual, J ? &forward_ : nullptr, tips);
+    spatial_residual(robot_, x, scale_, steps_, residual, J ? &forward_ : nullptr, tips_);
     r = residual;
     if (!J) return;
     *J = forward_;  // the wrench columns stay; the pose columns become the joints'
     SpatialVector column(size());
     for (int i = 0; i < n_; ++i) {
-      spatial_input_column(robot_, x, scale_, i, tips[i], column);
+      spatial_input_column(robot_, x, scale_, i, tips_[i], column);
       J->col(6 * n_ + i) = column * scale_.length;
     }
+  }
+
+  /// d residual / d (p / L, delta) of the pose, the input, at the point last evaluated (its tips).
+  SpatialInputJacobian pose_jacobian(const SpatialShootingPoint<double>& x) const {
+    SpatialInputJacobian D(size(), 6);
+    spatial_pose_columns(
+        robot_, x, scale_, [&](int i) -> const SpatialRodState<double>& { return tips_[i]; }, D);
+    return D;
+  }
+
+  /// The scaled pose step from `from` to `to`: (p_to - p_from) / L, and the rotation vector w of
+  /// R_from^T R_to (R_to = R_from exp([w]x)), as the forward problem's unknowns step.
+  Eigen::Matrix<double, 6, 1> pose_step(const SpatialPose<double>& from,
+                                        const SpatialPose<double>& to) const {
+    const Eigen::AngleAxisd turn(Eigen::Quaterniond(from.rotation().transpose() * to.rotation()));
+    Eigen::Matrix<double, 6, 1> step;
+    step << (to.position - from.position) / scale_.length, turn.angle() * turn.axis();
+    return step;
   }
 
   /// How far a step dz moves the joints (m); IK has no angle output.
@@ -897,6 +940,7 @@ class SpatialInverseProblem {
   int n_;
   int steps_;
   mutable SpatialJacobian forward_;
+  mutable SpatialRodState<double> tips_[kMaxSpatialRods];
 };
 
 }  // namespace internal
@@ -908,91 +952,144 @@ struct SpatialInverseSolution {
   SpatialJointVector q;                                           ///< joint values (m)
   std::array<SpatialWrench<double>, kMaxSpatialRods> wrenches{};  ///< (n, m)(0) of each rod, in W
   SolverSummary summary;
+  /// For a warm start from this solution: the inverse problem's factorised Jacobian, and
+  /// d residual / d pose (6 columns) for the predictor.
+  SpatialWarmStart warm;
 };
 
-/// Inverse kinematics of a six-rod robot (the square case: 7 n unknowns, 6 n + 6 residuals), from
-/// a forward solution near the pose: Newton from its wrenches and joints at the requested pose;
-/// on failure (and options.continuation), natural continuation along the straight pose path
-/// from the start's pose (position on a line, orientation at a constant rate), halving the step
-/// on failure. Other rod counts: SolveStatus::kUnsupported.
-inline SpatialInverseSolution spatial_inverse_kinematics(
-    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
-    const SpatialForwardSolution& start, const SolverOptions& options = SolverOptions()) {
+namespace internal {
+
+/// Solves the inverse problem at `pose` from the solution x at x.pose (x updated): the whole step
+/// first, predicted along the tangent -J^-1 (d r / d pose) d pose when `warm` holds them, with
+/// chord steps on its factorisation; on failure (and options.continuation), natural continuation
+/// along the straight pose path (a line for the position, a constant-rate turn for the
+/// orientation), halving the step on failure. Returns the status and sets summary.path_fraction; x
+/// is the last point solved, `warm` what it leaves for the next solve.
+inline SolveStatus spatial_inverse_path(SpatialInverseProblem& problem,
+                                        SpatialShootingPoint<double>& x,
+                                        const SpatialPose<double>& pose, SpatialWarmStart& warm,
+                                        const SolverOptions& options, SolverSummary& summary) {
+  const SpatialPose<double> start = x.pose;
+  const Eigen::Matrix<double, 6, 1> whole = problem.pose_step(start, pose);
+  const auto pose_at = [&](double t) {
+    if (t == 1.0) return pose;
+    SpatialPose<double> at;
+    at.position = start.position + t * (pose.position - start.position);
+    at.orientation = quaternion_product<double>(start.orientation / start.orientation.norm(),
+                                                quaternion_exp<double>(t * whole.tail<3>()));
+    return at;
+  };
+  const auto predict = [&](const SpatialShootingPoint<double>& from, const SpatialPose<double>& to,
+                           SpatialShootingPoint<double>& trial) {
+    trial = from;
+    if (warm.valid && warm.lu.rows() == problem.size() && warm.input_jacobian.cols() == 6) {
+      const SpatialVector dz =
+          -warm.lu.solve(warm.input_jacobian * problem.pose_step(from.pose, to));
+      if (dz.allFinite()) trial = problem.retract(from, dz);
+    }
+    trial.pose = to;
+  };
+  Eigen::PartialPivLU<SpatialJacobian> lu;
+  double initial_norm, final_norm, t = 0.0, dt = 1.0;
+  SolveStatus status = SolveStatus::kMaxIterations;
+  while (t < 1.0) {
+    const bool first = t == 0.0 && dt == 1.0;
+    if (!first) {
+      if (!options.continuation || summary.continuation_steps >= options.max_continuation_steps) {
+        break;
+      }
+      ++summary.continuation_steps;
+    }
+    const double t_next = std::min(1.0, t + dt);
+    SpatialShootingPoint<double> trial;
+    predict(x, pose_at(t_next), trial);
+    status = spatial_newton(problem, trial, options,
+                            first ? options.max_iterations : options.max_continuation_iterations,
+                            summary, lu, initial_norm, final_norm, warm.valid ? &warm.lu : nullptr);
+    if (first) summary.initial_residual_norm = initial_norm;
+    if (status == SolveStatus::kConverged) {
+      x = trial;
+      t = t_next;
+      dt = std::min(2.0 * dt, 0.5);
+      summary.final_residual_norm = final_norm;
+      warm.lu = lu;
+      warm.input_jacobian = problem.pose_jacobian(x);
+      warm.valid = true;
+      continue;
+    }
+    dt *= 0.5;
+    if (dt < options.min_continuation_step) break;
+  }
+  summary.path_fraction = t;
+  return t >= 1.0 ? SolveStatus::kConverged : status;
+}
+
+inline bool spatial_pose_valid(const SpatialPose<double>& pose) {
+  return pose.position.allFinite() && pose.orientation.allFinite() &&
+         pose.orientation.squaredNorm() > 0;
+}
+
+template <class Start>
+SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& robot,
+                                            const SpatialPose<double>& pose, const Start& start,
+                                            const SpatialWarmStart* warm,
+                                            const SolverOptions& options) {
   SpatialInverseSolution out;
   const int n = robot.num_rods;
   if (n != 6) {
     out.summary.status = SolveStatus::kUnsupported;
     return out;
   }
-  if (!internal::spatial_inputs_valid(robot, start.q, options) || !pose.position.allFinite() ||
-      !pose.orientation.allFinite() || pose.orientation.squaredNorm() == 0) {
+  if (!spatial_inputs_valid(robot, start.q, options) || !spatial_pose_valid(pose) ||
+      !spatial_pose_valid(start.pose)) {
     out.summary.status = SolveStatus::kInvalidInput;
     return out;
   }
-  internal::SpatialInverseProblem problem(
-      robot, internal::starting_rod_steps(options, start.summary.rod_steps));
-  SpatialShootingPoint<double> last;
-  last.pose = start.pose;
+  SpatialInverseProblem problem(robot, starting_rod_steps(options, start.summary.rod_steps));
+  SpatialShootingPoint<double> x;
+  x.pose = start.pose;
   for (int i = 0; i < n; ++i) {
-    last.q[i] = start.q(i);
-    last.wrenches[i] = start.wrenches[i];
+    x.q[i] = start.q(i);
+    x.wrenches[i] = start.wrenches[i];
   }
-  // The pose path: p(t) = p0 + t (p1 - p0), R(t) = R0 exp(t [w]x), R0 exp([w]x) = R1.
-  const Vector3<double> p0 = start.pose.position, dp = pose.position - p0;
-  const Eigen::AngleAxisd turn(
-      Eigen::Quaterniond(start.pose.rotation().transpose() * pose.rotation()));
-  const Vector3<double> w = turn.angle() * turn.axis();
-  const auto pose_at = [&](double t) {
-    SpatialPose<double> at;
-    at.position = p0 + t * dp;
-    at.orientation = quaternion_product<double>(
-        start.pose.orientation / start.pose.orientation.norm(), quaternion_exp<double>(t * w));
-    return at;
-  };
-  Eigen::PartialPivLU<SpatialJacobian> lu;
-  double initial_norm, final_norm, t = 0.0, dt = 1.0;
-  SolveStatus status = SolveStatus::kMaxIterations;
-  while (t < 1.0) {
-    const bool whole = t == 0.0 && dt == 1.0;
-    if (!whole) {
-      if (!options.continuation ||
-          out.summary.continuation_steps >= options.max_continuation_steps) {
-        break;
-      }
-      ++out.summary.continuation_steps;
-    }
-    const double t_next = std::min(1.0, t + dt);
-    SpatialShootingPoint<double> trial = last;
-    trial.pose = t_next == 1.0 ? pose : pose_at(t_next);
-    status = internal::spatial_newton(
-        problem, trial, options,
-        whole ? options.max_iterations : options.max_continuation_iterations, out.summary, lu,
-        initial_norm, final_norm);
-    if (whole) out.summary.initial_residual_norm = initial_norm;
-    if (status == SolveStatus::kConverged) {
-      last = trial;
-      t = t_next;
-      dt = std::min(2.0 * dt, 0.5);
-      out.summary.final_residual_norm = final_norm;
-      continue;
-    }
-    dt *= 0.5;
-    if (dt < options.min_continuation_step) break;
-  }
-  out.summary.status = t >= 1.0 ? SolveStatus::kConverged : status;
-  out.summary.path_fraction = t;
+  if (warm) out.warm = *warm;
+  out.summary.status = spatial_inverse_path(problem, x, pose, out.warm, options, out.summary);
   if (out.summary.converged()) {
     out.summary.status =
-        internal::spatial_refine_rod_steps(problem, last, lu, options, out.summary, status);
+        spatial_refine_rod_steps(problem, x, out.warm.lu, options, out.summary, out.summary.status);
   }
   out.summary.rod_steps = problem.rod_steps();
-  out.pose = last.pose;
+  out.pose = x.pose;
   out.q.resize(n);
   for (int i = 0; i < n; ++i) {
-    out.q(i) = last.q[i];
-    out.wrenches[i] = last.wrenches[i];
+    out.q(i) = x.q[i];
+    out.wrenches[i] = x.wrenches[i];
   }
   return out;
+}
+
+}  // namespace internal
+
+/// Inverse kinematics of a six-rod robot (the square case: 7 n unknowns, 6 n + 6 residuals), from
+/// a forward solution near the pose: Newton from its wrenches and joints at the requested pose;
+/// on failure (and options.continuation), natural continuation along the straight pose path
+/// from the start's pose (position on a line, orientation at a constant rate), halving the step
+/// on failure. RK4 steps as spatial_forward_kinematics. Other rod counts:
+/// SolveStatus::kUnsupported.
+inline SpatialInverseSolution spatial_inverse_kinematics(
+    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+    const SpatialForwardSolution& start, const SolverOptions& options = SolverOptions()) {
+  // The forward solution's factorisation is of another problem: no carried Jacobian.
+  return internal::spatial_inverse_from(robot, pose, start, nullptr, options);
+}
+
+/// Inverse kinematics warm-started from a previous inverse solution (IK along a path, the normal
+/// case in a control loop): its joints and wrenches predicted along the tangent to the pose, then
+/// chord steps with its factorised Jacobian; on failure, as from a forward solution.
+inline SpatialInverseSolution spatial_inverse_kinematics(
+    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+    const SpatialInverseSolution& warm_start, const SolverOptions& options = SolverOptions()) {
+  return internal::spatial_inverse_from(robot, pose, warm_start, &warm_start.warm, options);
 }
 
 }  // namespace pcr
