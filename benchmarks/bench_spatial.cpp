@@ -54,6 +54,20 @@ void BM_SixRods(benchmark::State& state) {
 }
 BENCHMARK(BM_SixRods)->Arg(kDefaultSpatialRodSteps)->Arg(kDefaultSpatialRodSteps / 2);
 
+void BM_SixRodsInLanes(benchmark::State& state) {
+  const SixRods robot;
+  const int steps = static_cast<int>(state.range(0));
+  const std::array<SpatialRod<double>, 6> rods{robot.rod, robot.rod, robot.rod,
+                                               robot.rod, robot.rod, robot.rod};
+  std::array<SpatialRodState<double>, 6> tips;
+  for (auto _ : state) {
+    integrate_spatial_rods(robot.bases.data(), rods.data(), 6, robot.gravity, steps, tips.data());
+    benchmark::DoNotOptimize(tips.data());
+  }
+  state.counters["rod_steps"] = steps;
+}
+BENCHMARK(BM_SixRodsInLanes)->Arg(kDefaultSpatialRodSteps)->Arg(kDefaultSpatialRodSteps / 2);
+
 void BM_SixRodsWithSensitivity(benchmark::State& state) {
   const SixRods robot;
   const int steps = static_cast<int>(state.range(0));

@@ -160,6 +160,7 @@ struct SpatialRodLaw {
   T distributed_force[3];         ///< f = rho A g (N/m), world frame
   bool shear_and_extension = false;
 
+  SpatialRodLaw() = default;
   SpatialRodLaw(const SpatialRod<T>& rod, const Vector3<T>& gravity) {
     const T stiffness[3] = {rod.bending_stiffness(), rod.bending_stiffness(),
                             rod.torsional_stiffness()};
@@ -325,6 +326,32 @@ struct SpatialRodSlope {
   }
 };
 
+/// One RK4 step of the 13 states y (in place) of one rod (T a scalar) or of a bundle of rods, one
+/// per SIMD lane (T = LaneArray<N>: the same operations in the same order, so a lane is bit for bit
+/// the rod stepped alone). at_stage(st, slope) sees each stage's slope, st = 0 ... 3 (the
+/// tangents' hook).
+template <class T, class AtStage>
+EIGEN_ALWAYS_INLINE void spatial_rk4_step(const SpatialRodLaw<T>& law, T* y, const T& h,
+                                          const T& half_h, const T& sixth_h, AtStage&& at_stage) {
+  constexpr int kSize = SpatialRodIndex::kSize;
+  SpatialRodSlope<T> slope;
+  T k[4][kSize], stage[kSize];
+  for (int st = 0; st < 4; ++st) {
+    const T& a = st == 3 ? h : half_h;
+    if (st == 0) {
+      slope.evaluate(law, y);
+    } else {
+      for (int i = 0; i < kSize; ++i) stage[i] = y[i] + a * k[st - 1][i];
+      slope.evaluate(law, stage);
+    }
+    for (int i = 0; i < kSize; ++i) k[st][i] = slope.dy[i];
+    at_stage(st, slope);
+  }
+  for (int i = 0; i < kSize; ++i) {
+    y[i] += sixth_h * (k[0][i] + T(2) * (k[1][i] + k[2][i]) + k[3][i]);
+  }
+}
+
 /// RK4 on the 13 states, one step at a time; with Sens, also on the tangents w.r.t. the
 /// proximal (n, m), stage by stage with the states (the derivative of the discrete map).
 template <class T, bool Sens>
@@ -352,36 +379,64 @@ struct SpatialRodStepper {
   }
 
   void step() {
-    SpatialRodSlope<T> slope;
-    T k[4][kSize], stage[kSize];
-    SpatialRodTangents<T> kt[4], tangent_stage;
-    for (int st = 0; st < 4; ++st) {
-      const T& a = st == 3 ? h : half_h;
-      if (st == 0) {
-        slope.evaluate(law, y.data());
-      } else {
-        for (int i = 0; i < kSize; ++i) stage[i] = y[i] + a * k[st - 1][i];
-        slope.evaluate(law, stage);
-      }
-      for (int i = 0; i < kSize; ++i) k[st][i] = slope.dy[i];
-      if constexpr (Sens) {
-        if (st == 0) {
-          slope.linearise(law, tangents, kt[0]);
-        } else {
-          tangent_stage = tangents + a * kt[st - 1];
-          slope.linearise(law, tangent_stage, kt[st]);
-        }
-      }
+    if constexpr (Sens) {
+      SpatialRodTangents<T> kt[4], tangent_stage;
+      spatial_rk4_step(law, y.data(), h, half_h, sixth_h,
+                       [&](int st, const SpatialRodSlope<T>& slope) {
+                         if (st == 0) {
+                           slope.linearise(law, tangents, kt[0]);
+                         } else {
+                           tangent_stage = tangents + (st == 3 ? h : half_h) * kt[st - 1];
+                           slope.linearise(law, tangent_stage, kt[st]);
+                         }
+                       });
+      tangents += sixth_h * (kt[0] + T(2) * (kt[1] + kt[2]) + kt[3]);
+    } else {
+      spatial_rk4_step(law, y.data(), h, half_h, sixth_h, [](int, const SpatialRodSlope<T>&) {});
     }
-    for (int i = 0; i < kSize; ++i) {
-      y[i] += sixth_h * (k[0][i] + T(2) * (k[1][i] + k[2][i]) + k[3][i]);
-    }
-    if constexpr (Sens) tangents += sixth_h * (kt[0] + T(2) * (kt[1] + kt[2]) + kt[3]);
   }
 
   SpatialRodState<T> state() const { return SpatialRodState<T>::from_vector(y); }
   /// d state / d (n, m)(0), 13 x 6.
   SpatialRodSensitivity<T> sensitivity() const { return tangents.transpose(); }
+};
+
+/// Up to N rods' states stepped together, one per SIMD lane (LaneArray, pcr/rod.hpp): the rods of
+/// a residual evaluation, whose chains of dependent operations the CPU then overlaps.
+template <int N>
+struct SpatialRodBundle {
+  using L = LaneArray<N>;
+  L y[SpatialRodIndex::kSize];
+  SpatialRodLaw<L> law;
+  L h, half_h, sixth_h;
+
+  /// Lane `lane` from a one-rod stepper (lane 0 first: it sets the bundle's law kind).
+  void set_lane(int lane, const SpatialRodStepper<double, false>& rod) {
+    for (int i = 0; i < SpatialRodIndex::kSize; ++i) y[i][lane] = rod.y[i];
+    for (int i = 0; i < 3; ++i) {
+      law.half_bending_compliance[i][lane] = rod.law.half_bending_compliance[i];
+      law.half_intrinsic_curvature[i][lane] = rod.law.half_intrinsic_curvature[i];
+      law.shear_compliance[i][lane] =
+          rod.law.shear_and_extension ? rod.law.shear_compliance[i] : 0.0;
+      law.distributed_force[i][lane] = rod.law.distributed_force[i];
+    }
+    // A Kirchhoff rod in a bundle stepped with shear and extension has zero compliances, which
+    // give v = e3 and p' = R e3 exactly.
+    law.shear_and_extension = (lane > 0 && law.shear_and_extension) || rod.law.shear_and_extension;
+    h[lane] = rod.h;
+    half_h[lane] = rod.half_h;
+    sixth_h[lane] = rod.sixth_h;
+  }
+
+  void step() {
+    spatial_rk4_step(law, y, h, half_h, sixth_h, [](int, const SpatialRodSlope<L>&) {});
+  }
+
+  SpatialRodState<double> state(int lane) const {
+    SpatialRodVector<double> v;
+    for (int i = 0; i < SpatialRodIndex::kSize; ++i) v[i] = y[i][lane];
+    return SpatialRodState<double>::from_vector(v);
+  }
 };
 
 template <class T, bool Sens, class Visitor>
@@ -420,6 +475,28 @@ SpatialRodTip<T> integrate_spatial_rod_with_sensitivity(const SpatialRodState<T>
   const auto pass = internal::integrate_spatial_rod_pass<T, true>(base, rod, gravity, steps,
                                                                   internal::NoVisitor{});
   return SpatialRodTip<T>{pass.state(), pass.sensitivity()};
+}
+
+/// Integrates n rods (n <= 8) from their proximal states over their lengths in `steps` RK4 steps
+/// each, under gravity, their states stepped together in SIMD lanes (a bundle of 2, 4 or 8): the
+/// tips, bit for bit those of integrate_spatial_rod (unless the compiler contracts multiply-adds
+/// into FMAs differently in the two, as -march=native lets it).
+inline void integrate_spatial_rods(const SpatialRodState<double>* bases,
+                                   const SpatialRod<double>* rods, int n,
+                                   const Vector3<double>& gravity, int steps,
+                                   SpatialRodState<double>* tips) {
+  if (n <= 0) return;
+  internal::with_lane_count(n, [&](auto lanes) {
+    constexpr int kLanes = decltype(lanes)::value;
+    internal::SpatialRodBundle<kLanes> bundle;
+    for (int r = 0; r < kLanes; ++r) {
+      const int rod = r < n ? r : 0;  // idle lanes repeat rod 0
+      bundle.set_lane(
+          r, internal::SpatialRodStepper<double, false>(bases[rod], rods[rod], gravity, steps));
+    }
+    for (int i = 0; i < steps; ++i) bundle.step();
+    for (int r = 0; r < n; ++r) tips[r] = bundle.state(r);
+  });
 }
 
 /// Integrates the rod and calls visit(s, SpatialRodState) at each of the steps + 1 nodes

@@ -325,19 +325,18 @@ inline void spatial_residual(const SpatialRobotParams<double>& robot,
                              SpatialRodState<double>* tips_out = nullptr) {
   const int n = robot.num_rods;
   SpatialRodTip<double> tips[kMaxSpatialRods];
-  SpatialRodState<double> states[kMaxSpatialRods];
+  SpatialRodState<double> states[kMaxSpatialRods], bases[kMaxSpatialRods];
+  SpatialRod<double> rods[kMaxSpatialRods];
   for (int i = 0; i < n; ++i) {
     const SpatialLimbParams<double>& limb = robot.limb(i);
-    const SpatialRodState<double> base =
-        spatial_proximal_state(limb, point.q[i], point.wrenches[i]);
+    bases[i] = spatial_proximal_state(limb, point.q[i], point.wrenches[i]);
+    rods[i] = limb.rod_at(point.q[i]);
     if (jacobian) {
-      tips[i] = integrate_spatial_rod_with_sensitivity(base, limb.rod_at(point.q[i]), robot.gravity,
-                                                       rod_steps);
+      tips[i] = integrate_spatial_rod_with_sensitivity(bases[i], rods[i], robot.gravity, rod_steps);
       states[i] = tips[i].state;
-    } else {
-      states[i] = integrate_spatial_rod(base, limb.rod_at(point.q[i]), robot.gravity, rod_steps);
     }
   }
+  if (!jacobian) integrate_spatial_rods(bases, rods, n, robot.gravity, rod_steps, states);
   spatial_residual_from_tips(robot, point, scale, states, residual);
   if (jacobian) spatial_jacobian_from_tips(robot, point, scale, tips, *jacobian);
   if (tips_out) std::copy(states, states + n, tips_out);
