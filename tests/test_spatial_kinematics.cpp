@@ -160,8 +160,10 @@ TEST(SpatialRobot, ReferenceRobotLayout) {
     EXPECT_NEAR(turn, 40.0 * M_PI / 180.0, 1e-12);
     EXPECT_NEAR(limb.rod.bending_stiffness(), 200e9 * M_PI * std::pow(2e-3, 4) / 64, 1e-12);
   }
-  // Pairs of base holes 100 degrees apart.
+  // The published pattern: a pair's holes 20 degrees apart in the base, 100 in the platform.
   EXPECT_NEAR(std::acos(robot.limb(0).A.dot(robot.limb(1).A) / (0.087 * 0.087)),
+              20.0 * M_PI / 180.0, 1e-12);
+  EXPECT_NEAR(std::acos(robot.limb(0).B.dot(robot.limb(1).B) / (0.087 * 0.087)),
               100.0 * M_PI / 180.0, 1e-12);
 }
 

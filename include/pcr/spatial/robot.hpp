@@ -117,21 +117,14 @@ struct SpatialRobotParams {
 /// through holes in the base and clamped to a 0.1 kg platform (its centre of mass at its origin)
 /// under gravity.
 ///
-/// Layout: NOT yet the published one. Till's example of this robot (the hole pattern of Black,
-/// Till and Rucker 2018) puts a pair's holes 20 degrees apart in the base (the minor angle, rods
-/// at 120 k -+ 10 degrees) and 100 degrees apart in the platform (120 k -+ 50 degrees); the layout
-/// below has the two patterns the other way round (the robot upside down). With the published
-/// layout one IK of test_spatial_kinematics (joints 10 mm from the start) stops at its iteration
-/// limit: the swap waits for a more robust IK. The layout below: the holes lie on circles of
-/// radius 87 mm in the base (z = 0) and in the platform, in pairs 100 degrees apart (the major
-/// angle; 20 degrees between neighbouring pairs). The base pairs sit at +-50 degrees about 0, 120
-/// and 240 degrees; the platform's pattern is the same turned by 60 degrees. Rod i leaves the
-/// base at 120 k +- 50 degrees and meets the platform at 120 k +- 10 degrees (the nearer hole of
-/// the platform's pattern, 40 degrees round), so that the legs lean in alternate directions as
-/// in a Stewart-Gough platform. Rod frames are the identity at the base and at the platform
-/// (tip_orientation identity): an untilted platform holds each rod's tip vertical, and the rods
-/// bend in S shapes. The robot is symmetric under turns of 120 degrees about z and under the
-/// mirror y -> -y.
+/// Layout: the published one (Till's example of this robot, the hole pattern of Black, Till and
+/// Rucker 2018): holes on circles of radius 87 mm in the base (z = 0) and in the platform; a pair's
+/// holes 20 degrees apart in the base (rods at 120 k -+ 10 degrees) and 100 degrees apart in the
+/// platform (120 k -+ 50 degrees), rod i from the one to the other (40 degrees round), so that
+/// the legs lean in alternate directions as in a Stewart-Gough platform. Rod frames are the
+/// identity at the base and at the platform (tip_orientation identity): an untilted platform
+/// holds each rod's tip vertical, and the rods bend in S shapes. The robot is symmetric under
+/// turns of 120 degrees about z and under the mirror y -> -y.
 inline SpatialRobotParams<double> continuum_stewart_gough() {
   constexpr double kDeg = M_PI / 180.0;
   constexpr double kRadius = 0.087;
@@ -141,8 +134,8 @@ inline SpatialRobotParams<double> continuum_stewart_gough() {
   for (int k = 0; k < 3; ++k) {
     for (int side = 0; side < 2; ++side) {
       const double sign = side == 0 ? -1.0 : 1.0;
-      const double base_angle = (120.0 * k + sign * 50.0) * kDeg;
-      const double platform_angle = (120.0 * k + sign * 10.0) * kDeg;
+      const double base_angle = (120.0 * k + sign * 10.0) * kDeg;
+      const double platform_angle = (120.0 * k + sign * 50.0) * kDeg;
       SpatialLimbParams<double>& limb = robot.limb(2 * k + side);
       limb.rod.length = 0.4;
       limb.rod.diameter = 2e-3;
