@@ -489,7 +489,7 @@ class SpatialForwardProblem {
 /// Problem: size(), retract(x, dz), evaluate(x, r, J*), output_change(dz, position, angle)
 /// (SpatialForwardProblem, SpatialInverseProblem).
 template <class Problem>
-SolveStatus spatial_newton(const Problem& problem, SpatialShootingPoint<double>& x,
+SolveStatus spatial_newton(Problem& problem, SpatialShootingPoint<double>& x,
                            const SolverOptions& options, int max_iterations, SolverSummary& summary,
                            Eigen::PartialPivLU<SpatialJacobian>& lu, double& initial_norm,
                            double& final_norm,
@@ -505,11 +505,11 @@ SolveStatus spatial_newton(const Problem& problem, SpatialShootingPoint<double>&
   double norm = spatial_max_norm(r);
   initial_norm = final_norm = norm;
   if (!std::isfinite(norm)) return SolveStatus::kNonFinite;
-  if (chord && norm > kWarmNorm) {  // too far for chord steps: Newton from here
+  const bool chord_start = chord && norm <= kWarmNorm;
+  if (chord && !chord_start) {  // too far for chord steps: Newton from here
     problem.evaluate(x, r, &J);
     ++summary.residual_evaluations;
   }
-  const bool chord_start = chord && norm <= kWarmNorm;
   if (chord_start) lu = *carried;
   bool factorised = chord_start;  // lu holds the factorisation of J (or the carried one)
   bool lu_at_x = !chord_start;    // J (and lu once factorised) is the Jacobian at x
@@ -543,7 +543,9 @@ SolveStatus spatial_newton(const Problem& problem, SpatialShootingPoint<double>&
     SpatialShootingPoint<double> trial;
     for (int ls = 0; ls <= options.max_line_search; ++ls, t *= 0.5) {
       trial = problem.retract(x, t * step);
-      trial_has_jacobian = !warm;
+      // The Jacobian with the full step's residual (the usual accepted trial); a shortened
+      // step's trials take residuals alone, their Jacobian once accepted.
+      trial_has_jacobian = !warm && ls == 0;
       problem.evaluate(trial, r_trial, trial_has_jacobian ? &J_trial : nullptr);
       ++summary.residual_evaluations;
       const double trial2 = r_trial.squaredNorm();
