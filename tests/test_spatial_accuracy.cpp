@@ -180,10 +180,10 @@ TEST(SpatialAccuracy, ReferencePoseMatchesCvode) {
   Eigen::Matrix<double, 6, 1> step;
   step << (target.position - level.pose.position) / scale.length, turn.angle() * turn.axis();
   const SpatialJointVector q_near = level.q + pose_per_joint.partialPivLu().solve(step);
-  const SpatialForwardSolution near = spatial_forward_kinematics(robot, q_near, level);
-  ASSERT_TRUE(near.summary.converged());
-  const PoseError off = pose_error(near.pose, target);
-  const SpatialInverseSolution ik = spatial_inverse_kinematics(robot, target, near);
+  const SpatialForwardSolution nearby = spatial_forward_kinematics(robot, q_near, level);
+  ASSERT_TRUE(nearby.summary.converged());
+  const PoseError off = pose_error(nearby.pose, target);
+  const SpatialInverseSolution ik = spatial_inverse_kinematics(robot, target, nearby);
   ASSERT_TRUE(ik.summary.converged()) << to_string(ik.summary.status);
   const ReferenceIk reference = reference_inverse_kinematics(robot, point_of(ik, target));
   ASSERT_LT(reference.residual, 1e-11);
@@ -195,7 +195,7 @@ TEST(SpatialAccuracy, ReferencePoseMatchesCvode) {
       "steps; that FK %d, the level FK %d); joints within %.2e m of the CVODE IK (residual %.1e "
       "after %d iterations)\n",
       off.position * 1e3, off.angle * 180 / M_PI, ik.summary.residual_evaluations,
-      ik.summary.iterations, ik.summary.continuation_steps, near.summary.residual_evaluations,
+      ik.summary.iterations, ik.summary.continuation_steps, nearby.summary.residual_evaluations,
       level.summary.residual_evaluations, error, reference.residual, reference.iterations);
   // Each rod sampled at the solver's own nodes: the largest bending strain r |(u1, u2)|, with
   // r = d / 2 and u = K_bt^-1 R^T m (no intrinsic curvature).
