@@ -23,125 +23,16 @@
 #include "pcr/robot.hpp"
 #include "pcr/spatial/kinematics.hpp"
 #include "pcr/spatial/robot.hpp"
+#include "spatial_test_support.hpp"
 
 namespace pcr {
 namespace {
 
-using Eigen::Matrix3d;
-using Eigen::Vector3d;
-using Eigen::Vector4d;
-using Point = SpatialShootingPoint<double>;
-
-Eigen::Quaterniond eigen_quaternion(const Vector4d& h) {
-  return Eigen::Quaterniond(h[0], h[1], h[2], h[3]).normalized();
-}
-
-/// The angle of the rotation between two orientations (rad), through Eigen.
-double angle_between(const Vector4d& a, const Vector4d& b) {
-  return eigen_quaternion(a).angularDistance(eigen_quaternion(b));
-}
+using namespace pcr::testing;  // spatial_test_support.hpp
 
 SpatialRobotParams<double> without_gravity(SpatialRobotParams<double> robot) {
   robot.gravity.setZero();
   return robot;
-}
-
-SpatialJointVector equal_joints(int n, double q) { return SpatialJointVector::Constant(n, q); }
-
-// ---- The CVODE reference FK ---------------------------------------------------------------------
-
-/// x (+) dz written here with Eigen's quaternions, not the solver's retract.
-Point reference_retract(const Point& x, const Eigen::VectorXd& dz, int n,
-                        const ShootingScale& scale) {
-  Point out = x;
-  for (int i = 0; i < n; ++i) {
-    out.wrenches[i].force += dz.segment<3>(6 * i) * scale.force;
-    out.wrenches[i].moment += dz.segment<3>(6 * i + 3) * scale.moment();
-  }
-  out.pose.position += dz.segment<3>(6 * n) * scale.length;
-  const Vector3d delta = dz.segment<3>(6 * n + 3);
-  const Eigen::Quaterniond turn =
-      delta.norm() > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(delta.norm(), delta.normalized()))
-                       : Eigen::Quaterniond::Identity();
-  const Eigen::Quaterniond h = eigen_quaternion(x.pose.orientation) * turn;
-  out.pose.orientation = Vector4d(h.w(), h.x(), h.y(), h.z());
-  return out;
-}
-
-SpatialRodState<double> cvode_tip(const SpatialRobotParams<double>& robot, const Point& x, int i) {
-  const SpatialLimbParams<double>& limb = robot.limb(i);
-  return integrate_spatial_rod_reference(spatial_proximal_state(limb, x.q[i], x.wrenches[i]),
-                                         limb.rod_at(x.q[i]), robot.gravity);
-}
-
-Eigen::VectorXd residual_of(const SpatialRobotParams<double>& robot, const Point& x,
-                            const ShootingScale& scale, const SpatialRodState<double>* tips) {
-  SpatialResidualVector<double> r;
-  spatial_residual_from_tips(robot, x, scale, tips, r);
-  return r;
-}
-
-struct ReferenceFk {
-  Point x;
-  double residual = 0;
-  int iterations = 0;
-};
-
-/// Newton on the CVODE residual from `start` (the RK4 solution), with central-difference
-/// Jacobians: a rod's columns re-integrate that rod alone, the pose's none.
-ReferenceFk reference_forward_kinematics(const SpatialRobotParams<double>& robot,
-                                         const Point& start) {
-  const int n = robot.num_rods, size = 6 * n + 6;
-  const ShootingScale scale = spatial_shooting_scale(robot);
-  constexpr double kStep = 1e-6;
-  ReferenceFk out{start};
-  std::vector<SpatialRodState<double>> tips(n);
-  for (; out.iterations < 8; ++out.iterations) {
-    for (int i = 0; i < n; ++i) tips[i] = cvode_tip(robot, out.x, i);
-    const Eigen::VectorXd r = residual_of(robot, out.x, scale, tips.data());
-    out.residual = r.lpNorm<Eigen::Infinity>();
-    if (out.residual <= 2e-12) break;
-    Eigen::MatrixXd J(size, size);
-    for (int k = 0; k < size; ++k) {
-      const int rod = k < 6 * n ? k / 6 : -1;
-      Eigen::VectorXd sides[2];
-      for (int s = 0; s < 2; ++s) {
-        const Point moved = reference_retract(
-            out.x, (s == 0 ? kStep : -kStep) * Eigen::VectorXd::Unit(size, k), n, scale);
-        std::vector<SpatialRodState<double>> moved_tips = tips;
-        if (rod >= 0) moved_tips[rod] = cvode_tip(robot, moved, rod);
-        sides[s] = residual_of(robot, moved, scale, moved_tips.data());
-      }
-      J.col(k) = (sides[0] - sides[1]) / (2 * kStep);
-    }
-    out.x = reference_retract(out.x, -J.partialPivLu().solve(r), n, scale);
-  }
-  return out;
-}
-
-struct PoseError {
-  double position = 0, angle = 0;
-};
-PoseError pose_error(const SpatialPose<double>& a, const SpatialPose<double>& b) {
-  return PoseError{(a.position - b.position).norm(), angle_between(a.orientation, b.orientation)};
-}
-
-/// The equal joint value that puts the reference robot's platform `height` above its base
-/// (secant on cold FK).
-double joint_for_height(const SpatialRobotParams<double>& robot, double height) {
-  const int n = robot.num_rods;
-  const auto z_at = [&](double q) {
-    return spatial_forward_kinematics(robot, equal_joints(n, q)).pose.position.z() - height;
-  };
-  double q0 = 0.0, q1 = 0.01, f0 = z_at(q0), f1 = z_at(q1);
-  for (int k = 0; k < 20 && std::abs(f1) > 1e-13; ++k) {
-    const double q2 = q1 - f1 * (q1 - q0) / (f1 - f0);
-    q0 = q1;
-    f0 = f1;
-    q1 = q2;
-    f1 = z_at(q1);
-  }
-  return q1;
 }
 
 // ---- The model
@@ -226,57 +117,6 @@ TEST(SpatialKinematics, SymmetricRobotStaysOnItsAxis) {
 }
 
 // ---- Jacobian -----------------------------------------------------------------------------------
-
-/// A robot with every kind of rod: clamped and spherical tips, holes and translated clamps,
-/// tilted and twisted frames, under gravity with a payload off its centre.
-SpatialRobotParams<double> mixed_robot(std::mt19937_64& rng, int n) {
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const SpatialRobotParams<double> reference = continuum_stewart_gough();
-  SpatialRobotParams<double> robot = reference;
-  robot.num_rods = n;
-  for (int i = 0; i < n; ++i) {
-    SpatialLimbParams<double>& limb = robot.limb(i);
-    limb = reference.limb(0);
-    // As in the reference robot, each rod meets the platform about 40 degrees round from its
-    // hole, alternately clockwise and counterclockwise.
-    const double base_angle = 2 * M_PI * i / n + 0.1 * u(rng);
-    const double platform_angle =
-        base_angle + (i % 2 == 0 ? 1 : -1) * (40 * M_PI / 180 + 0.1 * u(rng));
-    const double base_radius = 0.087 * (1 + 0.1 * u(rng));
-    const double platform_radius = 0.087 * (1 + 0.1 * u(rng));
-    limb.A = Vector3d(base_radius * std::cos(base_angle), base_radius * std::sin(base_angle),
-                      0.002 * u(rng));
-    limb.B = Vector3d(platform_radius * std::cos(platform_angle),
-                      platform_radius * std::sin(platform_angle), 0.002 * u(rng));
-    limb.rod.length = 0.4 + 0.002 * u(rng);
-    limb.rod.diameter = 2e-3 * (1 + 0.2 * u(rng));
-    const Matrix3d base = (Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitX()) *
-                           Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitY()) *
-                           Eigen::AngleAxisd(M_PI * u(rng), Vector3d::UnitZ()))
-                              .toRotationMatrix();
-    limb.base_orientation = quaternion_of<double>(base);
-    // The tip frame: the base frame (as if the platform were W) turned by up to 0.1 rad about
-    // each axis: clamped rods bend and twist by that much on top of the layout's S shapes.
-    const Matrix3d tip = (Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitX()) *
-                          Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitY()) *
-                          Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitZ()))
-                             .toRotationMatrix() *
-                         base;
-    limb.tip_orientation = quaternion_of<double>(tip);
-    limb.attachment = u(rng) > 0 ? SpatialAttachment::kClamped : SpatialAttachment::kSpherical;
-    if (u(rng) > 0) {
-      limb.actuation = SpatialActuation::kTranslatedClamp;
-      limb.actuator_direction =
-          (base.col(2) + 0.05 * Vector3d(u(rng), u(rng), u(rng))).normalized();
-    }
-  }
-  robot.platform_mass = 0.1 + 0.2 * (u(rng) + 1);
-  robot.platform_centre_of_mass = Vector3d(0.01 * u(rng), 0.01 * u(rng), 0.02 * u(rng));
-  robot.external_force = Vector3d(0.3 * u(rng), 0.3 * u(rng), 0.3 * u(rng));
-  robot.external_moment = Vector3d(0.02 * u(rng), 0.02 * u(rng), 0.02 * u(rng));
-  return robot;
-}
-
 TEST(SpatialKinematics, JacobianMatchesCentralDifferences) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
