@@ -387,11 +387,12 @@ TEST(SpatialStability, PlanarRobotInSpaceGivesThePlanarCheck) {
 // from the x axis) by the planar core's warm-started IK left on its branch, which loses its planar
 // stability near 22.78 mm (tests/test_stability.cpp): each solution described as spatial and
 // re-solved by spatial FK at its joints. In space the robot loses its stability earlier, near
-// 14.5 mm, out of its plane: its platform is held out of plane by the rods' bending and torsion
-// alone (no rod's axial stiffness), which the compressed rod 0 overcomes first. There the margin
-// crosses zero where the spatial forward Jacobian's determinant (an LU of the whole matrix)
-// changes sign, and the singularity measure is least; the in-plane part of the check (its
-// stiffness' in-plane block, the rods' conjugate points) gives the planar flag all along.
+// 14.5 mm, out of its plane (a bifurcation that the mirror z -> -z makes symmetric): its platform
+// is held out of plane by the rods' bending and torsion alone (no rod's axial stiffness), which the
+// compressed rod 0 overcomes first. There the margin crosses zero where the spatial forward
+// Jacobian's determinant (an LU of the whole matrix) changes sign, and the singularity measure is
+// least; the in-plane part of the check (its stiffness' in-plane block, the rods' conjugate points)
+// gives the planar flag all along.
 TEST(SpatialStability, MarginCrossesZeroWhereTheForwardJacobianTurnsSingular) {
   RobotParams<double> planar = femto_3pf();
   for (int i = 0; i < 3; ++i) {
@@ -462,10 +463,13 @@ TEST(SpatialStability, MarginCrossesZeroWhereTheForwardJacobianTurnsSingular) {
   const std::size_t nearest =
       std::abs(margins[cross - 1]) < std::abs(margins[cross]) ? cross - 1 : cross;
   for (std::size_t i = nearest - 3; i <= nearest + 3; ++i) {
-    if (i != nearest) EXPECT_LT(singularities[nearest], 0.75 * singularities[i]) << ts[i];
+    if (i != nearest) {
+      EXPECT_LT(singularities[nearest], 0.75 * singularities[i]) << ts[i];
+    }
   }
   std::printf(
-      "out-of-plane fold: the margin crosses zero at %.5f mm, the forward Jacobian's determinant "
+      "out-of-plane bifurcation: the margin crosses zero at %.5f mm, the forward Jacobian's "
+      "determinant "
       "at %.5f mm; singularity %.2e there, %.2e at home\n",
       margin_zero * 1e3, det_zero * 1e3, singularities[nearest], singularities.front());
 }

@@ -9,7 +9,9 @@
 //     - a clamped tip: no conjugate point in (0, L]. The Jacobi matrix
 //       d(p, turn)(s) / d(n, m)(0) (6 x 6: the position and the body-frame turn of the rod's frame
 //       at s, by the proximal wrench), which the rod's variational tangents give at every RK4
-//       node, stays non-singular (its determinant stays positive from 0+);
+//       node, stays non-singular: its determinant stays positive from 0+, and does not touch
+//       zero either (a circular section makes double conjugate points generic: a straight rod
+//       buckles in every plane through its axis at once);
 //     - a spherical tip (its rotation free, its moment zero): the same test (a conjugate point in
 //       (0, L] makes the rod unstable whatever its tip's rotation does), and the tip's rotational
 //       stiffness, the 3 x 3 Schur complement S = d(R^T m(L)) / d(turn of the tip) with the tip's
