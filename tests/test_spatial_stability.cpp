@@ -474,6 +474,60 @@ TEST(SpatialStability, MarginCrossesZeroWhereTheForwardJacobianTurnsSingular) {
       margin_zero * 1e3, det_zero * 1e3, singularities[nearest], singularities.front());
 }
 
+// The out-of-plane loss of stability above, checked against finite differences: the same robot
+// with rods that shear and stretch (so that the straight rod 0 has a finite axial stiffness to
+// difference, and the check takes no compliance of its own), at 16 mm along the line. Its
+// stiffness' out-of-plane block and least eigenvalue, negative, are those of the re-solved rods.
+TEST(SpatialStability, OutOfPlaneLossMatchesDifferencesOfResolvedRods) {
+  RobotParams<double> planar = femto_3pf();
+  for (int i = 0; i < 3; ++i) {
+    planar.limb(i).q_min = -0.030;
+    planar.limb(i).q_max = 0.030;
+  }
+  SpatialRobotParams<double> robot = testing::spatial_of_planar(planar);
+  for (int i = 0; i < 3; ++i) robot.limb(i).rod.shear_and_extension = true;
+  SolverOptions options;
+  options.stable_inverse = false;
+  InverseSequence sequence(planar, options, PlatformLoad<double>(), SequenceMode::kPath);
+  const double direction = 75 * M_PI / 180;
+  InverseSolution ik;
+  for (int k = 0; k <= 160; ++k) {
+    const double t = k * 1e-4;
+    ik = sequence.solve({t * std::cos(direction), t * std::sin(direction), 0.0});
+    ASSERT_TRUE(ik.summary.converged()) << t;
+  }
+  const SpatialForwardSolution fk =
+      polished(robot, spatial_point_of_planar(ik.q, ik.pose, ik.wrenches));
+  ASSERT_TRUE(fk.summary.converged());
+  constexpr int kSteps = 128;
+  const Point point = spatial_shooting_point(robot, fk);
+  const SpatialEquilibriumStability s =
+      internal::spatial_equilibrium_stability(robot, point, kSteps, false);
+  const Matrix6d k = stiffness_by_differences(robot, point, kSteps);
+  const Matrix6d symmetric = 0.5 * (k + k.transpose());
+  const int index[3] = {2, 3, 4};
+  Matrix3d out_check, out_differences;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      out_check(a, b) = s.stiffness(index[a], index[b]);
+      out_differences(a, b) = symmetric(index[a], index[b]);
+    }
+  }
+  const double error = (out_check - out_differences).norm() / out_differences.norm();
+  const double least = Eigen::SelfAdjointEigenSolver<Matrix6d>(symmetric).eigenvalues()(0);
+  EXPECT_LT(error, 1e-4);
+  EXPECT_LT(least, 0);
+  EXPECT_FALSE(s.stable);
+  EXPECT_EQ(s.conjugate_limb, -1);
+  EXPECT_NEAR(s.margin, least, 1e-4 * std::abs(least));
+  EXPECT_LT((in_plane(s.stiffness) - in_plane(symmetric)).norm(),
+            1e-4 * in_plane(symmetric).norm());
+  std::printf(
+      "16 mm, rods with shear and extension: margin %.5e, differences' least eigenvalue %.5e; "
+      "out-of-plane block within %.1e\n",
+      s.margin, least, error);
+}
+
 // ---- Symmetry, steps, real time -----------------------------------------------------------------
 
 // The reference robot is symmetric under turns of 120 degrees about z, which take rod i to rod
