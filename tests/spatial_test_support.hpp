@@ -1,7 +1,8 @@
 #pragma once
 // Helpers shared by the spatial robot's tests (test_spatial_kinematics.cpp,
-// test_spatial_accuracy.cpp): a forward kinematics whose rods are integrated by CVODE, pose
-// errors through Eigen's quaternions, and random robots drawn around the reference.
+// test_spatial_accuracy.cpp, test_spatial_stability.cpp): a forward kinematics whose rods are
+// integrated by CVODE, pose errors through Eigen's quaternions, random robots drawn around the
+// reference, and a planar robot described as a spatial one.
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "pcr/reference.hpp"
+#include "pcr/robot.hpp"
 #include "pcr/spatial/kinematics.hpp"
 #include "pcr/spatial/robot.hpp"
 
@@ -178,6 +180,41 @@ inline SpatialRobotParams<double> mixed_robot(std::mt19937_64& rng, int n) {
   robot.platform_centre_of_mass = Vector3d(0.01 * u(rng), 0.01 * u(rng), 0.02 * u(rng));
   robot.external_force = Vector3d(0.3 * u(rng), 0.3 * u(rng), 0.3 * u(rng));
   robot.external_moment = Vector3d(0.02 * u(rng), 0.02 * u(rng), 0.02 * u(rng));
+  return robot;
+}
+
+// ---- The planar robot in space ------------------------------------------------------------------
+
+/// The rod frame of a planar tangent angle: d3 = (cos a, sin a, 0), d1 = e3 (the in-plane bending
+/// axis), d2 = d3 x d1.
+inline Vector4d planar_frame(double angle) {
+  Matrix3d R;
+  R.col(0) = Vector3d::UnitZ();
+  R.col(2) = Vector3d(std::cos(angle), std::sin(angle), 0);
+  R.col(1) = R.col(2).cross(R.col(0));
+  return quaternion_of<double>(R);
+}
+
+inline SpatialRobotParams<double> spatial_of_planar(const RobotParams<double>& planar) {
+  SpatialRobotParams<double> robot;
+  robot.num_rods = planar.num_limbs;
+  robot.gravity.setZero();
+  for (int i = 0; i < planar.num_limbs; ++i) {
+    const LimbParams<double>& limb = planar.limb(i);
+    SpatialLimbParams<double>& out = robot.limb(i);
+    out.rod.length = limb.rod.length;
+    out.rod.diameter = limb.rod.diameter;
+    out.rod.young_modulus = limb.rod.young_modulus;
+    out.rod.shear_modulus = limb.rod.young_modulus / 2.6;
+    out.A = Vector3d(limb.A.x(), limb.A.y(), 0);
+    out.base_orientation = planar_frame(limb.alpha);
+    out.actuation = SpatialActuation::kTranslatedClamp;
+    out.actuator_direction =
+        Vector3d(std::cos(limb.alpha + limb.gamma), std::sin(limb.alpha + limb.gamma), 0);
+    out.B = Vector3d(limb.B.x(), limb.B.y(), 0);
+    out.tip_orientation = planar_frame(limb.beta);
+    out.attachment = SpatialAttachment::kClamped;
+  }
   return robot;
 }
 

@@ -298,39 +298,6 @@ TEST(SpatialKinematics, PlatformBalancesOnCvodeRods) {
 
 // ---- The planar robot in space ------------------------------------------------------------------
 
-/// The rod frame of a planar tangent angle: d3 = (cos a, sin a, 0), d1 = e3 (the in-plane bending
-/// axis), d2 = d3 x d1.
-Vector4d planar_frame(double angle) {
-  Matrix3d R;
-  R.col(0) = Vector3d::UnitZ();
-  R.col(2) = Vector3d(std::cos(angle), std::sin(angle), 0);
-  R.col(1) = R.col(2).cross(R.col(0));
-  return quaternion_of<double>(R);
-}
-
-SpatialRobotParams<double> spatial_of_planar(const RobotParams<double>& planar) {
-  SpatialRobotParams<double> robot;
-  robot.num_rods = planar.num_limbs;
-  robot.gravity.setZero();
-  for (int i = 0; i < planar.num_limbs; ++i) {
-    const LimbParams<double>& limb = planar.limb(i);
-    SpatialLimbParams<double>& out = robot.limb(i);
-    out.rod.length = limb.rod.length;
-    out.rod.diameter = limb.rod.diameter;
-    out.rod.young_modulus = limb.rod.young_modulus;
-    out.rod.shear_modulus = limb.rod.young_modulus / 2.6;
-    out.A = Vector3d(limb.A.x(), limb.A.y(), 0);
-    out.base_orientation = planar_frame(limb.alpha);
-    out.actuation = SpatialActuation::kTranslatedClamp;
-    out.actuator_direction =
-        Vector3d(std::cos(limb.alpha + limb.gamma), std::sin(limb.alpha + limb.gamma), 0);
-    out.B = Vector3d(limb.B.x(), limb.B.y(), 0);
-    out.tip_orientation = planar_frame(limb.beta);
-    out.attachment = SpatialAttachment::kClamped;
-  }
-  return robot;
-}
-
 TEST(SpatialKinematics, PlanarRobotMatchesThePlanarCore) {
   const RobotParams<double> planar = femto_3pf();
   const SpatialRobotParams<double> robot = spatial_of_planar(planar);

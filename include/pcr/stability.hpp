@@ -168,36 +168,39 @@ struct LaneJacobiMonitor {
   }
 };
 
-/// The forward Jacobian J = [A B; C D] (3n + 3 square, scaled) of the rods with their axial
-/// compliance, by its 3 x 3 blocks: A block-diagonal (A_i: rod i's closure by its proximal
-/// wrench, compliance included), B_i (rod i's closure by the pose), C_i (the platform's
-/// equilibrium by rod i's wrench) and D (by the pose). Eliminating the rods leaves the platform's
-/// tangent stiffness, the Schur complement K = D - sum_i C_i A_i^-1 B_i.
-struct ForwardJacobianBlocks {
-  /// Row blocks of n limbs, stacked (3n rows).
-  using Stacked = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, 3 * kMaxLimbs, 3>;
+/// The forward Jacobian J = [A B; C D] (Bn + B square, scaled) of the rods with their axial
+/// compliance, by its B x B blocks (B = 3 for planar robots, 6 for spatial ones): A
+/// block-diagonal (A_i: rod i's closure by its proximal wrench, compliance included), B_i (rod
+/// i's closure by the pose), C_i (the platform's equilibrium by rod i's wrench) and D (by the
+/// pose). Eliminating the rods leaves the platform's tangent stiffness, the Schur complement
+/// K = D - sum_i C_i A_i^-1 B_i.
+template <int B, int MaxLimbs>
+struct BlockForwardJacobian {
+  using Block = Eigen::Matrix<double, B, B>;
+  /// Row blocks of n limbs, stacked (B n rows).
+  using Stacked = Eigen::Matrix<double, Eigen::Dynamic, B, 0, B * MaxLimbs, B>;
 
   int n = 0;
-  Eigen::Matrix3d a_inv[kMaxLimbs];  ///< A_i^-1
-  Eigen::Matrix3d y[kMaxLimbs];      ///< C_i A_i^-1
-  Stacked x;                         ///< A_i^-1 B_i
-  Eigen::Matrix3d stiffness;         ///< K
-  double norm = 0;                   ///< |J|_1, the largest column sum of magnitudes
+  Block a_inv[MaxLimbs];  ///< A_i^-1
+  Block y[MaxLimbs];      ///< C_i A_i^-1
+  Stacked x;              ///< A_i^-1 B_i
+  Block stiffness;        ///< K
+  double norm = 0;        ///< |J|_1, the largest column sum of magnitudes
 
-  /// The blocks of the first 3n + 3 columns of `partials` (shooting_partials_from_tips, the
-  /// inextensible rods), with_compliance(i, A_i) adding rod i's.
-  template <class Compliance>
-  ForwardJacobianBlocks(const ShootingMatrix& partials, int limbs, Compliance&& with_compliance)
-      : n(limbs), x(3 * limbs, 3) {
-    stiffness = partials.block<3, 3>(3 * n, 3 * n);
-    Eigen::RowVector3d pose_sums = stiffness.cwiseAbs().colwise().sum();
+  /// The blocks of the first B n + B columns of `partials` (the inextensible rods),
+  /// with_compliance(i, A_i) adding rod i's.
+  template <class Matrix, class Compliance>
+  BlockForwardJacobian(const Matrix& partials, int limbs, Compliance&& with_compliance)
+      : n(limbs), x(B * limbs, B) {
+    stiffness = partials.template block<B, B>(B * n, B * n);
+    Eigen::Matrix<double, 1, B> pose_sums = stiffness.cwiseAbs().colwise().sum();
     for (int i = 0; i < n; ++i) {
-      const Eigen::Matrix3d a = with_compliance(i, partials.block<3, 3>(3 * i, 3 * i));
-      const Eigen::Matrix3d b = partials.block<3, 3>(3 * i, 3 * n);
-      const Eigen::Matrix3d c = partials.block<3, 3>(3 * n, 3 * i);
+      const Block a = with_compliance(i, Block(partials.template block<B, B>(B * i, B * i)));
+      const Block b = partials.template block<B, B>(B * i, B * n);
+      const Block c = partials.template block<B, B>(B * n, B * i);
       a_inv[i] = a.inverse();
-      const Eigen::Matrix3d xi = a_inv[i].lazyProduct(b);
-      x.middleRows<3>(3 * i) = xi;
+      const Block xi = a_inv[i].lazyProduct(b);
+      x.template middleRows<B>(B * i) = xi;
       y[i] = c.lazyProduct(a_inv[i]);
       stiffness -= c.lazyProduct(xi);
       pose_sums += b.cwiseAbs().colwise().sum();
@@ -214,16 +217,16 @@ struct ForwardJacobianBlocks {
   /// singular (so is J).
   double rcond() const {
     if (stiffness.determinant() == 0) return 0.0;
-    const Eigen::Matrix3d k_inv = stiffness.inverse();
+    const Block k_inv = stiffness.inverse();
     // The pose's block column: [-X K^-1; K^-1].
     Stacked column = x.lazyProduct(k_inv);
     double inverse_norm =
         (column.cwiseAbs().colwise().sum() + k_inv.cwiseAbs().colwise().sum()).maxCoeff();
     // Rod j's block column: [A_j^-1 in row block j + X W_j; -W_j], W_j = K^-1 Y_j.
     for (int j = 0; j < n; ++j) {
-      const Eigen::Matrix3d w = k_inv.lazyProduct(y[j]);
+      const Block w = k_inv.lazyProduct(y[j]);
       column = x.lazyProduct(w);
-      column.middleRows<3>(3 * j) += a_inv[j];
+      column.template middleRows<B>(B * j) += a_inv[j];
       inverse_norm =
           std::max(inverse_norm,
                    (column.cwiseAbs().colwise().sum() + w.cwiseAbs().colwise().sum()).maxCoeff());
@@ -231,6 +234,9 @@ struct ForwardJacobianBlocks {
     return 1.0 / (norm * inverse_norm);
   }
 };
+
+/// The planar robots' blocks: 3 x 3.
+using ForwardJacobianBlocks = BlockForwardJacobian<3, kMaxLimbs>;
 
 /// equilibrium_stability, optionally without the rods' axial compliance (tests compare the
 /// platform stiffness of the inextensible model with finite differences).

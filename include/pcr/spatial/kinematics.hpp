@@ -515,7 +515,11 @@ SolveStatus spatial_newton(Problem& problem, SpatialShootingPoint<double>& x,
   bool lu_at_x = !chord_start;    // J (and lu once factorised) is the Jacobian at x
   bool damped = false;            // J is singular: Levenberg steps instead of Newton's
   for (int iter = 0; iter <= max_iterations; ++iter) {
-    if (norm <= options.tolerance) return SolveStatus::kConverged;
+    if (norm <= options.tolerance) {
+      // Callers keep the factorisation (warm starts, the error estimate): J is the one at x.
+      if (!factorised) lu.compute(J);
+      return SolveStatus::kConverged;
+    }
     if (iter == max_iterations) break;
     ++summary.iterations;
     if (!factorised) {
