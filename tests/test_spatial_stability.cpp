@@ -435,6 +435,11 @@ TEST(SpatialStability, MarginCrossesZeroWhereTheForwardJacobianTurnsSingular) {
     if (s.conjugate_limb < 0) {
       EXPECT_EQ(s.margin > 0, det * determinants.front() > 0) << t << " margin " << s.margin;
     }
+    // The solver's own check (at half the steps) in its summary, away from the crossing.
+    if (std::abs(s.margin) > 1.0) {
+      EXPECT_EQ(fk.summary.stability, s.stable ? Stability::kStable : Stability::kUnstable) << t;
+      EXPECT_EQ(fk.summary.stability_margin > 0, s.margin > 0) << t;
+    }
     if (k % 10 == 0 || (k >= 142 && k <= 148)) {
       std::printf("%.1f mm: margin %+.4e, singularity %.3e, det %+.3e, planar %s, conjugate %d\n",
                   t * 1e3, s.margin, s.singularity, det, planar_stable ? "stable" : "unstable",

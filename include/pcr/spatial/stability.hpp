@@ -43,8 +43,8 @@
 #include <limits>
 
 #include "pcr/spatial/cosserat_rod.hpp"
-#include "pcr/spatial/kinematics.hpp"
 #include "pcr/spatial/robot.hpp"
+#include "pcr/spatial/shooting.hpp"
 #include "pcr/stability.hpp"
 
 namespace pcr {
