@@ -1,7 +1,8 @@
 // Speed of the spatial Cosserat rod (pcr/spatial/cosserat_rod.hpp): the rods of one shooting
 // residual of a continuum Stewart-Gough robot (six rods), with and without the sensitivity a
-// Newton step needs, at the default step count and at half of it; and warm FK and IK of the
-// reference robot (pcr/spatial/kinematics.hpp) along 1 mm joint steps.
+// Newton step needs, at the default step count and at half of it; a plain baseline residual
+// written the textbook way; and FK and IK of the reference robot (pcr/spatial/kinematics.hpp):
+// warm along a path of 1 mm / 1 degree steps around its reference pose, from home, and cold.
 //   build/benchmarks/bench_spatial [--benchmark_repetitions=5 --benchmark_report_aggregates_only]
 #include <benchmark/benchmark.h>
 
@@ -83,73 +84,212 @@ BENCHMARK(BM_SixRodsWithSensitivity)
     ->Arg(kDefaultSpatialRodSteps)
     ->Arg(kDefaultSpatialRodSteps / 2);
 
-/// A closed path of the reference continuum Stewart-Gough robot in 1 mm joint steps: each rod's
-/// length q0 + 5 mm sin(2 pi k / 32 + phase_i) (5 mm x 2 pi / 32 = 0.98 mm per step) around the
-/// equal length that holds the platform 0.4 m up, with its FK solutions.
-struct SpatialPath {
+/// The plain baseline the issue measures against: one residual's six rods integrated by a
+/// straightforward RK4 loop, as a textbook writes the Kirchhoff rod (state p, R, n, m in Eigen's
+/// fixed-size types, R as a matrix, u = K^-1 R^T m, p' = R e3, R' = R [u]x, n' = -f,
+/// m' = -p' x n), at the step count the library chose at the reference pose: the unit of the
+/// "per solve" ratios (the library's solve costs N of these).
+struct PlainRod {
+  Eigen::Vector3d p;
+  Eigen::Matrix3d R;
+  Eigen::Vector3d n, m;
+};
+
+PlainRod plain_slope(const PlainRod& y, const Eigen::Vector3d& inverse_stiffness,
+                     const Eigen::Vector3d& f) {
+  const Eigen::Vector3d u = inverse_stiffness.cwiseProduct(y.R.transpose() * y.m);
+  Eigen::Matrix3d u_hat;
+  u_hat << 0, -u.z(), u.y(), u.z(), 0, -u.x(), -u.y(), u.x(), 0;
+  PlainRod dy;
+  dy.p = y.R.col(2);
+  dy.R = y.R * u_hat;
+  dy.n = -f;
+  dy.m = -dy.p.cross(y.n);
+  return dy;
+}
+
+PlainRod plain_axpy(const PlainRod& y, double a, const PlainRod& k) {
+  return PlainRod{y.p + a * k.p, y.R + a * k.R, y.n + a * k.n, y.m + a * k.m};
+}
+
+PlainRod plain_rk4(PlainRod y, double length, int steps, const Eigen::Vector3d& inverse_stiffness,
+                   const Eigen::Vector3d& f) {
+  const double h = length / steps;
+  for (int i = 0; i < steps; ++i) {
+    const PlainRod k1 = plain_slope(y, inverse_stiffness, f);
+    const PlainRod k2 = plain_slope(plain_axpy(y, h / 2, k1), inverse_stiffness, f);
+    const PlainRod k3 = plain_slope(plain_axpy(y, h / 2, k2), inverse_stiffness, f);
+    const PlainRod k4 = plain_slope(plain_axpy(y, h, k3), inverse_stiffness, f);
+    y.p += h / 6 * (k1.p + 2 * k2.p + 2 * k3.p + k4.p);
+    y.R += h / 6 * (k1.R + 2 * k2.R + 2 * k3.R + k4.R);
+    y.n += h / 6 * (k1.n + 2 * k2.n + 2 * k3.n + k4.n);
+    y.m += h / 6 * (k1.m + 2 * k2.m + 2 * k3.m + k4.m);
+  }
+  return y;
+}
+
+/// The reference continuum Stewart-Gough robot (the published layout) on a closed path around
+/// its reference pose (0.4 m up, tilted 10 degrees about y) in steps of 1 mm and 1 degree: the
+/// platform's centre on a 5 mm circle (0.98 mm per step) while it turns about its own z by
+/// 9 sin(2 pi k / 32) degrees (up to 0.9 degrees per step), 32 poses, with the IK and FK
+/// solutions along it.
+struct ReferencePath {
   static constexpr int kPoints = 32;
   SpatialRobotParams<double> robot = continuum_stewart_gough();
+  std::vector<SpatialPose<double>> poses;
+  std::vector<SpatialInverseSolution> ik;
   std::vector<SpatialJointVector> q;
-  std::vector<SpatialForwardSolution> fk;
+  SpatialForwardSolution home, first;
+  SpatialPose<double> reference;
 
-  SpatialPath() {
-    const double q0 = 0.005285;
-    for (int k = 0; k < kPoints; ++k) {
-      SpatialJointVector joints(6);
-      for (int i = 0; i < 6; ++i) joints(i) = q0 + 0.005 * std::sin(2 * M_PI * k / kPoints + i);
-      q.push_back(joints);
-    }
-    fk.push_back(spatial_forward_kinematics(robot, q[0]));
+  static SpatialPose<double> pose_at(double phase) {
+    const double deg = M_PI / 180;
+    const Eigen::Quaterniond tilt(Eigen::AngleAxisd(10 * deg, Eigen::Vector3d::UnitY()));
+    const Eigen::Quaterniond turn(
+        Eigen::AngleAxisd(9 * deg * std::sin(phase), Eigen::Vector3d::UnitZ()));
+    const Eigen::Quaterniond h = tilt * turn;
+    SpatialPose<double> pose;
+    pose.position = Vector3<double>(0.005 * std::cos(phase), 0.005 * std::sin(phase), 0.4);
+    pose.orientation = Vector4<double>(h.w(), h.x(), h.y(), h.z());
+    return pose;
+  }
+
+  ReferencePath() {
+    home = spatial_forward_kinematics(robot, SpatialJointVector::Zero(6));
+    reference.position = Vector3<double>(0, 0, 0.4);
+    reference.orientation =
+        Vector4<double>(std::cos(5 * M_PI / 180), 0, std::sin(5 * M_PI / 180), 0);
+    const SpatialForwardSolution level =
+        spatial_forward_kinematics(robot, SpatialJointVector::Constant(6, 0.005285));
+    for (int k = 0; k < kPoints; ++k) poses.push_back(pose_at(2 * M_PI * k / kPoints));
+    ik.push_back(spatial_inverse_kinematics(robot, poses[0], level));
     for (int k = 1; k < kPoints; ++k)
-      fk.push_back(spatial_forward_kinematics(robot, q[k], fk.back()));
+      ik.push_back(spatial_inverse_kinematics(robot, poses[k], ik.back()));
+    for (const SpatialInverseSolution& s : ik) q.push_back(s.q);
+    first = spatial_forward_kinematics(robot, q[0]);
   }
 };
 
-const SpatialPath& spatial_path() {
-  static const SpatialPath path;
+const ReferencePath& reference_path() {
+  static const ReferencePath path;
   return path;
 }
 
-/// Warm FK along the path, each solve from the previous solution.
-void BM_SpatialForwardWarm(benchmark::State& state) {
-  const SpatialPath& path = spatial_path();
-  SpatialForwardSolution previous = path.fk.back();
-  int k = 0;
-  long evaluations = 0, solves = 0, failures = 0;
-  for (auto _ : state) {
-    SpatialForwardSolution next = spatial_forward_kinematics(path.robot, path.q[k], previous);
-    benchmark::DoNotOptimize(next.pose.position.data());
-    evaluations += next.summary.residual_evaluations;
-    failures += next.summary.converged() ? 0 : 1;
-    ++solves;
-    previous = std::move(next);
-    k = (k + 1) % SpatialPath::kPoints;
-  }
-  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
-  state.counters["failures"] = static_cast<double>(failures);
+SolverOptions options_of(const benchmark::State& state) {
+  SolverOptions options;
+  options.check_stability = state.range(0) != 0;
+  return options;
 }
-BENCHMARK(BM_SpatialForwardWarm)->Unit(benchmark::kMicrosecond);
 
-/// Warm IK along the path's poses, each solve from the previous solution.
-void BM_SpatialInverseWarm(benchmark::State& state) {
-  const SpatialPath& path = spatial_path();
-  SpatialInverseSolution previous =
-      spatial_inverse_kinematics(path.robot, path.fk.back().pose, path.fk.back());
-  int k = 0;
-  long evaluations = 0, solves = 0, failures = 0;
+/// One residual of the reference robot at its reference pose the plain way (PlainRod), six rods
+/// at the library's step count there.
+void BM_PlainResidualBaseline(benchmark::State& state) {
+  const ReferencePath& path = reference_path();
+  const SpatialInverseSolution& at = path.ik[0];
+  const int steps = at.summary.rod_steps;
   for (auto _ : state) {
-    SpatialInverseSolution next = spatial_inverse_kinematics(path.robot, path.fk[k].pose, previous);
+    for (int i = 0; i < 6; ++i) {
+      const SpatialLimbParams<double>& limb = path.robot.limb(i);
+      const SpatialRod<double> rod = limb.rod_at(at.q(i));
+      const double ei = rod.bending_stiffness(), gj = rod.torsional_stiffness();
+      PlainRod y{limb.A, rotation_of(limb.base_orientation), at.wrenches[i].force,
+                 at.wrenches[i].moment};
+      benchmark::DoNotOptimize(plain_rk4(y, rod.length, steps,
+                                         Eigen::Vector3d(1 / ei, 1 / ei, 1 / gj),
+                                         rod.mass_per_length() * path.robot.gravity));
+    }
+  }
+  state.counters["rod_steps"] = steps;
+}
+BENCHMARK(BM_PlainResidualBaseline)->Unit(benchmark::kMicrosecond);
+
+/// Warm IK along the path, each solve from the previous IK solution, as a controller runs.
+/// Arg: the stability check on (1, the default) or off (0).
+void BM_SpatialInverseWarm(benchmark::State& state) {
+  const ReferencePath& path = reference_path();
+  const SolverOptions options = options_of(state);
+  SpatialInverseSolution previous = path.ik.back();
+  int k = 0;
+  long evaluations = 0, solves = 0, failures = 0, steps = 0;
+  for (auto _ : state) {
+    SpatialInverseSolution next =
+        spatial_inverse_kinematics(path.robot, path.poses[k], previous, options);
     benchmark::DoNotOptimize(next.q.data());
     evaluations += next.summary.residual_evaluations;
+    steps += next.summary.rod_steps;
     failures += next.summary.converged() ? 0 : 1;
     ++solves;
     previous = std::move(next);
-    k = (k + 1) % SpatialPath::kPoints;
+    k = (k + 1) % ReferencePath::kPoints;
+  }
+  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
+  state.counters["rod_steps"] = static_cast<double>(steps) / solves;
+  state.counters["failures"] = static_cast<double>(failures);
+}
+BENCHMARK(BM_SpatialInverseWarm)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
+
+/// Warm FK along the path's joints, each solve from the previous FK solution.
+void BM_SpatialForwardWarm(benchmark::State& state) {
+  const ReferencePath& path = reference_path();
+  const SolverOptions options = options_of(state);
+  SpatialForwardSolution previous = path.first;
+  int k = 1;
+  long evaluations = 0, solves = 0, failures = 0, steps = 0;
+  for (auto _ : state) {
+    SpatialForwardSolution next =
+        spatial_forward_kinematics(path.robot, path.q[k], previous, options);
+    benchmark::DoNotOptimize(next.pose.position.data());
+    evaluations += next.summary.residual_evaluations;
+    steps += next.summary.rod_steps;
+    failures += next.summary.converged() ? 0 : 1;
+    ++solves;
+    previous = std::move(next);
+    k = (k + 1) % ReferencePath::kPoints;
+  }
+  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
+  state.counters["rod_steps"] = static_cast<double>(steps) / solves;
+  state.counters["failures"] = static_cast<double>(failures);
+}
+BENCHMARK(BM_SpatialForwardWarm)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
+
+/// FK at the joints of the reference pose from the home solution (q = 0), and from nothing
+/// (straight rods).
+void BM_SpatialForwardFromHome(benchmark::State& state) {
+  const ReferencePath& path = reference_path();
+  const SolverOptions options = options_of(state);
+  const SpatialInverseSolution at =
+      spatial_inverse_kinematics(path.robot, path.reference, path.ik[0]);
+  long evaluations = 0, solves = 0, failures = 0;
+  for (auto _ : state) {
+    const SpatialForwardSolution fk =
+        spatial_forward_kinematics(path.robot, at.q, path.home, options);
+    benchmark::DoNotOptimize(fk.pose.position.data());
+    evaluations += fk.summary.residual_evaluations;
+    failures += fk.summary.converged() ? 0 : 1;
+    ++solves;
   }
   state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
   state.counters["failures"] = static_cast<double>(failures);
 }
-BENCHMARK(BM_SpatialInverseWarm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SpatialForwardFromHome)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+void BM_SpatialForwardCold(benchmark::State& state) {
+  const ReferencePath& path = reference_path();
+  const SolverOptions options = options_of(state);
+  const SpatialInverseSolution at =
+      spatial_inverse_kinematics(path.robot, path.reference, path.ik[0]);
+  long evaluations = 0, solves = 0, failures = 0;
+  for (auto _ : state) {
+    const SpatialForwardSolution fk = spatial_forward_kinematics(path.robot, at.q, options);
+    benchmark::DoNotOptimize(fk.pose.position.data());
+    evaluations += fk.summary.residual_evaluations;
+    failures += fk.summary.converged() ? 0 : 1;
+    ++solves;
+  }
+  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
+  state.counters["failures"] = static_cast<double>(failures);
+}
+BENCHMARK(BM_SpatialForwardCold)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
