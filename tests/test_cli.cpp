@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -189,6 +190,148 @@ TEST_F(Cli, ForwardThenInverseThenForwardReturnsThePose) {
     EXPECT_NEAR(back.rows[i][4], fk.rows[i][4], 1e-9) << i;
     EXPECT_NEAR(back.rows[i][5], fk.rows[i][5], 1e-6) << i;
   }
+}
+
+// ---- spatial robots --------------------------------------------------------------------------
+
+const std::string kSpatialRobot =
+    std::string(PCR_SOURCE_DIR) + "/robots/continuum-stewart-gough.json";
+// The numeric columns (the others, text or NaN, are checked as text).
+const std::vector<std::string> kSpatialFkColumns = {"q1", "q2", "q3", "q4", "q5", "q6",       "x",
+                                                    "y",  "z",  "rx", "ry", "rz", "converged"};
+const std::vector<std::string> kSpatialIkColumns = {"x",  "y",  "z",  "rx", "ry", "rz",       "q1",
+                                                    "q2", "q3", "q4", "q5", "q6", "converged"};
+
+/// The data lines of a tool's CSV output (the header dropped).
+std::vector<std::string> data_lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) lines.push_back(line);
+  return lines;
+}
+
+TEST_F(Cli, SpatialForwardThenInverseRecoversTheJoints) {
+  const std::string joints_text =
+      "q1,q2,q3,q4,q5,q6\n"
+      "0,0,0,0,0,0\n"
+      "0.005,0.005,0.005,0.005,0.005,0.005\n"
+      "0.012,-0.003,0.004,0.009,-0.001,0.006\n"
+      "-0.002,0.008,0.001,0.003,0.011,-0.004\n";
+  const std::string joints = write("q.csv", joints_text);
+  const std::string fk_out = (dir_ / "fk.csv").string();
+  Result r =
+      run("fk --robot '" + kSpatialRobot + "' --input '" + joints + "' --output '" + fk_out + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string fk_text = slurp(fk_out);
+  EXPECT_EQ(fk_text.substr(0, fk_text.find('\n')),
+            "q1,q2,q3,q4,q5,q6,x,y,z,rx,ry,rz,converged,iterations,residual,status,max_strain,"
+            "stable,stability_margin,singularity");
+  const pcr::CsvTable fk = parse(fk_text, kSpatialFkColumns);
+  ASSERT_EQ(fk.rows.size(), 4u);
+  for (const auto& row : fk.rows) EXPECT_EQ(row[12], 1.0);
+  // Not computed by the spatial solvers yet: max_strain, stability_margin and singularity NaN,
+  // stable empty, on every row.
+  for (const std::string& line : data_lines(fk_text)) {
+    const std::string tail = ",converged,nan,,nan,nan";
+    EXPECT_EQ(line.substr(line.size() - std::min(line.size(), tail.size())), tail) << line;
+  }
+  // Equal joints on the robot symmetric under turns of 120 degrees and the mirror y -> -y: the
+  // platform stays on the axis, untilted; longer rods raise it.
+  for (int row = 0; row < 2; ++row) {
+    for (int k : {6, 7, 9, 10, 11}) EXPECT_NEAR(fk.rows[row][k], 0.0, 1e-12) << row << " " << k;
+  }
+  EXPECT_GT(fk.rows[1][8], fk.rows[0][8] + 0.004);
+  EXPECT_GT(std::abs(fk.rows[2][9]) + std::abs(fk.rows[2][10]), 1e-3);  // unequal joints tilt it
+
+  // IK of the printed poses gives back the joints.
+  std::string poses = "x,y,z,rx,ry,rz\n";
+  for (const auto& row : fk.rows) {
+    for (int k = 6; k < 12; ++k) poses += pcr::format_double(row[k]) + (k < 11 ? "," : "\n");
+  }
+  r = run("ik --robot '" + kSpatialRobot + "'", poses);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> ik_lines = data_lines(r.out);
+  const pcr::CsvTable ik = parse(r.out, kSpatialIkColumns);
+  ASSERT_EQ(ik.rows.size(), fk.rows.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < ik.rows.size(); ++i) {
+    EXPECT_EQ(ik.rows[i][12], 1.0) << i;
+    for (int k = 0; k < 6; ++k) {
+      EXPECT_EQ(ik.rows[i][k], fk.rows[i][6 + k]);  // inputs echoed exactly
+      worst = std::max(worst, std::abs(ik.rows[i][6 + k] - fk.rows[i][k]));
+    }
+  }
+  std::printf("pcr ik of pcr fk's poses: joints within %.2e m\n", worst);
+  EXPECT_LT(worst, 1e-9);
+
+  // Independent rows: any order gives each row the same output line, to the last digit.
+  const std::vector<std::string> lines = data_lines(fk_text);
+  const std::vector<std::string> rows = data_lines(joints_text);
+  const std::vector<std::size_t> shuffled = {2, 0, 3, 1};
+  std::string shuffled_text = "q1,q2,q3,q4,q5,q6\n";
+  for (const std::size_t i : shuffled) shuffled_text += rows[i] + "\n";
+  r = run("fk --robot '" + kSpatialRobot + "'", shuffled_text);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> shuffled_lines = data_lines(r.out);
+  ASSERT_EQ(shuffled_lines.size(), lines.size());
+  for (std::size_t k = 0; k < shuffled.size(); ++k) {
+    EXPECT_EQ(shuffled_lines[k], lines[shuffled[k]]) << k;
+  }
+  const std::vector<std::string> pose_rows = data_lines(poses);
+  std::string shuffled_poses = "x,y,z,rx,ry,rz\n";
+  for (const std::size_t i : shuffled) shuffled_poses += pose_rows[i] + "\n";
+  r = run("ik --robot '" + kSpatialRobot + "'", shuffled_poses);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> ik_shuffled = data_lines(r.out);
+  ASSERT_EQ(ik_shuffled.size(), ik_lines.size());
+  for (std::size_t k = 0; k < shuffled.size(); ++k) {
+    EXPECT_EQ(ik_shuffled[k], ik_lines[shuffled[k]]) << k;
+  }
+
+  // A path (warm starts) reaches the same poses.
+  r = run("fk --path --robot '" + kSpatialRobot + "'", joints_text);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const pcr::CsvTable path = parse(r.out, kSpatialFkColumns);
+  ASSERT_EQ(path.rows.size(), fk.rows.size());
+  for (std::size_t i = 0; i < path.rows.size(); ++i) {
+    for (int k = 6; k < 9; ++k) EXPECT_NEAR(path.rows[i][k], fk.rows[i][k], 1e-9) << i;
+    for (int k = 9; k < 12; ++k) EXPECT_NEAR(path.rows[i][k], fk.rows[i][k], 1e-8) << i;
+  }
+}
+
+TEST_F(Cli, SpatialRobotFilesAreRefusedWhereTheyDoNotBelong) {
+  // A planar command names the file and its kind.
+  Result r = run("workspace --samples 1 --robot '" + kSpatialRobot + "'");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("continuum-stewart-gough.json: kind: this command takes a planar robot"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("\"spatial\""), std::string::npos) << r.err;
+  // The planar load options, and fold tracing.
+  r = run("fk --force 1,0 --robot '" + kSpatialRobot + "'", "0,0,0,0,0,0\n");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--force/--moment"), std::string::npos) << r.err;
+  r = run("ik --path --through-folds --robot '" + kSpatialRobot + "'", "0,0,0.4,0,0,0\n");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--through-folds"), std::string::npos) << r.err;
+  // A bad field: file, field and value.
+  std::string text = slurp(kSpatialRobot);
+  const std::size_t at = text.find("\"density\": 8000.0");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 17, "\"density\": -8000.0");
+  const std::string bad = write("bad.json", text);
+  for (const char* command : {"fk", "ik", "robot"}) {
+    r = run(std::string(command) + " --robot '" + bad + "'", "0,0,0,0,0,0\n");
+    EXPECT_EQ(r.status, 2) << command;
+    EXPECT_NE(r.err.find("bad.json: rods[0].density"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("-8000"), std::string::npos) << r.err;
+  }
+  // pcr robot writes the shipped file as it is (it is in canonical form).
+  r = run("robot --robot '" + kSpatialRobot + "'");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out, slurp(kSpatialRobot));
 }
 
 TEST_F(Cli, FailedRowsAreReportedAndTheToolGoesOn) {

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "pcr/robot_io.hpp"
+#include "random_doubles.hpp"
 #include "scratch_directory.hpp"
 
 namespace {
@@ -307,18 +308,7 @@ TEST(RobotIo, UnreadableFileNamesIt) {
   }
 }
 
-/// A random finite double spread over many magnitudes (random mantissa bits).
-double random_double(std::mt19937_64& rng, double lo_exp, double hi_exp, bool positive) {
-  std::uniform_real_distribution<double> e(lo_exp, hi_exp);
-  std::uniform_int_distribution<std::uint64_t> mantissa(0, (std::uint64_t(1) << 52) - 1);
-  double x = std::pow(10.0, e(rng));
-  std::uint64_t bits;
-  std::memcpy(&bits, &x, sizeof x);
-  bits = (bits & ~((std::uint64_t(1) << 52) - 1)) | mantissa(rng);
-  std::memcpy(&x, &bits, sizeof x);
-  if (!positive && (rng() & 1)) x = -x;
-  return x;
-}
+using pcr::testing::random_double;
 
 TEST(RobotIo, RoundTripIsBitExact) {
   std::mt19937_64 rng(7);

@@ -118,6 +118,29 @@ TEST(Quaternion, ProductsMatchEigen) {
   EXPECT_LT((quaternion_times_vector(wxyz(a), u) - wxyz(a * pure)).norm(), 1e-15);
 }
 
+TEST(Quaternion, LogIsTheRotationVector) {
+  // Against Eigen's angle-axis, relative to the angle, for any scale and either sign of h: small
+  // angles (where a formula through acos would lose digits), ordinary ones, and near a half turn.
+  std::mt19937 rng(9);
+  std::normal_distribution<double> normal;
+  double worst = 0;
+  for (int i = 0; i < 100; ++i) {
+    const Vector3d axis = Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    const double angle = i < 10   ? std::pow(10.0, -1.0 - i)
+                         : i < 20 ? M_PI - std::pow(10.0, -1.0 - (i - 10))
+                                  : M_PI * std::uniform_real_distribution<double>(0, 1)(rng);
+    const Vector4d h = wxyz(Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis)));
+    for (double scale : {1.0, -1.0, 0.3, -7.0}) {
+      const Vector3d v = quaternion_log<double>(scale * h);
+      const double error = (v - angle * axis).norm() / std::max(angle, 1e-300);
+      worst = std::max(worst, error);
+      EXPECT_LT(error, 1e-15) << i << " " << scale;
+    }
+  }
+  std::printf("quaternion_log: worst relative error %.1e\n", worst);
+  EXPECT_EQ(quaternion_log<double>(identity_quaternion<double>()), Vector3d::Zero());
+}
+
 // ---- Section constants
 // ----------------------------------------------------------------------------
 

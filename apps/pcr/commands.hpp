@@ -66,6 +66,20 @@ inline CLI::Option* add_robot_option(CLI::App& command, std::string& path) {
                             "pcr-robot JSON description (default: the built-in femto-3pf)");
 }
 
+/// Whether `--robot PATH` names a spatial robot file ("kind": "spatial"); an empty path is the
+/// built-in planar robot. `pcr fk` and `pcr ik` take either kind; the other commands load planar
+/// robots only, and name the file and its kind when given a spatial one.
+inline bool is_spatial_robot(const std::string& path) {
+  return !path.empty() && load_robot_kind(path) == RobotKind::kSpatial;
+}
+
+/// The pose columns of a spatial robot's rows: the platform's position (m, in W) and its
+/// orientation P -> W as a rotation vector (rad), angle times axis.
+inline const std::vector<std::string>& spatial_pose_columns() {
+  static const std::vector<std::string> columns = {"x", "y", "z", "rx", "ry", "rz"};
+  return columns;
+}
+
 /// The robot of `--robot PATH` (the default robot when empty) for a command that solves inverse
 /// kinematics (`what`): an InputError when it has more than 3 limbs.
 inline RobotDescription load_robot_for_inverse(const std::string& path, const std::string& what) {
@@ -179,6 +193,16 @@ struct SolveArguments {
     options.rod_steps = steps;
     return options;
   }
+
+  /// A spatial robot's file carries its load (gravity, external_force, external_moment): the
+  /// planar load options would be ignored, so they are refused.
+  void require_no_planar_load(const std::string& robot_path) const {
+    if (!force.empty() || moment != 0) {
+      throw InputError("--force/--moment: " + robot_path +
+                       " is a spatial robot, whose file carries its load (external_force, "
+                       "external_moment, gravity)");
+    }
+  }
 };
 
 /// What the rows of `pcr fk` and `pcr ik` are (pcr::SequenceMode).
@@ -201,6 +225,14 @@ struct RowsArguments {
 
   SequenceMode mode() const { return path ? SequenceMode::kPath : SequenceMode::kIndependent; }
   void apply(SolverOptions& options) const { options.through_folds = through_folds; }
+
+  /// Spatial robots have no fold tracing yet (pcr/spatial/sequence.hpp).
+  void require_spatial_support(const std::string& robot_path) const {
+    if (through_folds) {
+      throw InputError("--through-folds: " + robot_path +
+                       " is a spatial robot, whose solvers do not trace folds yet");
+    }
+  }
 };
 
 /// The row loop of `pcr fk` and `pcr ik`: `solve_row(row, out)` solves each input row (as its

@@ -4,6 +4,8 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "pcr/spatial/robot_io.hpp"
+#include "pcr/spatial/sequence.hpp"
 
 namespace {
 
@@ -13,8 +15,49 @@ struct FkArguments {
   pcr::cli::RowsArguments rows;
 };
 
+/// A spatial robot: rows q1..qn -> q1..qn, x, y, z, rx, ry, rz and the summary columns.
+void run_spatial_fk(const FkArguments& args) {
+  using namespace pcr;
+  args.solve.require_no_planar_load(args.robot);
+  args.rows.require_spatial_support(args.robot);
+  const SpatialRobotDescription robot = load_spatial_robot(args.robot);
+  const int n = robot.params.num_rods;
+  CsvReadOptions csv;
+  csv.columns = cli::joint_names(n);
+  const CsvTable table = cli::read_table(args.input, csv);
+  for (std::size_t c = 0; c < csv.columns.size(); ++c) {
+    cli::check_column_range(table, c, -1.0, 1.0, "m");
+  }
+
+  std::vector<std::string> header = csv.columns;
+  for (const std::string& c : cli::spatial_pose_columns()) header.push_back(c);
+  for (const std::string& c : cli::summary_columns()) header.push_back(c);
+
+  SpatialForwardSequence sequence(robot.params, args.solve.options(), args.rows.mode());
+  const auto solve_row = [&](const CsvRow row, CsvWriter& out) {
+    SpatialJointVector q(n);
+    for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];
+    const SpatialForwardSolution& solution = sequence.solve(q);
+    const SolverSummary& s = solution.summary;
+    const bool valid = usable_as_warm_start(s);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const Vector3<double> r = quaternion_log(solution.pose.orientation);
+    for (int i = 0; i < n; ++i) out.add(q(i));
+    for (int k = 0; k < 3; ++k) out.add(valid ? solution.pose.position(k) : nan);
+    for (int k = 0; k < 3; ++k) out.add(valid ? r(k) : nan);
+    // The spatial solvers compute no strain or stability yet: NaN and empty, as unchecked.
+    cli::add_summary_fields(s, valid, out);
+    return s.status;
+  };
+  cli::solve_rows("pcr fk", table, args.output, header, solve_row);
+}
+
 void run_fk(const FkArguments& args) {
   using namespace pcr;
+  if (cli::is_spatial_robot(args.robot)) {
+    run_spatial_fk(args);
+    return;
+  }
   const RobotDescription robot = load_robot_or_default(args.robot);
   const int n = robot.params.num_limbs;
   SolverOptions options = args.solve.options();
@@ -58,7 +101,9 @@ void register_fk_command(CLI::App& app) {
       "Forward kinematics: rows q1,...,qn (m) -> q1,...,qn,x,y,theta,converged,"
       "iterations,residual,status,max_strain,stable,stability_margin,singularity. Joints "
       "outside q_range give converged=0, status out_of_range (the pose of that equilibrium is "
-      "still given). stable=0: the equilibrium would not hold. Exit status 1 if a row did not "
+      "still given). stable=0: the equilibrium would not hold. A spatial robot file (\"kind\": "
+      "\"spatial\") gives q1,...,qn,x,y,z,rx,ry,rz (m, rad: the platform's orientation as a "
+      "rotation vector) and the same summary columns. Exit status 1 if a row did not "
       "converge.");
   pcr::cli::add_robot_option(*fk, args->robot);
   fk->add_option("--input", args->input, "CSV of joint values (default: stdin)");

@@ -4,6 +4,8 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "pcr/spatial/robot_io.hpp"
+#include "pcr/spatial/sequence.hpp"
 
 namespace {
 
@@ -14,8 +16,53 @@ struct IkArguments {
   bool allow_unstable = false;
 };
 
+/// A spatial robot of six rods: rows x, y, z, rx, ry, rz -> the same, q1..q6 and the summary
+/// columns.
+void run_spatial_ik(const IkArguments& args) {
+  using namespace pcr;
+  args.solve.require_no_planar_load(args.robot);
+  args.rows.require_spatial_support(args.robot);
+  const SpatialRobotDescription robot = load_spatial_robot(args.robot);
+  const int n = robot.params.num_rods;
+  if (n != 6) {
+    throw InputError(args.robot + ": robot '" + robot.name + "' has " + std::to_string(n) +
+                     " rods; pcr ik solves the inverse kinematics of a spatial robot, a square "
+                     "problem only for 6 rods");
+  }
+  CsvReadOptions csv;
+  csv.columns = cli::spatial_pose_columns();
+  const CsvTable table = cli::read_table(args.input, csv);
+  for (std::size_t c = 0; c < 3; ++c) cli::check_column_range(table, c, -1.0, 1.0, "m");
+  for (std::size_t c = 3; c < 6; ++c) cli::check_column_range(table, c, -2 * M_PI, 2 * M_PI, "rad");
+
+  std::vector<std::string> header = csv.columns;
+  for (const std::string& q : cli::joint_names(n)) header.push_back(q);
+  for (const std::string& c : cli::summary_columns()) header.push_back(c);
+
+  SpatialInverseSequence sequence(robot.params, args.solve.options(), args.rows.mode());
+  const auto solve_row = [&](const CsvRow row, CsvWriter& out) {
+    SpatialPose<double> pose;
+    pose.position = Vector3<double>(row[0], row[1], row[2]);
+    pose.orientation = quaternion_exp(Vector3<double>(row[3], row[4], row[5]));
+    const SpatialInverseSolution& solution = sequence.solve(pose);
+    const SolverSummary& s = solution.summary;
+    const bool valid = usable_as_warm_start(s);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (std::size_t c = 0; c < 6; ++c) out.add(row[c]);
+    for (int i = 0; i < n; ++i) out.add(valid ? solution.q(i) : nan);
+    // The spatial solvers compute no strain or stability yet: NaN and empty, as unchecked.
+    cli::add_summary_fields(s, valid, out);
+    return s.status;
+  };
+  cli::solve_rows("pcr ik", table, args.output, header, solve_row, args.allow_unstable);
+}
+
 void run_ik(const IkArguments& args) {
   using namespace pcr;
+  if (cli::is_spatial_robot(args.robot)) {
+    run_spatial_ik(args);
+    return;
+  }
   const RobotDescription robot = cli::load_robot_for_inverse(args.robot, "pcr ik");
   const int n = robot.params.num_limbs;
   SolverOptions options = args.solve.options();
@@ -61,7 +108,11 @@ void register_ik_command(CLI::App& app) {
       "outside q_range give converged=0, status out_of_range. An equilibrium that would not "
       "hold (stable=0) is replaced by a stable one at the same pose when one is found, else "
       "status unstable. With 2 limbs theta is solved for (the input theta is ignored). Exit "
-      "status 1 if a row did not converge or is unstable (unless --allow-unstable).");
+      "status 1 if a row did not converge or is unstable (unless --allow-unstable). A spatial "
+      "robot "
+      "file (\"kind\": \"spatial\", six rods) takes rows x,y,z,rx,ry,rz (m, rad: the "
+      "platform's orientation as a rotation vector) -> x,y,z,rx,ry,rz,q1,...,q6 and the same "
+      "summary columns.");
   pcr::cli::add_robot_option(*ik, args->robot);
   ik->add_option("--input", args->input, "CSV of poses (default: stdin)");
   ik->add_option("--output", args->output, "output CSV (default: stdout)");

@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "pcr/spatial/robot_io.hpp"
 
 namespace {
 
@@ -10,8 +11,29 @@ struct RobotArguments {
   std::string robot, output, home_pose;
 };
 
+/// A spatial robot file: validated and written in canonical form (every field).
+void run_spatial_robot(const RobotArguments& args) {
+  using namespace pcr;
+  if (!args.home_pose.empty()) {
+    throw InputError("--home-pose: " + args.robot +
+                     " is a spatial robot, whose home is unique (no home_bow)");
+  }
+  const SpatialRobotDescription robot = load_spatial_robot(args.robot);
+  if (args.output.empty() || args.output == "-") {
+    std::cout << spatial_robot_to_json(robot);
+  } else {
+    save_spatial_robot(robot, args.output);
+  }
+  std::cerr << args.robot << ": '" << robot.name << "', spatial, " << robot.params.num_rods
+            << " rods: valid\n";
+}
+
 void run_robot(const RobotArguments& args) {
   using namespace pcr;
+  if (cli::is_spatial_robot(args.robot)) {
+    run_spatial_robot(args);
+    return;
+  }
   RobotDescription robot = load_robot_or_default(args.robot);
   if (!args.home_pose.empty()) {
     const std::vector<double> pose =
@@ -54,8 +76,8 @@ void register_robot_command(CLI::App& app) {
   auto args = std::make_shared<RobotArguments>();
   CLI::App* cmd =
       app.add_subcommand("robot",
-                         "Validate a pcr-robot description and write it in canonical form "
-                         "(full precision; a summary goes to stderr).");
+                         "Validate a pcr-robot description, planar or spatial, and write it in "
+                         "canonical form (full precision; a summary goes to stderr).");
   pcr::cli::add_robot_option(*cmd, args->robot);
   cmd->add_option("--output", args->output, "output JSON file (default: stdout)");
   cmd->add_option("--home-pose", args->home_pose,

@@ -14,7 +14,6 @@
 // declared here (kinematics_impl.hpp).
 
 #include <array>
-#include <type_traits>
 
 #include "pcr/internal/newton.hpp"
 #include "pcr/robot.hpp"
@@ -228,26 +227,81 @@ enum class SequenceMode {
   kPath,
 };
 
+/// What SequenceSolver needs of a kind of solution: the robot, input and load types, what the
+/// sequence keeps for its independent inputs (Home, solved once), and the policy's two solves:
+///   static Home home(const Robot&, const SolverOptions&, const Load&);
+///   /// kIndependent: exactly the cold solve's result, from `home`.
+///   static Solution independent(const Robot&, const Input&, const Home&, const SolverOptions&,
+///                               const Load&);
+///   /// kPath: warm-started from `warm` (null: none), retried cold when that fails.
+///   static Solution continued(const Robot&, const Input&, const Solution* warm,
+///                             const SolverOptions&, const Load&);
+/// Specialised below for the planar solutions, in pcr/spatial/sequence.hpp for the spatial ones.
+template <class Solution>
+struct SequenceTraits;
+
+template <>
+struct SequenceTraits<ForwardSolution> {
+  using Robot = RobotParams<double>;
+  using Input = JointVector;
+  using Load = PlatformLoad<double>;
+  using Home = ForwardSolution;
+  static Home home(const Robot& robot, const SolverOptions& options, const Load& load);
+  static ForwardSolution independent(const Robot& robot, const Input& q, const Home& home,
+                                     const SolverOptions& options, const Load& load) {
+    return forward_kinematics_from_home(robot, q, home, options, load);
+  }
+  static ForwardSolution continued(const Robot& robot, const Input& q, const ForwardSolution* warm,
+                                   const SolverOptions& options, const Load& load) {
+    return forward_kinematics_or_cold(robot, q, warm, options, load);
+  }
+};
+
+template <>
+struct SequenceTraits<InverseSolution> {
+  using Robot = RobotParams<double>;
+  using Input = Pose2<double>;
+  using Load = PlatformLoad<double>;
+  using Home = ForwardSolution;
+  static Home home(const Robot& robot, const SolverOptions& options, const Load& load) {
+    return SequenceTraits<ForwardSolution>::home(robot, options, load);
+  }
+  static InverseSolution independent(const Robot& robot, const Input& pose, const Home& home,
+                                     const SolverOptions& options, const Load& load) {
+    return inverse_kinematics_from_home(robot, pose, home, options, load);
+  }
+  static InverseSolution continued(const Robot& robot, const Input& pose,
+                                   const InverseSolution* warm, const SolverOptions& options,
+                                   const Load& load) {
+    return inverse_kinematics_or_cold(robot, pose, warm, options, load);
+  }
+};
+
 /// Solves a sequence of FK (ForwardSequence) or IK (InverseSequence) inputs: the rows of a file,
-/// a batch, a trajectory, a measurement campaign. One policy, everywhere in pcr, chosen by what
-/// the inputs are (SequenceMode). In a path, each input is warm-started from the last usable
-/// solution (usable_as_warm_start), and a warm solve that fails is retried cold, from home (one
-/// that stops at a fold is first followed through it, with SolverOptions::through_folds). A failed
-/// input leaves the warm start as it was, so the input after it starts from the last usable
-/// solution again. No heap: the solutions live in the solver, which keeps the home solution, the
-/// last usable one and the latest one.
+/// a batch, a trajectory, a measurement campaign; the spatial robots' too
+/// (SpatialForwardSequence, SpatialInverseSequence in pcr/spatial/sequence.hpp). One policy,
+/// everywhere in pcr, chosen by what the inputs are (SequenceMode). In a path, each input is
+/// warm-started from the last usable solution (usable_as_warm_start), and a warm solve that fails
+/// is retried cold, from home (one that stops at a fold is first followed through it, with
+/// SolverOptions::through_folds). A failed input leaves the warm start as it was, so the input
+/// after it starts from the last usable solution again. No heap: the solutions live in the
+/// solver, which keeps the home solution, the last usable one and the latest one.
 template <class Solution>
 class SequenceSolver {
  public:
-  /// JointVector for FK, Pose2<double> for IK.
-  using Input =
-      std::conditional_t<std::is_same_v<Solution, ForwardSolution>, JointVector, Pose2<double>>;
+  using Traits = SequenceTraits<Solution>;
+  using Robot = typename Traits::Robot;
+  /// JointVector for FK, Pose2<double> for IK (the spatial ones: SpatialJointVector,
+  /// SpatialPose<double>).
+  using Input = typename Traits::Input;
+  using Load = typename Traits::Load;
 
-  explicit SequenceSolver(const RobotParams<double>& robot,
-                          const SolverOptions& options = SolverOptions(),
-                          const PlatformLoad<double>& load = PlatformLoad<double>(),
-                          SequenceMode mode = SequenceMode::kIndependent)
+  explicit SequenceSolver(const Robot& robot, const SolverOptions& options = SolverOptions(),
+                          const Load& load = Load(), SequenceMode mode = SequenceMode::kIndependent)
       : robot_(robot), options_(options), load_(load), mode_(mode) {}
+  /// The default load (a spatial robot carries its load in its parameters).
+  SequenceSolver(const Robot& robot, const SolverOptions& options, SequenceMode mode)
+      : SequenceSolver(robot, options, Load(), mode) {}
 
   /// Solves the next input; the reference stays valid until the next call.
   const Solution& solve(const Input& input);
@@ -263,17 +317,17 @@ class SequenceSolver {
   /// The last usable solution, or null.
   const Solution* last_usable() const { return has_last_ ? &slots_[last_] : nullptr; }
 
-  const RobotParams<double>& robot() const { return robot_; }
+  const Robot& robot() const { return robot_; }
   const SolverOptions& options() const { return options_; }
-  const PlatformLoad<double>& load() const { return load_; }
+  const Load& load() const { return load_; }
   SequenceMode mode() const { return mode_; }
 
  private:
-  RobotParams<double> robot_;
+  Robot robot_;
   SolverOptions options_;
-  PlatformLoad<double> load_;
+  Load load_;
   SequenceMode mode_;
-  ForwardSolution home_;  ///< kIndependent: the home solution, once solved (has_home_)
+  typename Traits::Home home_;  ///< kIndependent: the home solution, once solved (has_home_)
   bool has_home_ = false;
   Solution slots_[2];  ///< the last usable solution and the latest one
   int last_ = 0;

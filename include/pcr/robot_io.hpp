@@ -19,7 +19,8 @@ namespace pcr {
 /// it was cut (a field may hold megabytes).
 std::string excerpt(std::string text);
 
-/// Parses and validates a description; `source` names the file in error messages.
+/// Parses and validates a description; `source` names the file in error messages. A file of
+/// another kind (a spatial robot) is an InputError naming the file and its kind.
 RobotDescription parse_robot(const std::string& json_text, const std::string& source);
 
 /// The deepest nesting of arrays and objects a pcr JSON file may have: every format is a few
@@ -30,6 +31,14 @@ inline constexpr int kMaxJsonNesting = 32;
 /// InputError naming `source`, the line and the column where the text nests deeper than
 /// kMaxJsonNesting.
 void check_json_nesting(const std::string& json_text, const std::string& source);
+/// What a pcr-robot file describes: its "kind" field, "planar" (the default when absent: this
+/// header's RobotDescription) or "spatial" (pcr/spatial/robot_io.hpp).
+enum class RobotKind { kPlanar, kSpatial };
+/// The kind of the robot in `json_text` (InputError naming `source` on a bad file or kind).
+RobotKind robot_kind(const std::string& json_text, const std::string& source);
+/// The kind of the robot in the file at `path`, for a command that takes either.
+RobotKind load_robot_kind(const std::string& path);
+
 /// Reads a description from a file (throws InputError naming the file on any problem).
 RobotDescription load_robot(const std::string& path);
 /// Serialises with full double precision (lossless round trip).

@@ -1,14 +1,9 @@
 #include "pcr/robot_io.hpp"
 
-#include <cctype>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
-#include <fstream>
-#include <nlohmann/json.hpp>
-#include <set>
 #include <sstream>
 
+#include "json_reader.hpp"
 #include "pcr/csv_io.hpp"
 #include "pcr/files.hpp"
 
@@ -20,96 +15,15 @@ std::string excerpt(std::string text) {
 }
 namespace {
 
-using Json = nlohmann::json;
+using namespace json_io;
 
 constexpr int kFormatVersion = 1;
 
-std::string join(const std::string& parent, const std::string& key) {
-  return parent.empty() ? key : parent + "." + key;
-}
-std::string index(const std::string& parent, std::size_t i) {
-  return parent + "[" + std::to_string(i) + "]";
-}
-
-// nlohmann refuses numbers that overflow a double (1e999) without saying where they are. The
-// parse is retried with such a literal replaced by this marker string, so that validation reports
-// it with its field path like any other non-finite number.
-const std::string kOverflowMarker = std::string(1, '\x01') + "pcr-overflow:";
-
-bool is_overflow(const Json& value) {
-  return value.is_string() && value.get_ref<const std::string&>().rfind(kOverflowMarker, 0) == 0;
-}
-
-// Physical ranges of the fields (docs/formats.md's field table): a lab robot fits in a 10 m room,
-// an angle needs no more than two turns, E spans soft polymers (1 MPa) to diamond (1.2 TPa), and
-// every EI = E pi d^4 / 64 they allow is a finite, normal double.
-constexpr double kMaxCoordinate = 10.0;    // m
-constexpr double kMaxAngle = 4.0 * M_PI;   // rad
-constexpr double kMinYoungModulus = 1e6;   // Pa
-constexpr double kMaxYoungModulus = 2e12;  // Pa
-
-/// A short rendering of an offending value for messages.
-std::string show(const Json& value) {
-  if (is_overflow(value)) return value.get<std::string>().substr(kOverflowMarker.size());
-  if (value.is_number_float()) return format_double(value.get<double>());
-  return excerpt(value.dump());
-}
-
 /// Reads and validates one description; every error names the source and the field path.
-class Reader {
+class Reader : public JsonReader {
  public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
+  using JsonReader::JsonReader;
 
-  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
-    throw InputError(source_ + ": " + (path.empty() ? "" : path + ": ") + what);
-  }
-  [[noreturn]] void fail(const std::string& path, const std::string& what,
-                         const Json& value) const {
-    fail(path, what + ", got " + show(value));
-  }
-
-  /// `object` must be a JSON object whose keys are all in `allowed`.
-  void check_object(const Json& object, const std::string& path,
-                    std::initializer_list<const char*> allowed) const {
-    if (!object.is_object()) fail(path.empty() ? "<root>" : path, "expected an object", object);
-    for (auto it = object.begin(); it != object.end(); ++it) {
-      bool known = false;
-      for (const char* name : allowed) known = known || it.key() == name;
-      if (!known) {
-        std::string names;
-        for (const char* name : allowed) names += (names.empty() ? "" : ", ") + std::string(name);
-        fail(join(path, it.key()), "unknown field (allowed here: " + names + ")");
-      }
-    }
-  }
-
-  const Json& required(const Json& object, const std::string& path, const char* key) const {
-    const auto it = object.find(key);
-    if (it == object.end()) fail(join(path, key), "missing required field");
-    return *it;
-  }
-
-  double number(const Json& value, const std::string& path) const {
-    if (is_overflow(value)) {
-      fail(path, "expected a finite number (this one overflows a double)", value);
-    }
-    if (!value.is_number()) fail(path, "expected a number", value);
-    const double x = value.get<double>();
-    if (!std::isfinite(x)) fail(path, "expected a finite number", value);
-    return x;
-  }
-  /// A number in the field's physical range [lo, hi] (docs/formats.md's field table).
-  double in_range(const Json& value, const std::string& path, double lo, double hi,
-                  const char* unit) const {
-    const double x = number(value, path);
-    if (!(x >= lo && x <= hi)) {
-      fail(path,
-           std::string("outside its physical range [") + format_double(lo) + ", " +
-               format_double(hi) + "] " + unit,
-           value);
-    }
-    return x;
-  }
   /// A half-width: 0 (the parameter is known) or in [min, max]. Below min a bound would be
   /// indistinguishable from the value itself (a denormal aborts the bounded solver).
   double half_width(const Json& value, const std::string& path, double min, double max,
@@ -123,19 +37,6 @@ class Reader {
            value);
     }
     return x;
-  }
-
-  template <int N>
-  Eigen::Matrix<double, N, 1> vector(const Json& value, const std::string& path) const {
-    if (!value.is_array() || value.size() != static_cast<std::size_t>(N)) {
-      fail(path, "expected an array of " + std::to_string(N) + " numbers", value);
-    }
-    Eigen::Matrix<double, N, 1> out;
-    for (int i = 0; i < N; ++i) {
-      const Json& v = value[static_cast<std::size_t>(i)];
-      out(i) = number(v, index(path, i));
-    }
-    return out;
   }
 
   Eigen::Vector2d position_half_widths(const Json& value, const std::string& path) const {
@@ -223,7 +124,10 @@ class Reader {
   }
 
   RobotDescription robot(const Json& root) const {
-    check_object(root, "", {"pcr_robot", "name", "E", "limbs", "extrinsics", "uncertainty"});
+    require_kind(*this, root,
+                 RobotKind::kPlanar);  // first: a spatial file's fields are unknown here
+    check_object(root, "",
+                 {"pcr_robot", "kind", "name", "E", "limbs", "extrinsics", "uncertainty"});
     const Json& version = required(root, "", "pcr_robot");
     if (!version.is_number_integer() || version.get<long long>() != kFormatVersion) {
       fail("pcr_robot",
@@ -311,86 +215,9 @@ class Reader {
     }
     return out;
   }
-
- private:
-  std::string source_;
 };
 
-/// 1-based line and column of a byte offset in `text`.
-std::pair<int, int> line_column(const std::string& text, std::size_t offset) {
-  int line = 1, column = 1;
-  for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
-    if (text[i] == '\n') {
-      ++line;
-      column = 1;
-    } else {
-      ++column;
-    }
-  }
-  return {line, column};
-}
-
-/// Offset of `token` in `text` standing alone as a number literal, or npos.
-std::size_t find_number_literal(const std::string& text, const std::string& token) {
-  auto part_of_number = [](char c) {
-    return std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'e' || c == 'E' ||
-           c == '+' || c == '-';
-  };
-  for (std::size_t at = text.find(token); at != std::string::npos; at = text.find(token, at + 1)) {
-    std::size_t before = at;
-    while (before > 0 && std::isspace(static_cast<unsigned char>(text[before - 1]))) --before;
-    const bool left = before > 0 && (text[before - 1] == ':' || text[before - 1] == ',' ||
-                                     text[before - 1] == '[');
-    const std::size_t after = at + token.size();
-    const bool right = after >= text.size() || !part_of_number(text[after]);
-    if (left && right) return at;
-  }
-  return std::string::npos;
-}
-
-// ---- writing --------------------------------------------------------------------------------
-// A small pretty printer: objects one field per line, arrays of numbers on one line. Numbers go
-// through nlohmann's shortest round-trip formatting, so load(save(x)) == x bit for bit.
-using Ordered = nlohmann::ordered_json;
-
-void print(const Ordered& value, int indent, std::ostringstream& out) {
-  const std::string pad(static_cast<std::size_t>(indent), ' ');
-  if (value.is_object()) {
-    if (value.empty()) {
-      out << "{}";
-      return;
-    }
-    out << "{\n";
-    std::size_t k = 0;
-    for (auto it = value.begin(); it != value.end(); ++it, ++k) {
-      out << pad << "  " << Ordered(it.key()).dump() << ": ";
-      print(*it, indent + 2, out);
-      out << (k + 1 < value.size() ? ",\n" : "\n");
-    }
-    out << pad << "}";
-  } else if (value.is_array()) {
-    bool flat = true;
-    for (const Ordered& v : value) flat = flat && v.is_primitive();
-    if (flat) {
-      out << "[";
-      for (std::size_t i = 0; i < value.size(); ++i) out << (i ? ", " : "") << value[i].dump();
-      out << "]";
-      return;
-    }
-    out << "[\n";
-    for (std::size_t i = 0; i < value.size(); ++i) {
-      out << pad << "  ";
-      print(value[i], indent + 2, out);
-      out << (i + 1 < value.size() ? ",\n" : "\n");
-    }
-    out << pad << "]";
-  } else {
-    out << value.dump();
-  }
-}
-
-bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
-
+using json_io::same_bits;  // and the overload below
 bool same_bits(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return same_bits(a(0), b(0)) && same_bits(a(1), b(1));
 }
@@ -452,53 +279,15 @@ void check_json_nesting(const std::string& json_text, const std::string& source)
 }
 
 RobotDescription parse_robot(const std::string& json_text, const std::string& source) {
-  check_json_nesting(json_text, source);
-  // Duplicate keys would otherwise silently keep the last value: reject them while parsing.
-  std::vector<std::set<std::string>> keys;
-  const Json::parser_callback_t check_duplicates = [&](int, Json::parse_event_t event,
-                                                       Json& parsed) {
-    if (event == Json::parse_event_t::object_start) keys.emplace_back();
-    if (event == Json::parse_event_t::object_end && !keys.empty()) keys.pop_back();
-    if (event == Json::parse_event_t::key && !keys.empty()) {
-      const std::string key = parsed.get<std::string>();
-      if (!keys.back().insert(key).second) {
-        throw InputError(source + ": duplicate field \"" + key + "\"");
-      }
-    }
-    return true;
-  };
-  Json root;
-  std::string text = json_text;
-  try {
-    for (int attempt = 0;; ++attempt) {
-      try {
-        keys.clear();
-        root = Json::parse(text, check_duplicates);
-        break;
-      } catch (const Json::out_of_range& e) {
-        // 406: a number literal overflows a double. Mark it and parse again (see kOverflowMarker).
-        const std::string what = e.what();
-        const std::size_t begin = what.find("parsing '");
-        const std::size_t end = what.rfind('\'');
-        if (e.id != 406 || begin == std::string::npos || end <= begin + 9 || attempt > 1000) throw;
-        const std::string token = what.substr(begin + 9, end - begin - 9);
-        const std::size_t at = find_number_literal(text, token);
-        if (at == std::string::npos) throw;
-        text.replace(at, token.size(), Json(kOverflowMarker + token).dump());
-      }
-    }
-  } catch (const Json::out_of_range& e) {
-    throw InputError(source + ": " + e.what());
-  } catch (const Json::parse_error& e) {
-    const std::size_t offset = e.byte > 0 ? e.byte - 1 : 0;
-    const auto [line, column] = line_column(text, offset);
-    std::string what = e.what();
-    const std::size_t colon = what.find(": ");  // drop nlohmann's "[json.exception...] at ...:"
-    if (colon != std::string::npos) what = what.substr(colon + 2);
-    throw InputError(source + ":" + std::to_string(line) + ":" + std::to_string(column) +
-                     ": JSON syntax error: " + what);
-  }
-  return Reader(source).robot(root);
+  return Reader(source).robot(json_io::parse_json(json_text, source));
+}
+
+RobotKind robot_kind(const std::string& json_text, const std::string& source) {
+  return json_io::robot_kind(json_io::JsonReader(source), json_io::parse_json(json_text, source));
+}
+
+RobotKind load_robot_kind(const std::string& path) {
+  return robot_kind(read_input_file(path, kMaxJsonFileBytes, "a robot description"), path);
 }
 
 RobotDescription load_robot(const std::string& path) {

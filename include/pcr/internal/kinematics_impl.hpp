@@ -531,6 +531,12 @@ inline InverseSolution inverse_kinematics_or_cold(const RobotParams<double>& rob
       [&] { return inverse_kinematics(robot, pose, options, load); });
 }
 
+inline ForwardSolution SequenceTraits<ForwardSolution>::home(const Robot& robot,
+                                                             const SolverOptions& options,
+                                                             const Load& load) {
+  return home_solution(robot, internal::unchecked(options), load);
+}
+
 template <class Solution>
 const Solution& SequenceSolver<Solution>::solve(const Input& input) {
   const int latest = has_last_ ? 1 - last_ : last_;
@@ -538,21 +544,13 @@ const Solution& SequenceSolver<Solution>::solve(const Input& input) {
   if (mode_ == SequenceMode::kIndependent) {
     // The cold solve's own steps, with its home solved once.
     if (!has_home_) {
-      home_ = home_solution(robot_, internal::unchecked(options_), load_);
+      home_ = Traits::home(robot_, options_, load_);
       has_home_ = true;
     }
-    if constexpr (std::is_same_v<Solution, ForwardSolution>) {
-      solution = forward_kinematics_from_home(robot_, input, home_, options_, load_);
-    } else {
-      solution = inverse_kinematics_from_home(robot_, input, home_, options_, load_);
-    }
+    solution = Traits::independent(robot_, input, home_, options_, load_);
   } else {
-    const Solution* warm = has_last_ ? &slots_[last_] : nullptr;
-    if constexpr (std::is_same_v<Solution, ForwardSolution>) {
-      solution = forward_kinematics_or_cold(robot_, input, warm, options_, load_);
-    } else {
-      solution = inverse_kinematics_or_cold(robot_, input, warm, options_, load_);
-    }
+    solution =
+        Traits::continued(robot_, input, has_last_ ? &slots_[last_] : nullptr, options_, load_);
   }
   if (usable_as_warm_start(solution.summary)) {
     last_ = latest;

@@ -84,4 +84,18 @@ Vector4<T> quaternion_of(const Matrix3<T>& R) {
   return h;
 }
 
+/// The rotation vector (rad) of h / |h|: angle times axis, the angle in [0, pi] (of h and -h, the
+/// one with w >= 0). The inverse of quaternion_exp (pcr/spatial/kinematics.hpp). atan2 keeps
+/// full precision at small and at large angles.
+template <class T>
+Vector3<T> quaternion_log(const Vector4<T>& h) {
+  using std::atan2;
+  using std::sqrt;
+  const T sign = h[0] < T(0) ? T(-1) : T(1);
+  const Vector3<T> v = sign * h.template tail<3>();
+  const T n = sqrt(v.squaredNorm());
+  if (n == T(0)) return Vector3<T>::Zero();
+  return (T(2) * atan2(n, sign * h[0]) / n) * v;
+}
+
 }  // namespace pcr
