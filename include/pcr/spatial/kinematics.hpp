@@ -728,4 +728,30 @@ inline SpatialInverseSolution spatial_inverse_kinematics(
   return internal::spatial_inverse_from(robot, pose, warm_start, &warm_start.warm, options);
 }
 
+/// Inverse kinematics from the home solution (FK at q = 0): as from any forward solution; a home
+/// that did not converge is returned as a failed solution with its status (the summary does not
+/// count the home solve's iterations).
+inline SpatialInverseSolution spatial_inverse_kinematics_from_home(
+    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+    const SpatialForwardSolution& home, const SolverOptions& options = SolverOptions()) {
+  if (!home.summary.converged()) {
+    SpatialInverseSolution out;
+    out.summary = home.summary;
+    out.summary.iterations = 0;
+    out.summary.path_fraction = 0.0;
+    return out;
+  }
+  return spatial_inverse_kinematics(robot, pose, home, options);
+}
+
+/// Inverse kinematics from a cold start: the home solution (a cold FK at q = 0), then
+/// spatial_inverse_kinematics_from_home.
+inline SpatialInverseSolution spatial_inverse_kinematics(
+    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+    const SolverOptions& options = SolverOptions()) {
+  const SpatialForwardSolution home =
+      spatial_forward_kinematics(robot, SpatialJointVector::Zero(robot.num_rods), options);
+  return spatial_inverse_kinematics_from_home(robot, pose, home, options);
+}
+
 }  // namespace pcr

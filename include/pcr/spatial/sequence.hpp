@@ -16,42 +16,6 @@ namespace pcr {
 /// no separate one.
 struct SpatialNoLoad {};
 
-/// A spatial IK solution as the forward solution at its joints: a start for the next IK (or a
-/// warm start for FK). The factorisation is left behind (the IK's columns are not FK's).
-inline SpatialForwardSolution as_spatial_forward_solution(const SpatialInverseSolution& ik) {
-  SpatialForwardSolution fk;
-  fk.pose = ik.pose;
-  fk.q = ik.q;
-  fk.wrenches = ik.wrenches;
-  fk.summary = ik.summary;
-  return fk;
-}
-
-/// Spatial IK from the home solution (FK at q = 0); a home that did not converge is returned as a
-/// failed solution with its status. The summary does not count the home solve's iterations.
-inline SpatialInverseSolution spatial_inverse_kinematics_from_home(
-    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
-    const SpatialForwardSolution& home, const SolverOptions& options = SolverOptions()) {
-  if (!usable_as_warm_start(home.summary)) {
-    SpatialInverseSolution out;
-    out.summary = home.summary;
-    out.summary.iterations = 0;
-    out.summary.path_fraction = 0.0;
-    return out;
-  }
-  return spatial_inverse_kinematics(robot, pose, home, options);
-}
-
-/// Spatial IK from a cold start: the home solution (a cold FK at q = 0), then
-/// spatial_inverse_kinematics_from_home.
-inline SpatialInverseSolution spatial_inverse_kinematics(
-    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
-    const SolverOptions& options = SolverOptions()) {
-  const SpatialForwardSolution home =
-      spatial_forward_kinematics(robot, SpatialJointVector::Zero(robot.num_rods), options);
-  return spatial_inverse_kinematics_from_home(robot, pose, home, options);
-}
-
 template <>
 struct SequenceTraits<SpatialForwardSolution> {
   using Robot = SpatialRobotParams<double>;
@@ -93,7 +57,7 @@ struct SequenceTraits<SpatialInverseSolution> {
                                           const SpatialInverseSolution* warm,
                                           const SolverOptions& options, const Load&) {
     const auto warm_solve = [&](const SpatialInverseSolution& w) {
-      return spatial_inverse_kinematics(robot, pose, as_spatial_forward_solution(w), options);
+      return spatial_inverse_kinematics(robot, pose, w, options);
     };
     return internal::solve_with_cold_fallback(
         warm, warm_solve, /*through_folds=*/false, warm_solve,
