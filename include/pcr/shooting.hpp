@@ -76,15 +76,23 @@ struct ShootingScale {
   double moment() const { return force * length; }
 };
 
-inline ShootingScale shooting_scale(const RobotParams<double>& robot) {
+/// The scale of n rods (rod_of(i) each, planar or spatial): their mean length L and mean EI, so
+/// lengths by L, forces by EI / L^2, moments by EI / L.
+template <class RodOf>
+ShootingScale mean_rod_scale(int n, RodOf&& rod_of) {
   double length = 0, ei = 0;
-  for (int i = 0; i < robot.num_limbs; ++i) {
-    length += robot.limb(i).rod.length;
-    ei += robot.limb(i).rod.bending_stiffness();
+  for (int i = 0; i < n; ++i) {
+    length += rod_of(i).length;
+    ei += rod_of(i).bending_stiffness();
   }
-  length /= robot.num_limbs;
-  ei /= robot.num_limbs;
+  length /= n;
+  ei /= n;
   return ShootingScale{length, ei / (length * length)};
+}
+
+inline ShootingScale shooting_scale(const RobotParams<double>& robot) {
+  return mean_rod_scale(robot.num_limbs,
+                        [&](int i) -> const Rod<double>& { return robot.limb(i).rod; });
 }
 
 /// Physical values of every shooting unknown and input.

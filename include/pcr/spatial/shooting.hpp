@@ -115,14 +115,8 @@ Vector3<T> orientation_mismatch(const Matrix3<T>& target, const Matrix3<T>& tip)
 
 /// Reference magnitudes of the scaled problem: the mean rod length at q = 0 and the mean EI.
 inline ShootingScale spatial_shooting_scale(const SpatialRobotParams<double>& robot) {
-  double length = 0, ei = 0;
-  for (int i = 0; i < robot.num_rods; ++i) {
-    length += robot.limb(i).rod.length;
-    ei += robot.limb(i).rod.bending_stiffness();
-  }
-  length /= robot.num_rods;
-  ei /= robot.num_rods;
-  return ShootingScale{length, ei / (length * length)};
+  return mean_rod_scale(robot.num_rods,
+                        [&](int i) -> const SpatialRod<double>& { return robot.limb(i).rod; });
 }
 
 /// Rod i's proximal state: at its hole (or moved clamp), in its base frame, the wrench unknown.
