@@ -231,15 +231,16 @@ TEST_F(Cli, SpatialForwardThenInverseRecoversTheJoints) {
   const pcr::CsvTable fk = parse(fk_text, kSpatialFkColumns);
   ASSERT_EQ(fk.rows.size(), 4u);
   for (const auto& row : fk.rows) EXPECT_EQ(row[12], 1.0);
-  // No strain from the spatial solvers yet (max_strain NaN); the stability check's flag, margin
-  // and distance to a singularity on every row: these configurations hold (margin > 0), and
-  // none is singular.
-  for (const std::string& line : data_lines(fk_text)) {
-    EXPECT_NE(line.find(",converged,nan,1,"), std::string::npos) << line;
-  }
-  for (const auto& row : parse(fk_text, {"stability_margin", "singularity"}).rows) {
+  // The largest bending strain and the stability check's flag, margin and distance to a
+  // singularity on every row: bent rods (strain within the 1e-2 of steel's elastic range), and
+  // configurations that hold (margin > 0) and none singular.
+  for (const auto& row :
+       parse(fk_text, {"max_strain", "stable", "stability_margin", "singularity"}).rows) {
     EXPECT_GT(row[0], 0.0);
-    EXPECT_GT(row[1], 0.0);
+    EXPECT_LT(row[0], 1e-2);
+    EXPECT_EQ(row[1], 1.0);
+    EXPECT_GT(row[2], 0.0);
+    EXPECT_GT(row[3], 0.0);
   }
   // Equal joints on the robot symmetric under turns of 120 degrees and the mirror y -> -y: the
   // platform stays on the axis, untilted; longer rods raise it.

@@ -521,6 +521,36 @@ TEST(SpatialKinematics, InverseAlongAPathFromItsOwnSolutions) {
       worst, most_in_order, most_shuffled);
 }
 
+TEST(SpatialKinematics, MaxStrainOfAnArcIsItsClosedForm) {
+  // One rod clamped at its base and to the platform, no gravity, a moment M on the platform about
+  // x: the rod bends into a circular arc of curvature M / EI, so its outermost fibre's strain is
+  // (d / 2) M / EI all along it. M bends it by 0.5, 1 and 2 rad; the rod's frame is turned about
+  // its axis, so the bending plane is none of the body's.
+  SpatialRobotParams<double> robot;
+  robot.num_rods = 1;
+  robot.gravity.setZero();
+  SpatialLimbParams<double>& limb = robot.limb(0);
+  limb.rod = continuum_stewart_gough().limb(0).rod;
+  const Eigen::Quaterniond twist(Eigen::AngleAxisd(0.7, Vector3d::UnitZ()));
+  limb.base_orientation = Vector4d(twist.w(), twist.x(), twist.y(), twist.z());
+  limb.tip_orientation = limb.base_orientation;
+  const double ei = limb.rod.bending_stiffness(), L = limb.rod.length;
+  for (const double turn : {0.5, 1.0, 2.0}) {
+    robot.external_moment = Vector3d(turn * ei / L, 0, 0);
+    const SpatialForwardSolution fk =
+        spatial_forward_kinematics(robot, SpatialJointVector::Zero(1));
+    ASSERT_TRUE(fk.summary.converged()) << turn << " " << to_string(fk.summary.status);
+    const double expected = limb.rod.diameter / 2 * turn / L;
+    EXPECT_NEAR(fk.summary.max_strain, expected, 1e-9 * expected) << turn;
+    // The arc's tip: (0, -(1 - cos) / k, sin / k) with k = turn / L, bent towards -y.
+    const double k = turn / L;
+    EXPECT_NEAR(fk.pose.position.y(), -(1 - std::cos(turn)) / k, 1e-9) << turn;
+    EXPECT_NEAR(fk.pose.position.z(), std::sin(turn) / k, 1e-9) << turn;
+    std::printf("arc of %.1f rad: max strain %.12e, closed form %.12e\n", turn,
+                fk.summary.max_strain, expected);
+  }
+}
+
 TEST(SpatialKinematics, SolvesNeverAllocate) {
   // Neither operator new nor Eigen's aligned malloc, in cold and warm FK and in IK.
   const SpatialRobotParams<double> robot = continuum_stewart_gough();

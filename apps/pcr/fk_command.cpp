@@ -45,7 +45,6 @@ void run_spatial_fk(const FkArguments& args) {
     for (int i = 0; i < n; ++i) out.add(q(i));
     for (int k = 0; k < 3; ++k) out.add(valid ? solution.pose.position(k) : nan);
     for (int k = 0; k < 3; ++k) out.add(valid ? r(k) : nan);
-    // The spatial solvers compute no strain yet: max_strain NaN.
     cli::add_summary_fields(s, valid, out);
     return s.status;
   };

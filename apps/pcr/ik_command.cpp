@@ -50,7 +50,6 @@ void run_spatial_ik(const IkArguments& args) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (std::size_t c = 0; c < 6; ++c) out.add(row[c]);
     for (int i = 0; i < n; ++i) out.add(valid ? solution.q(i) : nan);
-    // The spatial solvers compute no strain yet: max_strain NaN.
     cli::add_summary_fields(s, valid, out);
     return s.status;
   };

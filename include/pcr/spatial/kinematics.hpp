@@ -397,17 +397,43 @@ inline SolveStatus spatial_solve_path(SpatialForwardProblem& problem,
   return t >= 1.0 ? SolveStatus::kConverged : status;
 }
 
-/// Checks a converged solution's elastic stability into its summary (SolverOptions::
-/// check_stability), at half its RK4 steps (stability_rod_steps) as the planar solvers do.
+/// The largest bending strain over the nodes of every rod of a configuration, its rods integrated
+/// in rod_steps steps: (d / 2) |(u - u*)_1,2| = (d / 2) |(R^T m)_1,2| / EI, the strain of the
+/// outermost fibre relative to the stress-free rod (SolverSummary::max_strain, as the planar
+/// solvers report it; torsion's shear strain is not counted).
+inline double spatial_max_strain(const SpatialRobotParams<double>& robot,
+                                 const SpatialShootingPoint<double>& x, int rod_steps) {
+  double strain = 0;
+  for (int i = 0; i < robot.num_rods; ++i) {
+    const SpatialLimbParams<double>& limb = robot.limb(i);
+    const SpatialRod<double> rod = limb.rod_at(x.q[i]);
+    const double per_moment = rod.diameter / (2 * rod.bending_stiffness());
+    sample_spatial_rod(spatial_proximal_state(limb, x.q[i], x.wrenches[i]), rod, robot.gravity,
+                       rod_steps, [&](double, const SpatialRodState<double>& node) {
+                         const Vector3<double> m = node.rotation().transpose() * node.moment;
+                         const double e = per_moment * std::hypot(m.x(), m.y());
+                         strain = std::isnan(e) ? e : std::max(strain, e);
+                       });
+  }
+  return strain;
+}
+
+/// What the summary reports of a converged solution beyond the solve: its largest bending strain
+/// and, with SolverOptions::check_stability, its elastic stability at half its RK4 steps
+/// (stability_rod_steps) as the planar solvers do.
 template <class Solution>
-void check_spatial_stability(const SpatialRobotParams<double>& robot, const SolverOptions& options,
+void report_spatial_solution(const SpatialRobotParams<double>& robot, const SolverOptions& options,
                              Solution& solution) {
   SolverSummary& summary = solution.summary;
+  summary.max_strain = summary.stability_margin = summary.singularity =
+      std::numeric_limits<double>::quiet_NaN();
   summary.stability = Stability::kUnchecked;
-  summary.stability_margin = summary.singularity = std::numeric_limits<double>::quiet_NaN();
-  if (!options.check_stability || !summary.converged()) return;
+  if (!summary.converged()) return;
+  const SpatialShootingPoint<double> point = spatial_shooting_point(robot, solution);
+  summary.max_strain = spatial_max_strain(robot, point, summary.rod_steps);
+  if (!options.check_stability) return;
   const SpatialEquilibriumStability s =
-      spatial_equilibrium_stability(robot, solution, stability_rod_steps(summary.rod_steps));
+      spatial_equilibrium_stability(robot, point, stability_rod_steps(summary.rod_steps));
   summary.stability = s.stable ? Stability::kStable : Stability::kUnstable;
   summary.stability_margin = s.margin;
   summary.singularity = s.singularity;
@@ -461,7 +487,7 @@ inline SpatialForwardSolution spatial_forward_kinematics(
   out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
                                                           out.summary, out.summary.status);
   internal::fill_solution(problem, x, out);
-  internal::check_spatial_stability(robot, options, out);
+  internal::report_spatial_solution(robot, options, out);
   return out;
 }
 
@@ -509,7 +535,7 @@ inline SpatialForwardSolution spatial_forward_kinematics(
   out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
                                                           out.summary, out.summary.status);
   internal::fill_solution(problem, x, out);
-  internal::check_spatial_stability(robot, options, out);
+  internal::report_spatial_solution(robot, options, out);
   return out;
 }
 
@@ -700,7 +726,7 @@ SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& ro
     out.q(i) = x.q[i];
     out.wrenches[i] = x.wrenches[i];
   }
-  check_spatial_stability(robot, options, out);
+  report_spatial_solution(robot, options, out);
   return out;
 }
 
