@@ -70,17 +70,20 @@ inline Eigen::VectorXd residual_of(const SpatialRobotParams<double>& robot, cons
   return r;
 }
 
+/// A solution of the CVODE residual (ReferenceFk: FK's; the IK of test_spatial_accuracy.cpp).
 struct ReferenceFk {
   Point x;
   double residual = 0;
   int iterations = 0;
 };
 
-/// Newton on the CVODE residual from `start` (the RK4 solution), with central-difference
-/// Jacobians: a rod's columns re-integrate that rod alone, the pose's none.
-inline ReferenceFk reference_forward_kinematics(const SpatialRobotParams<double>& robot,
-                                                const Point& start) {
-  const int n = robot.num_rods, size = 6 * n + 6;
+/// Newton on the CVODE residual from `start` (an RK4 solution) over `size` scaled unknowns that
+/// retract(x, dz) steps, with central-difference Jacobians in which column k re-integrates rod
+/// rod_of(k) alone (none when negative: a pose column).
+template <class Retract, class RodOf>
+ReferenceFk reference_newton(const SpatialRobotParams<double>& robot, const Point& start, int size,
+                             Retract&& retract, RodOf&& rod_of) {
+  const int n = robot.num_rods;
   const ShootingScale scale = spatial_shooting_scale(robot);
   constexpr double kStep = 1e-6;
   ReferenceFk out{start};
@@ -92,20 +95,31 @@ inline ReferenceFk reference_forward_kinematics(const SpatialRobotParams<double>
     if (out.residual <= 2e-12) break;
     Eigen::MatrixXd J(size, size);
     for (int k = 0; k < size; ++k) {
-      const int rod = k < 6 * n ? k / 6 : -1;
+      const int rod = rod_of(k);
       Eigen::VectorXd sides[2];
       for (int s = 0; s < 2; ++s) {
-        const Point moved = reference_retract(
-            out.x, (s == 0 ? kStep : -kStep) * Eigen::VectorXd::Unit(size, k), n, scale);
+        const Point moved =
+            retract(out.x, (s == 0 ? kStep : -kStep) * Eigen::VectorXd::Unit(size, k));
         std::vector<SpatialRodState<double>> moved_tips = tips;
         if (rod >= 0) moved_tips[rod] = cvode_tip(robot, moved, rod);
         sides[s] = residual_of(robot, moved, scale, moved_tips.data());
       }
       J.col(k) = (sides[0] - sides[1]) / (2 * kStep);
     }
-    out.x = reference_retract(out.x, -J.partialPivLu().solve(r), n, scale);
+    out.x = retract(out.x, -J.partialPivLu().solve(r));
   }
   return out;
+}
+
+/// FK on the CVODE residual: reference_newton over the wrenches and the pose.
+inline ReferenceFk reference_forward_kinematics(const SpatialRobotParams<double>& robot,
+                                                const Point& start) {
+  const int n = robot.num_rods;
+  const ShootingScale scale = spatial_shooting_scale(robot);
+  return reference_newton(
+      robot, start, 6 * n + 6,
+      [&](const Point& x, const Eigen::VectorXd& dz) { return reference_retract(x, dz, n, scale); },
+      [n](int k) { return k < 6 * n ? k / 6 : -1; });
 }
 
 struct PoseError {

@@ -29,18 +29,12 @@ using namespace pcr::testing;  // spatial_test_support.hpp
 
 // ---- The CVODE reference IK ---------------------------------------------------------------------
 
-struct ReferenceIk {
-  Point x;
-  double residual = 0;
-  int iterations = 0;
-};
-
 /// Newton on the CVODE residual at x's pose (fixed), from `start` (the RK4 solution): unknowns
 /// each rod's proximal wrench and joint (7 n, the wrenches scaled as the solver's, the joints by
-/// L), central-difference Jacobians in which a rod's 7 columns re-integrate that rod alone.
-ReferenceIk reference_inverse_kinematics(const SpatialRobotParams<double>& robot,
+/// L); a rod's 7 columns re-integrate that rod alone.
+ReferenceFk reference_inverse_kinematics(const SpatialRobotParams<double>& robot,
                                          const Point& start) {
-  const int n = robot.num_rods, size = 7 * n;
+  const int n = robot.num_rods;
   const ShootingScale scale = spatial_shooting_scale(robot);
   const auto retract = [&](const Point& x, const Eigen::VectorXd& dz) {
     Point out = x;
@@ -51,40 +45,15 @@ ReferenceIk reference_inverse_kinematics(const SpatialRobotParams<double>& robot
     }
     return out;
   };
-  constexpr double kStep = 1e-6;
-  ReferenceIk out{start};
-  std::vector<SpatialRodState<double>> tips(n);
-  for (; out.iterations < 8; ++out.iterations) {
-    for (int i = 0; i < n; ++i) tips[i] = cvode_tip(robot, out.x, i);
-    const Eigen::VectorXd r = residual_of(robot, out.x, scale, tips.data());
-    out.residual = r.lpNorm<Eigen::Infinity>();
-    if (out.residual <= 2e-12) break;
-    Eigen::MatrixXd J(size, size);
-    for (int k = 0; k < size; ++k) {
-      const int rod = k < 6 * n ? k / 6 : k - 6 * n;
-      Eigen::VectorXd sides[2];
-      for (int s = 0; s < 2; ++s) {
-        const Point moved =
-            retract(out.x, (s == 0 ? kStep : -kStep) * Eigen::VectorXd::Unit(size, k));
-        std::vector<SpatialRodState<double>> moved_tips = tips;
-        moved_tips[rod] = cvode_tip(robot, moved, rod);
-        sides[s] = residual_of(robot, moved, scale, moved_tips.data());
-      }
-      J.col(k) = (sides[0] - sides[1]) / (2 * kStep);
-    }
-    out.x = retract(out.x, -J.partialPivLu().solve(r));
-  }
-  return out;
+  return reference_newton(robot, start, 7 * n, retract,
+                          [n](int k) { return k < 6 * n ? k / 6 : k - 6 * n; });
 }
 
 /// The RK4 IK's solution as a shooting point at `pose`, to start the reference from.
-Point point_of(const SpatialInverseSolution& ik, const SpatialPose<double>& pose) {
-  Point x;
+Point point_of(const SpatialRobotParams<double>& robot, const SpatialInverseSolution& ik,
+               const SpatialPose<double>& pose) {
+  Point x = spatial_shooting_point(robot, ik);
   x.pose = pose;
-  for (int i = 0; i < 6; ++i) {
-    x.q[i] = ik.q(i);
-    x.wrenches[i] = ik.wrenches[i];
-  }
   return x;
 }
 
@@ -132,7 +101,7 @@ TEST(SpatialAccuracy, InverseKinematicsMatchesCvode) {
     ASSERT_TRUE(fk.summary.converged()) << "trial " << trial;
     const SpatialInverseSolution ik = spatial_inverse_kinematics(robot, fk.pose, start);
     ASSERT_TRUE(ik.summary.converged()) << "trial " << trial << " " << to_string(ik.summary.status);
-    const ReferenceIk reference = reference_inverse_kinematics(robot, point_of(ik, fk.pose));
+    const ReferenceFk reference = reference_inverse_kinematics(robot, point_of(robot, ik, fk.pose));
     ASSERT_LT(reference.residual, 1e-11) << "trial " << trial;
     const double error = joint_difference(ik, reference.x);
     EXPECT_LT(error, 1e-9) << "trial " << trial;
@@ -185,7 +154,7 @@ TEST(SpatialAccuracy, ReferencePoseMatchesCvode) {
   const PoseError off = pose_error(nearby.pose, target);
   const SpatialInverseSolution ik = spatial_inverse_kinematics(robot, target, nearby);
   ASSERT_TRUE(ik.summary.converged()) << to_string(ik.summary.status);
-  const ReferenceIk reference = reference_inverse_kinematics(robot, point_of(ik, target));
+  const ReferenceFk reference = reference_inverse_kinematics(robot, point_of(robot, ik, target));
   ASSERT_LT(reference.residual, 1e-11);
   const double error = joint_difference(ik, reference.x);
   EXPECT_LT(error, 1e-9);
