@@ -203,6 +203,23 @@ void BM_PlainResidualBaseline(benchmark::State& state) {
 }
 BENCHMARK(BM_PlainResidualBaseline)->Unit(benchmark::kMicrosecond);
 
+/// Times solve() (which returns its summary) once per iteration, and reports the mean residual
+/// evaluations and RK4 steps per solve and the failures.
+template <class Solve>
+void time_solves(benchmark::State& state, Solve&& solve) {
+  long evaluations = 0, solves = 0, failures = 0, steps = 0;
+  for (auto _ : state) {
+    const SolverSummary summary = solve();
+    evaluations += summary.residual_evaluations;
+    steps += summary.rod_steps;
+    failures += summary.converged() ? 0 : 1;
+    ++solves;
+  }
+  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
+  state.counters["rod_steps"] = static_cast<double>(steps) / solves;
+  state.counters["failures"] = static_cast<double>(failures);
+}
+
 /// Warm IK along the path, each solve from the previous IK solution, as a controller runs.
 /// Arg: the stability check on (1, the default) or off (0).
 void BM_SpatialInverseWarm(benchmark::State& state) {
@@ -210,21 +227,12 @@ void BM_SpatialInverseWarm(benchmark::State& state) {
   const SolverOptions options = options_of(state);
   SpatialInverseSolution previous = path.ik.back();
   int k = 0;
-  long evaluations = 0, solves = 0, failures = 0, steps = 0;
-  for (auto _ : state) {
-    SpatialInverseSolution next =
-        spatial_inverse_kinematics(path.robot, path.poses[k], previous, options);
-    benchmark::DoNotOptimize(next.q.data());
-    evaluations += next.summary.residual_evaluations;
-    steps += next.summary.rod_steps;
-    failures += next.summary.converged() ? 0 : 1;
-    ++solves;
-    previous = std::move(next);
+  time_solves(state, [&] {
+    previous = spatial_inverse_kinematics(path.robot, path.poses[k], previous, options);
+    benchmark::DoNotOptimize(previous.q.data());
     k = (k + 1) % ReferencePath::kPoints;
-  }
-  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
-  state.counters["rod_steps"] = static_cast<double>(steps) / solves;
-  state.counters["failures"] = static_cast<double>(failures);
+    return previous.summary;
+  });
 }
 BENCHMARK(BM_SpatialInverseWarm)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 
@@ -234,60 +242,41 @@ void BM_SpatialForwardWarm(benchmark::State& state) {
   const SolverOptions options = options_of(state);
   SpatialForwardSolution previous = path.first;
   int k = 1;
-  long evaluations = 0, solves = 0, failures = 0, steps = 0;
-  for (auto _ : state) {
-    SpatialForwardSolution next =
-        spatial_forward_kinematics(path.robot, path.q[k], previous, options);
-    benchmark::DoNotOptimize(next.pose.position.data());
-    evaluations += next.summary.residual_evaluations;
-    steps += next.summary.rod_steps;
-    failures += next.summary.converged() ? 0 : 1;
-    ++solves;
-    previous = std::move(next);
+  time_solves(state, [&] {
+    previous = spatial_forward_kinematics(path.robot, path.q[k], previous, options);
+    benchmark::DoNotOptimize(previous.pose.position.data());
     k = (k + 1) % ReferencePath::kPoints;
-  }
-  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
-  state.counters["rod_steps"] = static_cast<double>(steps) / solves;
-  state.counters["failures"] = static_cast<double>(failures);
+    return previous.summary;
+  });
 }
 BENCHMARK(BM_SpatialForwardWarm)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 
-/// FK at the joints of the reference pose from the home solution (q = 0), and from nothing
-/// (straight rods).
+/// FK at the joints of the reference pose from the home solution (q = 0).
 void BM_SpatialForwardFromHome(benchmark::State& state) {
   const ReferencePath& path = reference_path();
   const SolverOptions options = options_of(state);
   const SpatialInverseSolution at =
       spatial_inverse_kinematics(path.robot, path.reference, path.ik[0]);
-  long evaluations = 0, solves = 0, failures = 0;
-  for (auto _ : state) {
+  time_solves(state, [&] {
     const SpatialForwardSolution fk =
         spatial_forward_kinematics(path.robot, at.q, path.home, options);
     benchmark::DoNotOptimize(fk.pose.position.data());
-    evaluations += fk.summary.residual_evaluations;
-    failures += fk.summary.converged() ? 0 : 1;
-    ++solves;
-  }
-  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
-  state.counters["failures"] = static_cast<double>(failures);
+    return fk.summary;
+  });
 }
 BENCHMARK(BM_SpatialForwardFromHome)->Arg(1)->Unit(benchmark::kMicrosecond);
 
+/// FK at the same joints from nothing (straight rods).
 void BM_SpatialForwardCold(benchmark::State& state) {
   const ReferencePath& path = reference_path();
   const SolverOptions options = options_of(state);
   const SpatialInverseSolution at =
       spatial_inverse_kinematics(path.robot, path.reference, path.ik[0]);
-  long evaluations = 0, solves = 0, failures = 0;
-  for (auto _ : state) {
+  time_solves(state, [&] {
     const SpatialForwardSolution fk = spatial_forward_kinematics(path.robot, at.q, options);
     benchmark::DoNotOptimize(fk.pose.position.data());
-    evaluations += fk.summary.residual_evaluations;
-    failures += fk.summary.converged() ? 0 : 1;
-    ++solves;
-  }
-  state.counters["evaluations"] = static_cast<double>(evaluations) / solves;
-  state.counters["failures"] = static_cast<double>(failures);
+    return fk.summary;
+  });
 }
 BENCHMARK(BM_SpatialForwardCold)->Arg(1)->Unit(benchmark::kMicrosecond);
 
