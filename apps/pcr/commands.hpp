@@ -126,6 +126,15 @@ inline std::vector<std::string> joint_names(int n) {
   return names;
 }
 
+/// A table of joint values q1..qn (m) from `path` (read_table), each within [-1, 1] m.
+inline CsvTable read_joint_table(const std::string& path, int n) {
+  CsvReadOptions csv;
+  csv.columns = joint_names(n);
+  const CsvTable table = read_table(path, csv);
+  for (std::size_t c = 0; c < csv.columns.size(); ++c) check_column_range(table, c, -1.0, 1.0, "m");
+  return table;
+}
+
 /// `option`'s text: as many comma-separated finite numbers as `names`, which name them in errors.
 inline std::vector<double> parse_list(const std::string& text,
                                       const std::vector<std::string>& names,

@@ -22,14 +22,9 @@ void run_spatial_fk(const FkArguments& args) {
   args.rows.require_spatial_support(args.robot);
   const SpatialRobotDescription robot = load_spatial_robot(args.robot);
   const int n = robot.params.num_rods;
-  CsvReadOptions csv;
-  csv.columns = cli::joint_names(n);
-  const CsvTable table = cli::read_table(args.input, csv);
-  for (std::size_t c = 0; c < csv.columns.size(); ++c) {
-    cli::check_column_range(table, c, -1.0, 1.0, "m");
-  }
+  const CsvTable table = cli::read_joint_table(args.input, n);
 
-  std::vector<std::string> header = csv.columns;
+  std::vector<std::string> header = cli::joint_names(n);
   for (const std::string& c : cli::spatial_pose_columns()) header.push_back(c);
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
@@ -62,14 +57,9 @@ void run_fk(const FkArguments& args) {
   SolverOptions options = args.solve.options();
   args.rows.apply(options);
   const PlatformLoad<double> load = args.solve.load();
-  CsvReadOptions csv;
-  csv.columns = cli::joint_names(n);
-  const CsvTable table = cli::read_table(args.input, csv);
-  for (std::size_t c = 0; c < csv.columns.size(); ++c) {
-    cli::check_column_range(table, c, -1.0, 1.0, "m");
-  }
+  const CsvTable table = cli::read_joint_table(args.input, n);
 
-  std::vector<std::string> header = csv.columns;
+  std::vector<std::string> header = cli::joint_names(n);
   for (const char* c : {"x", "y", "theta"}) header.emplace_back(c);
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
