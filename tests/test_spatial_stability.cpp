@@ -596,6 +596,57 @@ TEST(SpatialStability, CheckAtHalfTheStepsAgreesWithAFineIntegration) {
   std::printf("half the steps vs four times: margin within %.1e relative\n", worst);
 }
 
+// IK returns a stable equilibrium where one exists. At the reference pose a buckled seed leads IK
+// (stable_inverse off) to another equilibrium, one rod looped and about 0.4 m longer, unstable
+// with the joints held. IK warm-started from it 1 mm away stays on that branch with the search
+// off; with it on (the default) it returns a stable equilibrium, which a CVODE FK at its joints
+// puts at the requested pose.
+TEST(SpatialStability, InverseLeavesAnUnstableEquilibriumForAStableOne) {
+  const SpatialRobotParams<double> robot = continuum_stewart_gough();
+  SpatialPose<double> pose;
+  pose.position = Vector3d(0, 0, 0.4);
+  pose.orientation = quaternion_exp<double>(Vector3d(0, 10 * M_PI / 180, 0));
+  SolverOptions keep;
+  keep.stable_inverse = false;
+  const SpatialInverseSolution normal = spatial_inverse_kinematics(robot, pose, keep);
+  ASSERT_TRUE(normal.summary.converged());
+  ASSERT_EQ(normal.summary.stability, Stability::kStable);
+  SpatialInverseSolution looped;
+  for (int k = 0; k < kSpatialBuckledSeedsPerRod * robot.num_rods; ++k) {
+    looped = spatial_inverse_kinematics(robot, pose, spatial_buckled_seed(robot, normal, k), keep);
+    if (looped.summary.converged() && looped.summary.stability == Stability::kUnstable) break;
+  }
+  ASSERT_EQ(looped.summary.stability, Stability::kUnstable);
+  EXPECT_LT(looped.summary.stability_margin, 0);
+  EXPECT_GT((looped.q - normal.q).lpNorm<Eigen::Infinity>(), 0.1);
+
+  SpatialPose<double> moved = pose;
+  moved.position.x() += 1e-3;
+  const SpatialInverseSolution stays = spatial_inverse_kinematics(robot, moved, looped, keep);
+  ASSERT_TRUE(stays.summary.converged());
+  EXPECT_EQ(stays.summary.stability, Stability::kUnstable);
+  EXPECT_GT((stays.q - normal.q).lpNorm<Eigen::Infinity>(), 0.1);
+
+  const SpatialInverseSolution stable = spatial_inverse_kinematics(robot, moved, looped);
+  ASSERT_TRUE(stable.summary.converged()) << static_cast<int>(stable.summary.status);
+  EXPECT_EQ(stable.summary.stability, Stability::kStable);
+  EXPECT_GT(stable.summary.stability_margin, 0);
+  EXPECT_LT((stable.q - normal.q).lpNorm<Eigen::Infinity>(), 0.01);
+  EXPECT_GT(stable.summary.residual_evaluations, stays.summary.residual_evaluations);
+  const testing::ReferenceFk reference =
+      testing::reference_forward_kinematics(robot, spatial_shooting_point(robot, stable));
+  const testing::PoseError error = testing::pose_error(reference.x.pose, moved);
+  EXPECT_LT(error.position, 1e-9);
+  EXPECT_LT(error.angle, 1e-8);
+  std::printf(
+      "looped rod: margin %.3e, joints %.3f m from the stable ones; IK 1 mm away finds a stable "
+      "equilibrium (margin %.3e) in %d evaluations; CVODE FK at its joints within %.1e m, "
+      "%.1e rad of the pose\n",
+      looped.summary.stability_margin, (looped.q - normal.q).lpNorm<Eigen::Infinity>(),
+      stable.summary.stability_margin, stable.summary.residual_evaluations, error.position,
+      error.angle);
+}
+
 TEST(SpatialStability, NeverAllocates) {
   const SpatialRobotParams<double> robot = continuum_stewart_gough();
   const SpatialForwardSolution fk =

@@ -46,7 +46,7 @@ void run_spatial_ik(const IkArguments& args) {
     pose.orientation = quaternion_exp(Vector3<double>(row[3], row[4], row[5]));
     const SpatialInverseSolution& solution = sequence.solve(pose);
     const SolverSummary& s = solution.summary;
-    const bool valid = usable_as_warm_start(s);
+    const bool valid = is_equilibrium(s);  // maybe unstable
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (std::size_t c = 0; c < 6; ++c) out.add(row[c]);
     for (int i = 0; i < n; ++i) out.add(valid ? solution.q(i) : nan);

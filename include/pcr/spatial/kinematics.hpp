@@ -420,23 +420,25 @@ inline double spatial_max_strain(const SpatialRobotParams<double>& robot,
 
 /// What the summary reports of a converged solution beyond the solve: its largest bending strain
 /// and, with SolverOptions::check_stability, its elastic stability at half its RK4 steps
-/// (stability_rod_steps) as the planar solvers do.
+/// (stability_rod_steps) as the planar solvers do. Returns the first rod with a conjugate point
+/// (SpatialEquilibriumStability::conjugate_limb), -1 when none or unchecked.
 template <class Solution>
-void report_spatial_solution(const SpatialRobotParams<double>& robot, const SolverOptions& options,
-                             Solution& solution) {
+int report_spatial_solution(const SpatialRobotParams<double>& robot, const SolverOptions& options,
+                            Solution& solution) {
   SolverSummary& summary = solution.summary;
   summary.max_strain = summary.stability_margin = summary.singularity =
       std::numeric_limits<double>::quiet_NaN();
   summary.stability = Stability::kUnchecked;
-  if (!summary.converged()) return;
+  if (!summary.converged()) return -1;
   const SpatialShootingPoint<double> point = spatial_shooting_point(robot, solution);
   summary.max_strain = spatial_max_strain(robot, point, summary.rod_steps);
-  if (!options.check_stability) return;
+  if (!options.check_stability) return -1;
   const SpatialEquilibriumStability s =
       spatial_equilibrium_stability(robot, point, stability_rod_steps(summary.rod_steps));
   summary.stability = s.stable ? Stability::kStable : Stability::kUnstable;
   summary.stability_margin = s.margin;
   summary.singularity = s.singularity;
+  return s.conjugate_limb;
 }
 
 inline bool spatial_inputs_valid(const SpatialRobotParams<double>& robot,
@@ -618,6 +620,30 @@ class SpatialInverseProblem {
 
 }  // namespace internal
 
+/// Seeds of a spatial solution's other equilibria at the same input, per rod.
+inline constexpr int kSpatialBuckledSeedsPerRod = 8;
+
+/// Seed k (0 <= k < kSpatialBuckledSeedsPerRod n) of the other equilibria at `at`'s input: one rod
+/// bent further, its proximal moment moved by +-1 and +-2 times 2 pi EI / l (a clamped-clamped
+/// rod's buckled shapes, as the planar buckled_seed) about either axis normal to its proximal
+/// tangent (d1, d2: a straight rod buckles in any plane); the rods in turn from `first_rod`.
+template <class Solution>
+Solution spatial_buckled_seed(const SpatialRobotParams<double>& robot, const Solution& at, int k,
+                              int first_rod = 0) {
+  constexpr double kTurns[4] = {1.0, -1.0, 2.0, -2.0};
+  const int rod = (first_rod + k / kSpatialBuckledSeedsPerRod) % robot.num_rods;
+  const int kind = k % kSpatialBuckledSeedsPerRod;
+  const SpatialLimbParams<double>& limb = robot.limb(rod);
+  Solution seed = at;
+  seed.warm = SpatialWarmStart();  // not at the seed
+  const auto i = static_cast<std::size_t>(rod);
+  const SpatialRod<double> bent = limb.rod_at(at.q(rod));
+  const Matrix3<double> frame = spatial_proximal_state(limb, at.q(rod), at.wrenches[i]).rotation();
+  seed.wrenches[i].moment +=
+      kTurns[kind / 2] * 2.0 * M_PI * bent.bending_stiffness() / bent.length * frame.col(kind % 2);
+  return seed;
+}
+
 namespace internal {
 
 /// Solves the inverse problem at `pose` from the solution x at x.pose (x updated): the whole step
@@ -694,6 +720,66 @@ template <class Start>
 SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& robot,
                                             const SpatialPose<double>& pose, const Start& start,
                                             const SpatialWarmStart* warm,
+                                            const SolverOptions& options);
+
+/// IK has converged on an unstable equilibrium at `pose`: looks for a stable one there, first from
+/// home (the branch that continuation from the straight rods follows), then from the buckled seeds
+/// (spatial_buckled_seed), the rod with a conjugate point (conjugate_limb, or -1) first. Each seed
+/// is solved at the pose itself (no continuation), within options.max_continuation_iterations.
+/// Takes the stable
+/// solution whose joints lie nearest, else reports kUnstable with the unstable solution. The
+/// summary counts every seed's iterations and evaluations.
+inline void look_for_stable_spatial_inverse(const SpatialRobotParams<double>& robot,
+                                            const SpatialPose<double>& pose,
+                                            const SolverOptions& options, int conjugate_limb,
+                                            SpatialInverseSolution& solution) {
+  SolverOptions seed_options = options;
+  seed_options.stable_inverse = false;
+  SolverSummary totals = solution.summary;
+  SpatialInverseSolution best;
+  bool found = false;
+  double best_distance = HUGE_VAL;
+  const auto consider = [&](const SpatialInverseSolution& candidate) {
+    totals.iterations += candidate.summary.iterations;
+    totals.residual_evaluations += candidate.summary.residual_evaluations;
+    totals.continuation_steps += candidate.summary.continuation_steps;
+    if (!candidate.summary.converged() || candidate.summary.stability != Stability::kStable) return;
+    const double distance = (candidate.q - solution.q).norm();
+    if (!found || distance < best_distance) {
+      best = candidate;
+      found = true;
+      best_distance = distance;
+    }
+  };
+  const SpatialForwardSolution home =
+      spatial_forward_kinematics(robot, SpatialJointVector::Zero(robot.num_rods), seed_options);
+  if (home.summary.converged()) {
+    consider(spatial_inverse_from(robot, pose, home, nullptr, seed_options));
+  }
+  // The seeds are at the pose: no path to continue along, and a seed that leads to an equilibrium
+  // converges in a few iterations (as a continuation's sub-solve) or not at all.
+  seed_options.continuation = false;
+  seed_options.max_iterations = options.max_continuation_iterations;
+  for (int k = 0; k < kSpatialBuckledSeedsPerRod * robot.num_rods; ++k) {
+    consider(spatial_inverse_from(
+        robot, pose, spatial_buckled_seed(robot, solution, k, std::max(conjugate_limb, 0)), nullptr,
+        seed_options));
+  }
+  if (found) {
+    best.summary.iterations = totals.iterations;
+    best.summary.residual_evaluations = totals.residual_evaluations;
+    best.summary.continuation_steps = totals.continuation_steps;
+    solution = best;
+  } else {
+    totals.status = SolveStatus::kUnstable;
+    solution.summary = totals;
+  }
+}
+
+template <class Start>
+SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& robot,
+                                            const SpatialPose<double>& pose, const Start& start,
+                                            const SpatialWarmStart* warm,
                                             const SolverOptions& options) {
   SpatialInverseSolution out;
   const int n = robot.num_rods;
@@ -726,7 +812,10 @@ SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& ro
     out.q(i) = x.q[i];
     out.wrenches[i] = x.wrenches[i];
   }
-  report_spatial_solution(robot, options, out);
+  const int conjugate_limb = report_spatial_solution(robot, options, out);
+  if (out.summary.stability == Stability::kUnstable && options.stable_inverse) {
+    look_for_stable_spatial_inverse(robot, pose, options, conjugate_limb, out);
+  }
   return out;
 }
 
@@ -736,8 +825,9 @@ SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& ro
 /// a forward solution near the pose: Newton from its wrenches and joints at the requested pose;
 /// on failure (and options.continuation), natural continuation along the straight pose path
 /// from the start's pose (position on a line, orientation at a constant rate), halving the step
-/// on failure. RK4 steps as spatial_forward_kinematics. Other rod counts:
-/// SolveStatus::kUnsupported.
+/// on failure. RK4 steps as spatial_forward_kinematics. An equilibrium that would not hold is
+/// replaced by a stable one at the pose when one is found (SolverOptions::stable_inverse,
+/// look_for_stable_spatial_inverse), else kUnstable. Other rod counts: SolveStatus::kUnsupported.
 inline SpatialInverseSolution spatial_inverse_kinematics(
     const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
     const SpatialForwardSolution& start, const SolverOptions& options = SolverOptions()) {
