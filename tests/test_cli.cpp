@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "pcr/csv_io.hpp"
@@ -210,6 +211,37 @@ std::vector<std::string> data_lines(const std::string& text) {
   std::getline(in, line);
   while (std::getline(in, line)) lines.push_back(line);
   return lines;
+}
+
+// A three-rod spatial robot (rods 0, 2 and 4 of the reference robot): pcr ik imposes the position
+// alone and writes the orientation it solves, which is the one pcr fk gave at those joints.
+TEST_F(Cli, SpatialThreeRodInverseSolvesTheOrientation) {
+  nlohmann::json robot = nlohmann::json::parse(slurp(kSpatialRobot));
+  robot["name"] = "three-rods";
+  robot["rods"] = nlohmann::json::array({robot["rods"][0], robot["rods"][2], robot["rods"][4]});
+  const std::string file = write("three-rods.json", robot.dump(2));
+  Result r = run("fk --robot '" + file + "'", "q1,q2,q3\n0.005,0.005,0.005\n0.01,0,0.004\n");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const pcr::CsvTable fk = parse(r.out, {"q1", "q2", "q3", "x", "y", "z", "rx", "ry", "rz"});
+  std::string poses = "x,y,z,rx,ry,rz\n";
+  for (const auto& row : fk.rows) {
+    for (int k = 3; k < 6; ++k) poses += pcr::format_double(row[k]) + ",";
+    poses += "0,0,0\n";  // the rotation, not imposed by three rods
+  }
+  r = run("ik --robot '" + file + "'", poses);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const pcr::CsvTable ik =
+      parse(r.out, {"x", "y", "z", "rx", "ry", "rz", "q1", "q2", "q3", "converged"});
+  ASSERT_EQ(ik.rows.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(ik.rows[i][9], 1.0) << i;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(ik.rows[i][k], fk.rows[i][3 + k]) << i;                      // echoed
+      EXPECT_NEAR(ik.rows[i][3 + k], fk.rows[i][6 + k], 1e-8) << i;          // solved
+      EXPECT_NEAR(ik.rows[i][6 + k], fk.rows[i][k], 1e-9) << i << " " << k;  // joints
+    }
+  }
+  EXPECT_GT(std::abs(fk.rows[1][6]) + std::abs(fk.rows[1][7]), 1e-3);  // a tilted platform
 }
 
 TEST_F(Cli, SpatialForwardThenInverseRecoversTheJoints) {

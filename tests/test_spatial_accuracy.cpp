@@ -29,12 +29,14 @@ using namespace pcr::testing;  // spatial_test_support.hpp
 
 // ---- The CVODE reference IK ---------------------------------------------------------------------
 
-/// Newton on the CVODE residual at x's pose (fixed), from `start` (the RK4 solution): unknowns
-/// each rod's proximal wrench and joint (7 n, the wrenches scaled as the solver's, the joints by
-/// L); a rod's 7 columns re-integrate that rod alone.
+/// Newton on the CVODE residual at x's pose, from `start` (the RK4 solution): unknowns each rod's
+/// proximal wrench and joint (7 n, the wrenches scaled as the solver's, the joints by L) and the
+/// orientation directions that IK leaves free for this rod count (the last of the body-frame
+/// rotation, spatial_inverse_free_angles); a rod's 7 columns re-integrate that rod alone.
 ReferenceFk reference_inverse_kinematics(const SpatialRobotParams<double>& robot,
                                          const Point& start) {
   const int n = robot.num_rods;
+  const int free = spatial_inverse_free_angles(n);
   const ShootingScale scale = spatial_shooting_scale(robot);
   const auto retract = [&](const Point& x, const Eigen::VectorXd& dz) {
     Point out = x;
@@ -43,23 +45,32 @@ ReferenceFk reference_inverse_kinematics(const SpatialRobotParams<double>& robot
       out.wrenches[i].moment += dz.segment<3>(6 * i + 3) * scale.moment();
       out.q[i] += dz(6 * n + i) * scale.length;
     }
+    Vector3d turn = Vector3d::Zero();
+    turn.tail(free) = dz.tail(free);
+    out.pose.orientation =
+        quaternion_product<double>(x.pose.orientation, quaternion_exp<double>(turn)).normalized();
     return out;
   };
-  return reference_newton(robot, start, 7 * n, retract,
-                          [n](int k) { return k < 6 * n ? k / 6 : k - 6 * n; });
+  return reference_newton(robot, start, 7 * n + free, retract, [n](int k) {
+    return k < 6 * n ? k / 6 : k < 7 * n ? k - 6 * n : -1;
+  });
 }
 
-/// The RK4 IK's solution as a shooting point at `pose`, to start the reference from.
+/// The RK4 IK's solution as a shooting point at the requested position and at the orientation
+/// IK imposes (the request's for six rods, the solved one otherwise), to start the reference from.
 Point point_of(const SpatialRobotParams<double>& robot, const SpatialInverseSolution& ik,
                const SpatialPose<double>& pose) {
   Point x = spatial_shooting_point(robot, ik);
-  x.pose = pose;
+  x.pose.position = pose.position;
+  if (robot.num_rods == 6) x.pose.orientation = pose.orientation;
   return x;
 }
 
 double joint_difference(const SpatialInverseSolution& ik, const Point& reference) {
   double worst = 0;
-  for (int i = 0; i < 6; ++i) worst = std::max(worst, std::abs(ik.q(i) - reference.q[i]));
+  for (int i = 0; i < ik.q.size(); ++i) {
+    worst = std::max(worst, std::abs(ik.q(i) - reference.q[i]));
+  }
   return worst;
 }
 
@@ -125,6 +136,67 @@ TEST(SpatialAccuracy, InverseKinematicsMatchesCvode) {
       "(%d drawn)\n",
       worst, mixed_tested, mixed_drawn);
   EXPECT_GE(mixed_tested, 5);
+}
+
+// Three- and five-rod robots, whose IK imposes the position (and for five the platform normal)
+// and solves the rest of the orientation: robots drawn around the reference (mixed_robot) with
+// gravity and payload on and off, until four of each count have a cold FK start. The request is
+// FK's pose at joints up to 10 mm from the start's; the IK (from that start) against the CVODE IK
+// at the imposed position: joints and free orientation.
+TEST(SpatialAccuracy, InverseKinematicsOfThreeAndFiveRodsMatchesCvode) {
+  std::mt19937_64 rng(311);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  double worst_joint = 0, worst_angle = 0, worst_round_trip = 0;
+  for (const int n : {3, 5}) {
+    int tested = 0, drawn = 0;
+    while (tested < 4 && drawn < 10) {
+      SpatialRobotParams<double> robot = mixed_robot(rng, n);
+      ++drawn;
+      if (tested % 2 == 1) robot.gravity.setZero();
+      if ((tested / 2) % 2 == 1) {
+        robot.platform_mass = 0;
+        robot.external_force.setZero();
+        robot.external_moment.setZero();
+      }
+      const SpatialJointVector q0 = equal_joints(n, 0.005);
+      SolverOptions direct;
+      direct.continuation = false;
+      const SpatialForwardSolution start = spatial_forward_kinematics(robot, q0, direct);
+      if (!start.summary.converged()) continue;
+      SpatialJointVector q(n);
+      for (int i = 0; i < n; ++i) q(i) = q0(i) + 0.01 * u(rng);
+      const SpatialForwardSolution fk = spatial_forward_kinematics(robot, q, start);
+      ASSERT_TRUE(fk.summary.converged()) << n << " rods, robot " << drawn;
+      const SpatialInverseSolution ik = spatial_inverse_kinematics(robot, fk.pose, start);
+      ASSERT_TRUE(ik.summary.converged())
+          << n << " rods, robot " << drawn << " " << to_string(ik.summary.status);
+      EXPECT_EQ(ik.pose.position, fk.pose.position);
+      const Vector3d normal = ik.pose.rotation().col(2), requested = fk.pose.rotation().col(2);
+      if (n == 5) EXPECT_LT((normal - requested).norm(), 1e-12);
+      const ReferenceFk reference =
+          reference_inverse_kinematics(robot, point_of(robot, ik, fk.pose));
+      ASSERT_LT(reference.residual, 1e-11) << n << " rods, robot " << drawn;
+      const double joint = joint_difference(ik, reference.x);
+      const double angle = angle_between(ik.pose.orientation, reference.x.pose.orientation);
+      EXPECT_LT(joint, 1e-9) << n << " rods, robot " << drawn;
+      EXPECT_LT(angle, 1e-8) << n << " rods, robot " << drawn;
+      worst_joint = std::max(worst_joint, joint);
+      worst_angle = std::max(worst_angle, angle);
+      worst_round_trip = std::max(worst_round_trip, (ik.q - q).lpNorm<Eigen::Infinity>());
+      ++tested;
+      std::printf(
+          "%d rods, robot %d: IK %d evaluations; joints within %.2e m, free orientation within "
+          "%.2e rad of the CVODE IK; FK joints returned within %.2e m\n",
+          n, drawn, ik.summary.residual_evaluations, joint, angle,
+          (ik.q - q).lpNorm<Eigen::Infinity>());
+    }
+    EXPECT_EQ(tested, 4) << n << " rods: " << drawn << " drawn";
+  }
+  EXPECT_LT(worst_round_trip, 1e-9);
+  std::printf(
+      "3- and 5-rod IK vs CVODE IK: worst joint error %.2e m, free orientation %.2e rad; FK's "
+      "joints returned within %.2e m\n",
+      worst_joint, worst_angle, worst_round_trip);
 }
 
 // ---- The reference robot at its reference pose --------------------------------------------------

@@ -24,10 +24,11 @@ void run_spatial_ik(const IkArguments& args) {
   args.rows.require_spatial_support(args.robot);
   const SpatialRobotDescription robot = load_spatial_robot(args.robot);
   const int n = robot.params.num_rods;
-  if (n != 6) {
+  const int free_angles = spatial_inverse_free_angles(n);
+  if (free_angles < 0) {
     throw InputError(args.robot + ": robot '" + robot.name + "' has " + std::to_string(n) +
-                     " rods; pcr ik solves the inverse kinematics of a spatial robot, a square "
-                     "problem only for 6 rods");
+                     " rods; the inverse kinematics of a spatial robot is square for 3, 5 and 6 "
+                     "rods only");
   }
   CsvReadOptions csv;
   csv.columns = cli::spatial_pose_columns();
@@ -48,7 +49,13 @@ void run_spatial_ik(const IkArguments& args) {
     const SolverSummary& s = solution.summary;
     const bool valid = is_equilibrium(s);  // maybe unstable
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    for (std::size_t c = 0; c < 6; ++c) out.add(row[c]);
+    // The position as requested; the rotation as requested, or as solved where the rod count
+    // leaves some of it free.
+    for (std::size_t c = 0; c < 3; ++c) out.add(row[c]);
+    const Vector3<double> rotation = free_angles == 0 ? Vector3<double>(row[3], row[4], row[5])
+                                     : valid          ? quaternion_log(solution.pose.orientation)
+                                                      : Vector3<double>::Constant(nan);
+    for (int c = 0; c < 3; ++c) out.add(rotation(c));
     for (int i = 0; i < n; ++i) out.add(valid ? solution.q(i) : nan);
     cli::add_summary_fields(s, valid, out);
     return s.status;
@@ -108,10 +115,10 @@ void register_ik_command(CLI::App& app) {
       "hold (stable=0) is replaced by a stable one at the same pose when one is found, else "
       "status unstable. With 2 limbs theta is solved for (the input theta is ignored). Exit "
       "status 1 if a row did not converge or is unstable (unless --allow-unstable). A spatial "
-      "robot "
-      "file (\"kind\": \"spatial\", six rods) takes rows x,y,z,rx,ry,rz (m, rad: the "
-      "platform's orientation as a rotation vector) -> x,y,z,rx,ry,rz,q1,...,q6 and the same "
-      "summary columns.");
+      "robot file (\"kind\": \"spatial\") takes rows x,y,z,rx,ry,rz (m, rad: the "
+      "platform's orientation as a rotation vector) -> x,y,z,rx,ry,rz,q1,...,qn and the same "
+      "summary columns: six rods impose the whole pose; five the position and the platform's "
+      "normal, three the position, and the rotation written is the solved one.");
   pcr::cli::add_robot_option(*ik, args->robot);
   ik->add_option("--input", args->input, "CSV of poses (default: stdin)");
   ik->add_option("--output", args->output, "output CSV (default: stdout)");

@@ -1,6 +1,6 @@
 #pragma once
 // Forward kinematics of a spatial parallel continuum robot (pcr/spatial/robot.hpp) by Newton
-// shooting on the problem of pcr/spatial/shooting.hpp, and inverse kinematics of a six-rod one,
+// shooting on the problem of pcr/spatial/shooting.hpp, and its inverse kinematics (3, 5 or 6 rods),
 // the spatial counterparts of pcr/kinematics.hpp; every converged solution's elastic stability
 // checked (pcr/spatial/stability.hpp). Header-only, Eigen only, no heap, no exceptions, a bounded
 // number of iterations; numerical outcomes are reported in a SolverSummary.
@@ -541,22 +541,56 @@ inline SpatialForwardSolution spatial_forward_kinematics(
   return out;
 }
 
+/// Orientation directions that spatial IK solves for rather than imposes, by rod count, so that its
+/// problem is square (7 n + free = 6 n + 6 unknowns): none for six rods (the whole pose imposed);
+/// the twist about the platform's z axis for five (position and platform normal R e3 imposed); the
+/// whole orientation for three (the position imposed, as the planar IK of two limbs solves theta).
+/// -1 for other rod counts, whose IK is not supported: four rods would leave two of the three
+/// rotation directions to choose, and more than six make the joints redundant.
+inline int spatial_inverse_free_angles(int num_rods) {
+  return num_rods == 6 ? 0 : num_rods == 5 ? 1 : num_rods == 3 ? 3 : -1;
+}
+
+/// The pose nearest `current` that imposes what IK imposes of `request`
+/// (spatial_inverse_free_angles): the request for six rods; its position with current's orientation
+/// for three; for five, its position and the orientation R_request exp(psi e3) whose twist psi is
+/// that of R_request^T R_current about e3.
+inline SpatialPose<double> spatial_imposed_pose(int num_rods, const SpatialPose<double>& request,
+                                                const SpatialPose<double>& current) {
+  const int free = spatial_inverse_free_angles(num_rods);
+  if (free <= 0) return request;
+  SpatialPose<double> out{request.position, current.orientation};
+  if (free == 3) return out;
+  const Vector4<double> conjugate(request.orientation(0), -request.orientation(1),
+                                  -request.orientation(2), -request.orientation(3));
+  const Vector4<double> relative = quaternion_product<double>(conjugate, current.orientation);
+  Vector4<double> twist(relative(0), 0, 0, relative(3));
+  const double norm = twist.norm();
+  twist = norm > 0 ? Vector4<double>(twist / norm) : identity_quaternion<double>();
+  const Vector4<double> h = quaternion_product<double>(request.orientation, twist);
+  out.orientation = h / h.norm();
+  return out;
+}
+
 namespace internal {
 
-/// The inverse shooting problem of a six-rod robot at an imposed platform pose: unknowns each
-/// rod's proximal wrench (6) and joint q_i (1, scaled by L), 7 n = 6 n + 6 for n = 6; the residual
-/// is the forward one.
+/// The inverse shooting problem at an imposed platform pose: unknowns each rod's proximal wrench
+/// (6) and joint q_i (1, scaled by L), and the orientation directions left free
+/// (spatial_inverse_free_angles: the last `free` of the body-frame rotation, turned on the right
+/// as the forward problem's); the residual is the forward one.
 class SpatialInverseProblem {
  public:
   SpatialInverseProblem(const SpatialRobotParams<double>& robot, int rod_steps)
       : robot_(robot),
         scale_(spatial_shooting_scale(robot)),
         n_(robot.num_rods),
+        free_(std::max(spatial_inverse_free_angles(robot.num_rods), 0)),
         steps_(rod_steps) {}
 
-  int size() const { return 7 * n_; }
+  int size() const { return 7 * n_ + free_; }
   int rod_steps() const { return steps_; }
   void set_rod_steps(int steps) { steps_ = steps; }
+  const SpatialRobotParams<double>& robot() const { return robot_; }
 
   SpatialShootingPoint<double> retract(const SpatialShootingPoint<double>& x,
                                        const SpatialVector& dz) const {
@@ -565,6 +599,13 @@ class SpatialInverseProblem {
       out.wrenches[i].force += dz.segment<3>(6 * i) * scale_.force;
       out.wrenches[i].moment += dz.segment<3>(6 * i + 3) * scale_.moment();
       out.q[i] += dz(6 * n_ + i) * scale_.length;
+    }
+    if (free_ > 0) {
+      Vector3<double> turn = Vector3<double>::Zero();
+      turn.tail(free_) = dz.segment(7 * n_, free_);
+      const Vector4<double> h =
+          quaternion_product<double>(x.pose.orientation, quaternion_exp<double>(turn));
+      out.pose.orientation = h / h.norm();
     }
     return out;
   }
@@ -577,7 +618,9 @@ class SpatialInverseProblem {
     spatial_residual(robot_, x, scale_, steps_, residual, J ? &forward_ : nullptr, tips_);
     r = residual;
     if (!J) return;
-    *J = forward_;  // the wrench columns stay; the pose columns become the joints'
+    // The wrench columns stay, and so do the free rotation columns (the last free_ of the pose's,
+    // at 7 n since 6 n + 6 - free_ = 7 n); the others become the joints'.
+    *J = forward_;
     SpatialVector column(size());
     for (int i = 0; i < n_; ++i) {
       spatial_input_column(robot_, x, scale_, i, tips_[i], column);
@@ -603,16 +646,17 @@ class SpatialInverseProblem {
     return step;
   }
 
-  /// How far a step dz moves the joints (m); IK has no angle output.
+  /// How far a step dz moves the joints (m) and the free orientation (rad).
   void output_change(const SpatialVector& dz, double& position, double& angle) const {
     position = spatial_max_norm(dz.segment(6 * n_, n_)) * scale_.length;
-    angle = 0.0;
+    angle = free_ > 0 ? spatial_max_norm(dz.segment(7 * n_, free_)) : 0.0;
   }
 
  private:
   const SpatialRobotParams<double>& robot_;
   ShootingScale scale_;
   int n_;
+  int free_;
   int steps_;
   mutable SpatialJacobian forward_;
   mutable SpatialRodState<double> tips_[kMaxSpatialRods];
@@ -646,7 +690,8 @@ Solution spatial_buckled_seed(const SpatialRobotParams<double>& robot, const Sol
 
 namespace internal {
 
-/// Solves the inverse problem at `pose` from the solution x at x.pose (x updated): the whole step
+/// Solves the inverse problem at the pose that `request` imposes (spatial_imposed_pose, nearest
+/// x.pose) from the solution x at x.pose (x updated): the whole step
 /// first, predicted along the tangent -J^-1 (d r / d pose) d pose when `warm` holds them, with
 /// chord steps on its factorisation; on failure (and options.continuation), natural continuation
 /// along the straight pose path (a line for the position, a constant-rate turn for the
@@ -654,9 +699,10 @@ namespace internal {
 /// is the last point solved, `warm` what it leaves for the next solve.
 inline SolveStatus spatial_inverse_path(SpatialInverseProblem& problem,
                                         SpatialShootingPoint<double>& x,
-                                        const SpatialPose<double>& pose, SpatialWarmStart& warm,
+                                        const SpatialPose<double>& request, SpatialWarmStart& warm,
                                         const SolverOptions& options, SolverSummary& summary) {
   const SpatialPose<double> start = x.pose;
+  const SpatialPose<double> pose = spatial_imposed_pose(problem.robot().num_rods, request, start);
   const Eigen::Matrix<double, 6, 1> whole = problem.pose_step(start, pose);
   const auto pose_at = [&](double t) {
     if (t == 1.0) return pose;
@@ -783,7 +829,7 @@ SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& ro
                                             const SolverOptions& options) {
   SpatialInverseSolution out;
   const int n = robot.num_rods;
-  if (n != 6) {
+  if (spatial_inverse_free_angles(n) < 0) {
     out.summary.status = SolveStatus::kUnsupported;
     return out;
   }
@@ -821,13 +867,15 @@ SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& ro
 
 }  // namespace internal
 
-/// Inverse kinematics of a six-rod robot (the square case: 7 n unknowns, 6 n + 6 residuals), from
-/// a forward solution near the pose: Newton from its wrenches and joints at the requested pose;
-/// on failure (and options.continuation), natural continuation along the straight pose path
-/// from the start's pose (position on a line, orientation at a constant rate), halving the step
-/// on failure. RK4 steps as spatial_forward_kinematics. An equilibrium that would not hold is
-/// replaced by a stable one at the pose when one is found (SolverOptions::stable_inverse,
-/// look_for_stable_spatial_inverse), else kUnstable. Other rod counts: SolveStatus::kUnsupported.
+/// Inverse kinematics from a forward solution near the pose: Newton from its wrenches and joints
+/// at the requested pose. Six rods impose the whole pose; five its position and platform normal
+/// R e3, three its position, and the orientation left free is solved for
+/// (spatial_inverse_free_angles; the solution's pose is the solved one). Other rod counts:
+/// SolveStatus::kUnsupported. On failure (and options.continuation), natural continuation along the
+/// straight pose path from the start's pose (position on a line, orientation at a constant rate),
+/// halving the step on failure. RK4 steps as spatial_forward_kinematics. An equilibrium that would
+/// not hold is replaced by a stable one at the pose when one is found
+/// (SolverOptions::stable_inverse, look_for_stable_spatial_inverse), else kUnstable.
 inline SpatialInverseSolution spatial_inverse_kinematics(
     const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
     const SpatialForwardSolution& start, const SolverOptions& options = SolverOptions()) {
