@@ -20,6 +20,13 @@
 
 namespace pcr {
 
+/// Straight rods are far from most equilibria and near a degenerate point (their axial forces do
+/// not act on their tips): Newton's globalised phase from there (line searches, Levenberg steps)
+/// takes tens of iterations, where a warm start takes a few. On 12 random robots around the
+/// reference, 11 solved from straight rods within 100 iterations, most within 40; the twelfth by
+/// the bowed cold start (spatial_homotopy_solve), in 134 steps.
+inline constexpr int kColdIterationFactor = 5;
+
 namespace internal {
 
 /// The largest |entry|, NaN when any is not finite (lpNorm<Infinity> can skip a NaN).
@@ -447,6 +454,117 @@ inline bool spatial_inputs_valid(const SpatialRobotParams<double>& robot,
          q.allFinite() && options.is_valid();
 }
 
+/// The robot whose equilibrium at x's joints is x's pose with unloaded rods: each rod integrated
+/// from its proximal end with no wrench (straight, or its intrinsic shape), and the platform
+/// attachment and tip frame moved to where it ends, seen from x's pose; no gravity, mass or
+/// external load. The start of the bowed cold start (spatial_homotopy_solve).
+inline SpatialRobotParams<double> spatial_relaxed_robot(const SpatialRobotParams<double>& robot,
+                                                        const SpatialShootingPoint<double>& x,
+                                                        int rod_steps) {
+  SpatialRobotParams<double> relaxed = robot;
+  relaxed.gravity.setZero();
+  relaxed.platform_mass = 0;
+  relaxed.external_force.setZero();
+  relaxed.external_moment.setZero();
+  const Matrix3<double> R = x.pose.rotation();
+  for (int i = 0; i < robot.num_rods; ++i) {
+    const SpatialLimbParams<double>& limb = robot.limb(i);
+    const SpatialRodState<double> tip =
+        integrate_spatial_rod(spatial_proximal_state(limb, x.q[i], SpatialWrench<double>()),
+                              limb.rod_at(x.q[i]), Vector3<double>::Zero().eval(), rod_steps);
+    relaxed.limb(i).B = R.transpose() * (tip.position - x.pose.position);
+    relaxed.limb(i).tip_orientation = quaternion_of<double>(R.transpose() * tip.rotation());
+  }
+  return relaxed;
+}
+
+/// The robot a fraction t of the way from `from` to `to` (which differ in the platform
+/// attachments, tip frames and loads): those blended linearly, the tip frames on the shortest
+/// arc; `to` itself at t = 1.
+inline SpatialRobotParams<double> spatial_blended_robot(const SpatialRobotParams<double>& from,
+                                                        const SpatialRobotParams<double>& to,
+                                                        double t) {
+  if (t >= 1.0) return to;
+  const auto blend = [t](const auto& a, const auto& b) { return (a + t * (b - a)).eval(); };
+  SpatialRobotParams<double> out = to;
+  for (int i = 0; i < to.num_rods; ++i) {
+    const Vector4<double>& a = from.limb(i).tip_orientation;
+    const Vector4<double>& b = to.limb(i).tip_orientation;
+    const Eigen::Quaterniond turn =
+        Eigen::Quaterniond(a(0), a(1), a(2), a(3))
+            .normalized()
+            .slerp(t, Eigen::Quaterniond(b(0), b(1), b(2), b(3)).normalized());
+    out.limb(i).B = blend(from.limb(i).B, to.limb(i).B);
+    out.limb(i).tip_orientation = Vector4<double>(turn.w(), turn.x(), turn.y(), turn.z());
+  }
+  out.gravity = blend(from.gravity, to.gravity);
+  out.platform_mass = from.platform_mass + t * (to.platform_mass - from.platform_mass);
+  out.external_force = blend(from.external_force, to.external_force);
+  out.external_moment = blend(from.external_moment, to.external_moment);
+  return out;
+}
+
+/// The point a fraction f of the step from `before` to `last` beyond `last` (a secant predictor):
+/// wrenches and position extrapolated linearly, the orientation turned on by f times the turn
+/// between them.
+inline SpatialShootingPoint<double> spatial_secant_prediction(
+    int num_rods, const SpatialShootingPoint<double>& before,
+    const SpatialShootingPoint<double>& last, double f) {
+  SpatialShootingPoint<double> out = last;
+  for (int i = 0; i < num_rods; ++i) {
+    out.wrenches[i].force += f * (last.wrenches[i].force - before.wrenches[i].force);
+    out.wrenches[i].moment += f * (last.wrenches[i].moment - before.wrenches[i].moment);
+  }
+  out.pose.position += f * (last.pose.position - before.pose.position);
+  const Vector4<double>& h = before.pose.orientation;
+  const Vector4<double> turn =
+      quaternion_product<double>(Vector4<double>(h(0), -h(1), -h(2), -h(3)), last.pose.orientation);
+  const Vector4<double> turned = quaternion_product<double>(
+      last.pose.orientation, quaternion_exp<double>((f * quaternion_log<double>(turn)).eval()));
+  out.pose.orientation = turned / turned.norm();
+  return out;
+}
+
+/// The bowed cold start: FK at x's joints by natural continuation from the relaxed robot
+/// (spatial_relaxed_robot, of which x with no wrenches is the equilibrium) to the robot itself
+/// (spatial_blended_robot), each step from a secant predictor, halved on failure and doubled (up to
+/// a half) on success. Where straight rods are too far from the equilibrium for Newton, the rods
+/// bow gradually as the attachments move into place and the loads come on; the path can turn
+/// sharply (one random robot around the reference took 134 steps), so it has kColdIterationFactor
+/// times options.max_continuation_steps. kConverged with x the robot's equilibrium.
+inline SolveStatus spatial_homotopy_solve(const SpatialRobotParams<double>& robot,
+                                          SpatialShootingPoint<double>& x, int rod_steps,
+                                          const SolverOptions& options, SolverSummary& summary) {
+  for (int i = 0; i < robot.num_rods; ++i) x.wrenches[i] = SpatialWrench<double>();
+  const SpatialRobotParams<double> relaxed = spatial_relaxed_robot(robot, x, rod_steps);
+  Eigen::PartialPivLU<SpatialJacobian> lu;
+  SpatialShootingPoint<double> before = x;
+  double t = 0.0, t_before = -1.0, dt = 0.25, initial_norm, final_norm;
+  for (int step = 0; t < 1.0 && step < kColdIterationFactor * options.max_continuation_steps;
+       ++step) {
+    ++summary.continuation_steps;
+    const double t_next = std::min(1.0, t + dt);
+    const SpatialRobotParams<double> at = spatial_blended_robot(relaxed, robot, t_next);
+    SpatialForwardProblem problem(at, rod_steps);
+    SpatialShootingPoint<double> trial =
+        t_before < 0
+            ? x
+            : spatial_secant_prediction(robot.num_rods, before, x, (t_next - t) / (t - t_before));
+    if (spatial_newton(problem, trial, options, options.max_continuation_iterations, summary, lu,
+                       initial_norm, final_norm) == SolveStatus::kConverged) {
+      before = x;
+      t_before = t;
+      x = trial;
+      t = t_next;
+      dt = std::min(2.0 * dt, 0.5);
+    } else {
+      dt *= 0.5;
+      if (dt < options.min_continuation_step) break;
+    }
+  }
+  return t >= 1.0 ? SolveStatus::kConverged : SolveStatus::kMaxIterations;
+}
+
 inline void fill_solution(const SpatialForwardProblem& problem,
                           const SpatialShootingPoint<double>& x, SpatialForwardSolution& out) {
   const int n = problem.robot().num_rods;
@@ -493,16 +611,13 @@ inline SpatialForwardSolution spatial_forward_kinematics(
   return out;
 }
 
-/// Straight rods are far from most equilibria and near a degenerate point (their axial forces do
-/// not act on their tips): Newton's globalised phase from there (line searches, Levenberg steps)
-/// takes tens of iterations, where a warm start takes a few. On 12 random robots around the
-/// reference, 11 solved from straight rods within 100 iterations, most within 40.
-inline constexpr int kColdIterationFactor = 5;
-
 /// Forward kinematics from a cold start: Newton from the straight-rod guess at q
-/// (straight_rods_guess); if that fails and options.continuation, the home solution (q = 0, from
-/// its straight-rod guess) followed by natural continuation in joint space from 0 to q. Both
-/// solves from straight rods have kColdIterationFactor times options.max_iterations.
+/// (straight_rods_guess); if that fails and options.continuation, the bowed cold start
+/// (spatial_homotopy_solve: from the robot of which straight rods at q are the equilibrium to the
+/// robot itself); if that fails too, the home solution (q = 0, from its straight-rod guess)
+/// followed by natural continuation in joint space from 0 to q. The solves from straight rods
+/// have kColdIterationFactor times options.max_iterations. A failure reports the first solve's
+/// status.
 inline SpatialForwardSolution spatial_forward_kinematics(
     const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
     const SolverOptions& options = SolverOptions()) {
@@ -512,28 +627,33 @@ inline SpatialForwardSolution spatial_forward_kinematics(
     return out;
   }
   internal::SpatialForwardProblem problem(robot, internal::starting_rod_steps(options, 0));
-  // A cold solve at q, then (if it fails) home and the path from it: both from straight rods, so
-  // they are the same solve when q = 0.
   SolverOptions direct = options;
   direct.continuation = false;
   direct.max_iterations = kColdIterationFactor * options.max_iterations;
   SpatialShootingPoint<double> x = straight_rods_guess(robot, q);
-  SpatialJointVector from = q;
   out.summary.status =
-      internal::spatial_solve_path(problem, x, from, q, out.warm, direct, out.summary);
+      internal::spatial_solve_path(problem, x, q, q, out.warm, direct, out.summary);
+  const SolveStatus cold = out.summary.status;
+  if (!out.summary.converged() && options.continuation) {
+    x = straight_rods_guess(robot, q);
+    out.summary.status =
+        internal::spatial_homotopy_solve(robot, x, problem.rod_steps(), options, out.summary);
+    if (out.summary.converged()) {  // there: its Jacobian and tangent, for the refinement
+      out.summary.status =
+          internal::spatial_solve_path(problem, x, q, q, out.warm, direct, out.summary);
+    }
+  }
   const SpatialJointVector home = SpatialJointVector::Zero(robot.num_rods);
   if (!out.summary.converged() && options.continuation && !q.isZero(0.0)) {
-    const SolveStatus cold = out.summary.status;
     x = straight_rods_guess(robot, home);
     out.summary.status =
         internal::spatial_solve_path(problem, x, home, home, out.warm, direct, out.summary);
     if (out.summary.converged()) {
       out.summary.status =
           internal::spatial_solve_path(problem, x, home, q, out.warm, options, out.summary);
-    } else {
-      out.summary.status = cold;
     }
   }
+  if (!out.summary.converged()) out.summary.status = cold;
   out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
                                                           out.summary, out.summary.status);
   internal::fill_solution(problem, x, out);
