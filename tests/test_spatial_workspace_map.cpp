@@ -83,6 +83,7 @@ TEST(SpatialWorkspaceMap, IsTheSameWhateverTheNumberOfThreads) {
   SpatialWorkspaceMapOptions options;
   options.plane = SpatialMapPlane::kXZ;
   options.grid = 6;
+  options.range = std::array<double, 4>{-0.05, 0.05, 0.36, 0.44};
   options.stroke = std::array<double, 2>{-0.02, 0.02};
   options.threads = 1;
   const SpatialWorkspaceMap one = spatial_workspace_map(robot, options);

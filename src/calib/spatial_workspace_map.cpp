@@ -46,15 +46,17 @@ class SpatialMapPoints {
   SpatialMapPoints(const SpatialRobotParams<double>& robot,
                    const SpatialWorkspaceMapOptions& options, const SpatialForwardSolution& home,
                    SpatialWorkspaceMap& map)
-      : robot_(robot),
-        options_(options),
-        home_(home),
-        map_(map),
-        neighbour_options_(map_internal::neighbour_solver_options(options.solver)) {}
+      : robot_(robot), options_(options), home_(home), map_(map) {
+    // The map follows its branch, as the planar map: where it turns unstable the point says so
+    // (stable false), and the flood goes on along it.
+    cold_options_ = options.solver;
+    cold_options_.stable_inverse = false;
+    neighbour_options_ = map_internal::neighbour_solver_options(cold_options_);
+  }
 
   SpatialInverseSolution cold(std::size_t k) const {
     return spatial_inverse_kinematics_from_home(robot_, pose_of(map_.points[k].pose), home_,
-                                                options_.solver);
+                                                cold_options_);
   }
   SpatialInverseSolution warm(std::size_t k, const SpatialInverseSolution& from) const {
     return spatial_inverse_kinematics(robot_, pose_of(map_.points[k].pose), from,
@@ -67,7 +69,7 @@ class SpatialMapPoints {
     p.status = s.summary.status;
     if (!is_equilibrium(s.summary)) return;
     p.q = s.q;
-    p.reachable = p.status == SolveStatus::kConverged && within_stroke(s.q);
+    p.reachable = within_stroke(s.q);
     if (p.status == SolveStatus::kConverged && !p.reachable) p.status = SolveStatus::kOutOfRange;
     p.stable = s.summary.stability == Stability::kStable;
     p.max_strain = s.summary.max_strain;
@@ -86,7 +88,7 @@ class SpatialMapPoints {
   const SpatialWorkspaceMapOptions& options_;
   const SpatialForwardSolution& home_;
   SpatialWorkspaceMap& map_;
-  SolverOptions neighbour_options_;
+  SolverOptions cold_options_, neighbour_options_;
 };
 
 }  // namespace

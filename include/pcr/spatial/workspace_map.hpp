@@ -82,7 +82,7 @@ struct SpatialWorkspaceMapPoint {
   /// IK was run here: false where the flood from the seeds never came (beyond the border of the
   /// equilibria found; reachable and stable false, status meaningless).
   bool visited = false;
-  /// IK converged at this pose with the joints inside the stroke.
+  /// IK found an equilibrium at this pose with the joints inside the stroke.
   bool reachable = false;
   /// That equilibrium (or, outside the stroke, the one IK found) holds with the joints held.
   bool stable = false;
@@ -117,7 +117,8 @@ SpatialPoseCoordinates spatial_pose_coordinates(const SpatialPose<double>& pose)
 /// before, with a small budget; seeds solved cold (from the home solution, FK at q = 0): first the
 /// grid point nearest the home pose, then the kSeedLattice x kSeedLattice lattice points the
 /// flood left unvisited. Each point gets the equilibrium of the branch the flood follows, stable
-/// or not. The result does not depend on the number of threads.
+/// or not (SolverOptions::stable_inverse is not used: where the branch turns unstable the point
+/// says so, as on a planar map). The result does not depend on the number of threads.
 ///
 /// Six-rod robots only (their IK is square); throws InputError on another rod count, on options
 /// is_valid refuses (naming the field and the value), and when the home solution fails (no
