@@ -125,8 +125,12 @@ TEST(SpatialWorkspaceMap, PointsBeyondTheRodsReachAreUnreachable) {
     if (p.pose[2] <= reach) continue;
     ++beyond;
     EXPECT_FALSE(p.reachable) << "z = " << p.pose[2] << ": q " << p.q.transpose();
-    // An equilibrium there, if IK found one, needs a joint past the stroke.
-    if (std::isfinite(p.q(0))) EXPECT_GT(p.q.maxCoeff(), 0.01);
+    // An equilibrium there, if IK found one, has a rod at least as long as the height: a joint
+    // past the stroke.
+    if (std::isfinite(p.q(0))) {
+      EXPECT_GE(robot.limb(0).rod.length + p.q.maxCoeff(), p.pose[2]);
+      EXPECT_EQ(p.status, SolveStatus::kOutOfRange);
+    }
   }
   EXPECT_EQ(beyond, 15);  // z = 0.42, 0.44 and 0.46 m
   // On the axis at 0.4 m, within the stroke (equal joints of 5.3 mm hold it there): reachable.
