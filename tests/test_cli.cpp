@@ -371,6 +371,97 @@ TEST_F(Cli, SpatialRobotFilesAreRefusedWhereTheyDoNotBelong) {
   EXPECT_EQ(r.out, slurp(kSpatialRobot));
 }
 
+#ifdef PCR_HAS_CALIB
+// A 5 x 5 slice of positions and one of rotation vectors: every point's joints, given to
+// `pcr fk` (cold, from straight rods, the same RK4 steps), return the point's pose.
+TEST_F(Cli, SpatialMapSlicesTheWorkspace) {
+  const std::vector<std::string> columns = {"u",  "v",  "x",         "y",     "z",  "rx",
+                                            "ry", "rz", "q1",        "q2",    "q3", "q4",
+                                            "q5", "q6", "reachable", "stable"};
+  const struct {
+    const char* plane;
+    const char* range;
+    const char* unit;
+    int u, v;  // the pose columns the grid spans
+  } slices[] = {{"xy", "-0.02,0.02,-0.02,0.02", "m^2", 2, 3},
+                {"ryrz", "0,0.2,-0.1,0.1", "rad^2", 6, 7}};
+  for (const auto& slice : slices) {
+    const std::string out = (dir_ / (std::string(slice.plane) + ".csv")).string();
+    const std::string common = "map --robot '" + kSpatialRobot + "' --plane " + slice.plane +
+                               " --pose 0.01,0,0.4,0,0.1,0 --grid 5 --steps 96 --range " +
+                               slice.range;
+    Result r = run(common + " --threads 2 --output '" + out + "'");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string text = slurp(out);
+    EXPECT_EQ(text.substr(0, text.find('\n')),
+              "u,v,x,y,z,rx,ry,rz,reachable,stable,status,q1,q2,q3,q4,q5,q6,max_strain,"
+              "stability_margin,singularity");
+    EXPECT_NE(r.err.find("25 reachable ("), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(std::string(" ") + slice.unit + ")"), std::string::npos) << r.err;
+    const pcr::CsvTable map = parse(text, columns);
+    ASSERT_EQ(map.rows.size(), 25u);
+    std::string joints = "q1,q2,q3,q4,q5,q6\n";
+    for (const auto& row : map.rows) {
+      EXPECT_EQ(row[slice.u], row[0]);  // u and v are the slice's coordinates of the pose
+      EXPECT_EQ(row[slice.v], row[1]);
+      EXPECT_EQ(row[14], 1.0);
+      EXPECT_EQ(row[15], 1.0);
+      for (int k = 8; k < 14; ++k) joints += pcr::format_double(row[k]) + (k < 13 ? "," : "\n");
+    }
+    EXPECT_EQ(map.rows[0][4], 0.4);  // z is held at --pose's in both slices
+    r = run("fk --steps 96 --robot '" + kSpatialRobot + "'", joints);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const pcr::CsvTable fk = parse(r.out, {"x", "y", "z", "rx", "ry", "rz"});
+    ASSERT_EQ(fk.rows.size(), 25u);
+    double worst = 0;
+    for (std::size_t i = 0; i < fk.rows.size(); ++i) {
+      for (int k = 0; k < 6; ++k) {
+        worst = std::max(worst, std::abs(fk.rows[i][k] - map.rows[i][2 + k]));
+      }
+    }
+    std::printf("pcr map --plane %s: pcr fk of its joints within %.2e (m, rad)\n", slice.plane,
+                worst);
+    EXPECT_LT(worst, 1e-9);
+    // One thread writes the same file.
+    const std::string one = (dir_ / "one.csv").string();
+    r = run(common + " --threads 1 --output '" + one + "'");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(slurp(one), text);
+  }
+}
+
+TEST_F(Cli, SpatialMapRefusesBadOptions) {
+  const std::string robot = " --robot '" + kSpatialRobot + "'";
+  const struct {
+    std::string args, message;
+  } cases[] = {
+      {"--theta 0.1" + robot, "--theta: " + kSpatialRobot + " is a spatial robot"},
+      {"--worst-case" + robot, "--worst-case: " + kSpatialRobot + " is a spatial robot"},
+      {"--force 1,0" + robot, "--force: "},
+      {"--range 0,1" + robot, "--range: expected 4 numbers (x_min,x_max,y_min,y_max), got '0,1'"},
+      {"--plane yz --range 0,0.1,inf,0.5" + robot, "--range: z_min = inf is not a finite number"},
+      {"--plane rxrz --range 0.1,-0.1,-0.1,0.1" + robot,
+       "range: expected rx_min < rx_max and rz_min < rz_max for the plane rxrz, got "
+       "0.1,-0.1,-0.1,0.1"},
+      {"--plane rxrz --range -7,0.1,-0.1,0.1" + robot,
+       "range.rx_min: expected a number from -6.283185307179586 to 6.283185307179586 (rad), got "
+       "-7"},
+      {"--grid 600" + robot, "grid: expected a number from 2 to 500, got 600"},
+      {"--pose 0,0,0.4,0,0" + robot, "--pose: expected 6 numbers (x,y,z,rx,ry,rz)"},
+      {"--stroke 0.02,-0.02" + robot, "stroke: expected q_min <= q_max (m), got 0.02,-0.02"},
+      {"--stroke 0.02,-0.02", "--stroke: <default robot> is a planar robot"},
+  };
+  for (const auto& c : cases) {
+    const std::string out = (dir_ / "map.csv").string();
+    const std::string grid = c.args.find("--grid") == std::string::npos ? "--grid 3 " : "";
+    const Result r = run("map " + grid + "--output '" + out + "' " + c.args);
+    EXPECT_EQ(r.status, 2) << c.args << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.args;
+  }
+}
+#endif
+
 TEST_F(Cli, FailedRowsAreReportedAndTheToolGoesOn) {
   // Pulling all three rods by 9 mm lies beyond the singularity (6 mm already does).
   const Result r = run("fk", "0.001,0,0\n-0.009,-0.009,-0.009\n0.001,0.001,0\n");

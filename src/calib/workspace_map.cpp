@@ -2,157 +2,54 @@
 #include "pcr/calib/workspace_map.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <exception>
-#include <mutex>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
-#include <system_error>
-#include <thread>
 #include <utility>
 
+#include "map_flood.hpp"
 #include "pcr/csv_io.hpp"
 #include "pcr/input_error.hpp"
 
 namespace pcr {
 namespace {
 
-/// IK at a pose from up to two warm starts (null or not usable: skipped), from home when there is
-/// none. Returns a usable solution when one of them gives it, else an equilibrium (IK's
-/// kUnstable), else the last failure.
-InverseSolution solve_from_neighbours(const RobotParams<double>& robot, const Pose2<double>& pose,
-                                      const InverseSolution* first, const InverseSolution* second,
-                                      const SolverOptions& options,
-                                      const PlatformLoad<double>& load) {
-  InverseSolution best;
-  bool tried = false, have_equilibrium = false;
-  for (const InverseSolution* warm : {first, second}) {
-    if (warm == nullptr || !usable_as_warm_start(warm->summary)) continue;
-    tried = true;
-    InverseSolution s = inverse_kinematics(robot, pose, *warm, options, load);
-    if (usable_as_warm_start(s.summary)) return s;
-    if (!have_equilibrium) {
-      have_equilibrium = is_equilibrium(s.summary);
-      best = std::move(s);
-    }
-  }
-  if (!tried) return inverse_kinematics(robot, pose, options, load);
-  return best;
-}
-
-/// Runs task(k) for k in [0, count) on up to `threads` threads, the caller's among them, each
-/// taking the next k when it is done with one (a failed solve costs a hundred converged ones).
-/// Rethrows the first exception a task threw, once every thread has stopped.
-template <class Task>
-void parallel_for(std::size_t count, int threads, const Task& task) {
-  const auto workers = std::min(count, static_cast<std::size_t>(std::max(threads, 1)));
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  const auto work = [&] {
-    for (std::size_t k = next++; k < count; k = next++) {
-      try {
-        task(k);
-      } catch (...) {
-        const std::lock_guard<std::mutex> lock(error_mutex);
-        if (!error) error = std::current_exception();
-        next = count;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < workers; ++t) {
-    try {
-      pool.emplace_back(work);
-    } catch (const std::system_error&) {
-      break;  // no more threads to be had: the ones running take the rest
-    }
-  }
-  work();
-  for (std::thread& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
-}
-
-/// Threads to run on: `threads`, or one per core when 0.
-int thread_count(int threads) {
-  return threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-}
-
-/// The solves of workspace_map: waves of points, each wave the unvisited neighbours of the points
-/// the wave before solved, warm-started from them.
-class MapFlood {
+/// The planar map's points for map_internal::GridFlood: IK at the grid's poses at the map's
+/// orientation, from home or from a neighbour, each recorded into its WorkspaceMapPoint.
+class PlanarMapPoints {
  public:
-  MapFlood(const RobotParams<double>& robot, const WorkspaceMapOptions& options, WorkspaceMap& map)
-      : robot_(robot),
-        options_(options),
-        map_(map),
-        threads_(thread_count(options.threads)),
-        slot_(map.points.size(), -1) {
+  using Solution = InverseSolution;
+
+  PlanarMapPoints(const RobotParams<double>& robot, const WorkspaceMapOptions& options,
+                  WorkspaceMap& map)
+      : robot_(robot), options_(options), map_(map) {
     // The map follows its branch: where it turns unstable the point says so (stable false), and
     // the flood goes on along it, as rotation_range does.
     cold_options_ = options.solver;
     cold_options_.stable_inverse = false;
-    // A neighbour lies a cell away: its warm start converges in a few iterations unless a fold
-    // lies between, where Newton crawls. There the solve stops early (a point one neighbour does
-    // not reach is left to the others): the budget that makes the border cost a few converged
-    // solves per point instead of a hundred.
-    neighbour_options_ = cold_options_;
-    SolverOptions& o = neighbour_options_;
-    o.max_iterations = std::min(o.max_iterations, 8);
-    o.max_line_search = std::min(o.max_line_search, 4);
-    o.max_continuation_steps = std::min(o.max_continuation_steps, 16);
-    o.min_continuation_step = std::max(o.min_continuation_step, 1.0 / 16);
+    neighbour_options_ = map_internal::neighbour_solver_options(cold_options_);
   }
 
-  void run() {
+  /// The grid point nearest home's position, when home is solved.
+  std::optional<std::size_t> first_seed() const {
     const ForwardSolution home = home_solution(robot_, cold_options_, options_.load);
-    if (usable_as_warm_start(home.summary)) flood(solve_cold({nearest_point(home.pose)}));
-    std::vector<std::size_t> lattice;
-    const int levels_x = std::min(kSeedLattice, map_.nx),
-              levels_y = std::min(kSeedLattice, map_.ny);
-    for (int b = 0; b < levels_y; ++b) {
-      for (int a = 0; a < levels_x; ++a) {
-        const std::size_t k =
-            index(static_cast<int>(std::lround(1.0 * a * (map_.nx - 1) / (levels_x - 1))),
-                  static_cast<int>(std::lround(1.0 * b * (map_.ny - 1) / (levels_y - 1))));
-        if (!map_.points[k].visited) lattice.push_back(k);
-      }
-    }
-    flood(solve_cold(lattice));
+    if (!usable_as_warm_start(home.summary)) return std::nullopt;
+    using map_internal::nearest_grid_index;
+    return static_cast<std::size_t>(
+               nearest_grid_index(home.pose.y, map_.y_min, map_.y_max, map_.ny)) *
+               static_cast<std::size_t>(map_.nx) +
+           static_cast<std::size_t>(
+               nearest_grid_index(home.pose.x, map_.x_min, map_.x_max, map_.nx));
   }
 
- private:
-  /// The solved points of a wave and their solutions.
-  struct Wave {
-    std::vector<std::size_t> points;
-    std::vector<InverseSolution> solutions;
-  };
-
-  std::size_t index(int i, int j) const {
-    return static_cast<std::size_t>(j) * static_cast<std::size_t>(map_.nx) +
-           static_cast<std::size_t>(i);
+  InverseSolution cold(std::size_t k) const {
+    return inverse_kinematics(robot_, pose(k), cold_options_, options_.load);
   }
-  Pose2<double> pose(std::size_t k) const {
-    return Pose2<double>{map_.points[k].x, map_.points[k].y, options_.theta};
-  }
-  std::size_t nearest_point(const Pose2<double>& at) const {
-    const auto nearest = [](double v, double lo, double hi, int count) {
-      return static_cast<int>(std::clamp(std::lround((v - lo) / (hi - lo) * (count - 1)), 0L,
-                                         static_cast<long>(count - 1)));
-    };
-    return index(nearest(at.x, map_.x_min, map_.x_max, map_.nx),
-                 nearest(at.y, map_.y_min, map_.y_max, map_.ny));
-  }
-  /// The four neighbours of point k in a fixed order (left, right, below, above; the grid's size
-  /// where there is none), so that the warm start a point gets does not depend on the threads.
-  std::array<std::size_t, 4> neighbours(std::size_t k) const {
-    const auto nx = static_cast<std::size_t>(map_.nx), size = map_.points.size();
-    const std::size_t i = k % nx;
-    return {i > 0 ? k - 1 : size, i + 1 < nx ? k + 1 : size, k >= nx ? k - nx : size,
-            k + nx < size ? k + nx : size};
+  InverseSolution warm(std::size_t k, const InverseSolution& from) const {
+    return inverse_kinematics(robot_, pose(k), from, neighbour_options_, options_.load);
   }
 
   void record(std::size_t k, const InverseSolution& s) {
@@ -170,66 +67,15 @@ class MapFlood {
     if (options_.accuracy) options_.accuracy(s, p);
   }
 
-  /// Marks the points visited, solves them with `solve(k, point)` in parallel, and returns the
-  /// wave of those that can warm-start their neighbours.
-  template <class Solve>
-  Wave solve_wave(std::vector<std::size_t> points, const Solve& solve) {
-    for (std::size_t k : points) map_.points[k].visited = true;
-    std::vector<InverseSolution> solutions(points.size());
-    parallel_for(points.size(), threads_, [&](std::size_t w) {
-      solutions[w] = solve(points[w]);
-      record(points[w], solutions[w]);
-    });
-    Wave wave;
-    for (std::size_t w = 0; w < points.size(); ++w) {
-      if (!usable_as_warm_start(solutions[w].summary)) continue;
-      wave.points.push_back(points[w]);
-      wave.solutions.push_back(std::move(solutions[w]));
-    }
-    return wave;
-  }
-
-  Wave solve_cold(std::vector<std::size_t> points) {
-    return solve_wave(std::move(points), [&](std::size_t k) {
-      return inverse_kinematics(robot_, pose(k), cold_options_, options_.load);
-    });
-  }
-
-  void flood(Wave wave) {
-    const std::size_t none = map_.points.size();
-    while (!wave.points.empty()) {
-      std::vector<std::size_t> next;
-      for (std::size_t w = 0; w < wave.points.size(); ++w) {
-        slot_[wave.points[w]] = static_cast<std::ptrdiff_t>(w);
-        for (std::size_t k : neighbours(wave.points[w])) {
-          if (k != none && !map_.points[k].visited) {
-            map_.points[k].visited = true;
-            next.push_back(k);
-          }
-        }
-      }
-      Wave solved = solve_wave(std::move(next), [&](std::size_t k) {
-        std::array<const InverseSolution*, 2> warm{nullptr, nullptr};
-        std::size_t found = 0;
-        for (std::size_t m : neighbours(k)) {
-          if (m != none && slot_[m] >= 0 && found < warm.size()) {
-            warm[found++] = &wave.solutions[static_cast<std::size_t>(slot_[m])];
-          }
-        }
-        return solve_from_neighbours(robot_, pose(k), warm[0], warm[1], neighbour_options_,
-                                     options_.load);
-      });
-      for (std::size_t k : wave.points) slot_[k] = -1;
-      wave = std::move(solved);
-    }
+ private:
+  Pose2<double> pose(std::size_t k) const {
+    return Pose2<double>{map_.points[k].x, map_.points[k].y, options_.theta};
   }
 
   const RobotParams<double>& robot_;
   const WorkspaceMapOptions& options_;
   WorkspaceMap& map_;
-  int threads_;
   SolverOptions cold_options_, neighbour_options_;
-  std::vector<std::ptrdiff_t> slot_;  ///< a point's place in the current wave, -1 if not in it
 };
 
 }  // namespace
@@ -247,10 +93,11 @@ std::array<double, 4> stroke_pose_box(const RobotParams<double>& robot, int leve
   // Each configuration solved as cold (from home, once per thread): the box does not depend on
   // the order, and every thread takes every workers-th configuration so that the corners' long
   // paths spread over them.
-  const int workers = std::max(1, std::min(thread_count(threads), static_cast<int>(count)));
+  const int workers =
+      std::max(1, std::min(map_internal::thread_count(threads), static_cast<int>(count)));
   std::vector<std::array<double, 4>> boxes(static_cast<std::size_t>(workers),
                                            {HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL});
-  parallel_for(boxes.size(), workers, [&](std::size_t w) {
+  map_internal::parallel_for(boxes.size(), workers, [&](std::size_t w) {
     ForwardSequence sequence(robot, options, load);
     std::array<double, 4>& box = boxes[w];
     JointVector q(n);
@@ -334,7 +181,9 @@ WorkspaceMap workspace_map(const RobotParams<double>& robot, const WorkspaceMapO
     map.points[k].q = JointVector::Constant(n, std::numeric_limits<double>::quiet_NaN());
   }
   const auto start = std::chrono::steady_clock::now();
-  MapFlood(robot, options, map).run();
+  PlanarMapPoints points(robot, options, map);
+  map_internal::GridFlood<PlanarMapPoints>(points, map.nx, map.ny, options.threads)
+      .run(points.first_seed());
   map.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   for (const WorkspaceMapPoint& p : map.points) {
     if (p.reachable) map.reachable_area += 1;
