@@ -186,7 +186,7 @@ TEST(SpatialWorkspaceMap, WritesOneRowPerPointAndRefusesBadOptions) {
   refused(o, robot, "stroke: expected q_min <= q_max (m), got 0.01,-0.01");
   SpatialRobotParams<double> five = robot;
   five.num_rods = 5;
-  refused(options, five, "square only for 6 rods, the robot has 5");
+  refused(options, five, "maps robots of 6 rods, whose IK imposes the whole pose; the robot has 5");
 }
 
 }  // namespace

@@ -191,9 +191,11 @@ SpatialPoseCoordinates spatial_pose_coordinates(const SpatialPose<double>& pose)
 SpatialWorkspaceMap spatial_workspace_map(const SpatialRobotParams<double>& robot,
                                           const SpatialWorkspaceMapOptions& options) {
   if (robot.num_rods != 6) {
+    // With 3 or 5 rods IK solves part of the orientation (spatial_inverse_free_angles): the
+    // slice's coordinates would not all be imposed.
     throw InputError(
-        "spatial_workspace_map: inverse kinematics of a spatial robot is square only for 6 rods, "
-        "the robot has " +
+        "spatial_workspace_map: maps robots of 6 rods, whose IK imposes the whole pose; the robot "
+        "has " +
         std::to_string(robot.num_rods));
   }
   require_valid(options, "spatial_workspace_map");
