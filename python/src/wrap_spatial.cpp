@@ -319,14 +319,9 @@ py::object spatial_inverse(const SpatialRobotDescription& robot, const py::objec
                            const py::object& rotation_vector,
                            const std::optional<SpatialSolution>& warm_start, bool shapes,
                            const std::optional<SolverOptions>& options_in, bool path) {
+  // The rod counts the solver takes are its own to say (status 'unsupported' for the others).
   const SpatialRobotParams<double>& params = robot.params;
   const int n = params.num_rods;
-  if (n != 6) {
-    throw std::invalid_argument(
-        "inverse: the inverse kinematics of a spatial robot is a square problem for 6 rods only; "
-        "this one has " +
-        std::to_string(n));
-  }
   bool single = false;
   const std::vector<SpatialPose<double>> poses =
       input_poses(position, rotation, quaternion, rotation_vector, single);
@@ -696,7 +691,8 @@ void bind_spatial_kinematics(py::module_& m) {
            py::arg("rotation") = py::none(), py::arg("quaternion") = py::none(),
            py::arg("rotation_vector") = py::none(), py::arg("warm_start") = py::none(),
            py::arg("shapes") = false, py::arg("options") = py::none(), py::arg("path") = false,
-           "Inverse kinematics of a six-rod robot. position: (3,) in W (m), with the platform's "
+           "Inverse kinematics (six rods: the whole pose imposed; rod counts the solver does not "
+           "take give status 'unsupported'). position: (3,) in W (m), with the platform's "
            "orientation P -> W given at most once by keyword: rotation (a (3, 3) rotation "
            "matrix), quaternion (w, x, y, z, unit) or rotation_vector (angle times axis, rad, as "
            "`pcr ik`'s rx, ry, rz); none: the identity -> SpatialSolution. (N, 3) positions "

@@ -246,12 +246,11 @@ def test_bad_inputs_say_what_they_got(spatial):
         limb.base_orientation = [1, 0, 0, 0.1]
     with pytest.raises(ValueError, match=r"SpatialLimb.actuation: .*got 'pulled'"):
         limb.actuation = "pulled"
-    five = spatial.copy()
-    five.rods = spatial.rods[:5]
-    with pytest.raises(ValueError, match="6 rods only; this one has 5"):
-        five.inverse(p)
+    four = spatial.copy()
+    four.rods = spatial.rods[:4]
+    assert four.inverse(p).status == "unsupported"  # the solver's verdict, not an exception
     with pytest.raises(ValueError, match="warm_start: a solution of a robot with 6 rods"):
-        five.forward([0.0] * 5, warm_start=spatial.home())
+        four.forward([0.0] * 4, warm_start=spatial.home())
 
 
 def test_plot_robot_draws_in_3d(spatial, fk, tmp_path):
