@@ -1,4 +1,5 @@
-"""pcr: planar parallel continuum robots (Mauze et al. 2021), Python bindings.
+"""pcr: planar parallel continuum robots (Mauze et al. 2021) and spatial ones (the continuum
+Stewart-Gough robot), Python bindings.
 
 All quantities are SI: metres, radians, newtons, pascals. The C++ library does the work
 (``pcr._pcr``); this package re-exports it and adds small pure-Python conveniences
@@ -21,6 +22,10 @@ from ._pcr import (  # noqa: F401
     Solution,
     SolverOptions,
     SolveStatus,
+    SpatialBatchResult,
+    SpatialLimb,
+    SpatialRobot,
+    SpatialSolution,
     Uncertainty,
     __version__,
     compose_poses,
@@ -125,7 +130,8 @@ def _replace(self, **changes):
     return out
 
 
-for _cls in (Robot, Limb, Pose, Extrinsics, Uncertainty, LimbUncertainty, SolverOptions) + (
+for _cls in (Robot, Limb, Pose, Extrinsics, Uncertainty, LimbUncertainty, SolverOptions,
+             SpatialRobot, SpatialLimb) + (
         (CalibrationOptions,) if has_calibration else ()):
     _cls.replace = _replace
 
@@ -162,6 +168,8 @@ def _batch(solve, rows_are):
 
 Robot.forward_batch = _batch(Robot.forward, "n")
 Robot.inverse_batch = _batch(Robot.inverse, "3")
+SpatialRobot.forward_batch = _batch(SpatialRobot.forward, "n")
+SpatialRobot.inverse_batch = _batch(SpatialRobot.inverse, "3")  # positions; orientations by keyword
 
 
 def workspace(robot, theta=0.0, half_width=None, resolution=41, centre=(0.0, 0.0), **solve_args):

@@ -152,6 +152,8 @@ class Solution:
     @property
     def iterations(self) -> int: ...
     @property
+    def residual_evaluations(self) -> int: ...
+    @property
     def residual(self) -> float: ...
     @property
     def max_strain(self) -> float: ...
@@ -180,12 +182,15 @@ class BatchResult:
     status: npt.NDArray[np.str_]
     status_code: npt.NDArray[np.int32]
     iterations: npt.NDArray[np.int32]
+    residual_evaluations: npt.NDArray[np.int32]
     residual: FloatArray
     max_strain: FloatArray
     rod_steps: npt.NDArray[np.int32]
     stable: npt.NDArray[np.bool_]
     stability_margin: FloatArray
     singularity: FloatArray
+    position_error_estimate: FloatArray  # m
+    angle_error_estimate: FloatArray  # rad
     shapes: Optional[list[Optional[list[FloatArray]]]]
     def __len__(self) -> int: ...
 
@@ -202,10 +207,11 @@ class Robot:
     def __init__(self) -> None: ...
     @staticmethod
     def default() -> Robot: ...
+    # A file's "kind" says which: a SpatialRobot for "spatial" (typed code: SpatialRobot.load).
     @staticmethod
-    def load(path: StrPath) -> Robot: ...
+    def load(path: StrPath) -> Union[Robot, SpatialRobot]: ...
     @staticmethod
-    def from_json(text: str, source: str = "<string>") -> Robot: ...
+    def from_json(text: str, source: str = "<string>") -> Union[Robot, SpatialRobot]: ...
     def save(self, path: StrPath) -> None: ...
     def to_json(self) -> str: ...
     def copy(self) -> Robot: ...
@@ -254,6 +260,174 @@ class Robot:
                            worst_case: bool = True, force: Vector = (0.0, 0.0),
                            moment: float = 0.0,
                            options: Optional[SolverOptions] = None) -> dict[str, Any]: ...
+
+# ---- spatial robots (pcr/spatial/, a robot file with "kind": "spatial") ---------------------
+# Quaternions are (w, x, y, z), body -> parent; rotation vectors angle (rad) times axis.
+
+class SpatialLimb:
+    length: float  # m (a rod pushed through its hole: the free length at q = 0)
+    diameter: float  # m
+    young_modulus: float  # Pa
+    shear_modulus: float  # Pa
+    density: float  # kg/m^3
+    shear_and_extension: bool
+    actuation: str  # 'length_through_hole' or 'translated_clamp'
+    attachment: str  # 'clamped' or 'spherical'
+    @property
+    def intrinsic_curvature(self) -> FloatArray: ...  # (3,) 1/m (a view)
+    @intrinsic_curvature.setter
+    def intrinsic_curvature(self, value: Vector) -> None: ...
+    @property
+    def A(self) -> FloatArray: ...  # (3,) m, in W
+    @A.setter
+    def A(self, value: Vector) -> None: ...
+    @property
+    def base_orientation(self) -> FloatArray: ...  # (4,) unit quaternion, rod frame at A -> W
+    @base_orientation.setter
+    def base_orientation(self, value: Vector) -> None: ...
+    @property
+    def actuator_direction(self) -> FloatArray: ...  # (3,) unit, in W
+    @actuator_direction.setter
+    def actuator_direction(self, value: Vector) -> None: ...
+    @property
+    def B(self) -> FloatArray: ...  # (3,) m, in P
+    @B.setter
+    def B(self, value: Vector) -> None: ...
+    @property
+    def tip_orientation(self) -> FloatArray: ...  # (4,) unit quaternion, tip frame -> P
+    @tip_orientation.setter
+    def tip_orientation(self, value: Vector) -> None: ...
+    @property
+    def EI(self) -> float: ...  # N m^2
+    def __init__(self) -> None: ...
+    def replace(self, **changes: Any) -> SpatialLimb: ...
+
+class SpatialSolution:
+    @property
+    def q(self) -> FloatArray: ...  # (n,) m
+    @property
+    def position(self) -> FloatArray: ...  # (3,) m, P's origin in W
+    @property
+    def quaternion(self) -> FloatArray: ...  # (4,) w, x, y, z (w >= 0), P -> W
+    @property
+    def rotation(self) -> FloatArray: ...  # (3, 3) P -> W
+    @property
+    def rotation_vector(self) -> FloatArray: ...  # (3,) rad, the rx, ry, rz of `pcr fk`
+    @property
+    def wrenches(self) -> FloatArray: ...  # (n, 6) proximal force N, moment N m, in W
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_code(self) -> SolveStatus: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def residual_evaluations(self) -> int: ...
+    @property
+    def residual(self) -> float: ...
+    @property
+    def max_strain(self) -> float: ...
+    @property
+    def rod_steps(self) -> int: ...
+    @property
+    def position_error_estimate(self) -> float: ...
+    @property
+    def angle_error_estimate(self) -> float: ...
+    @property
+    def continuation_steps(self) -> int: ...
+    @property
+    def stable(self) -> Optional[bool]: ...
+    @property
+    def stability_margin(self) -> float: ...
+    @property
+    def singularity(self) -> float: ...
+    @property
+    def shapes(self) -> Optional[list[FloatArray]]: ...  # per rod (steps + 1, 8): s, x, y, z, w, qx, qy, qz
+
+class SpatialBatchResult:
+    q: FloatArray  # (N, n) m
+    position: FloatArray  # (N, 3) m
+    quaternion: FloatArray  # (N, 4) w, x, y, z (w >= 0)
+    rotation: FloatArray  # (N, 3, 3)
+    rotation_vector: FloatArray  # (N, 3) rad
+    wrenches: FloatArray  # (N, n, 6) N, N m
+    converged: npt.NDArray[np.bool_]
+    status: npt.NDArray[np.str_]
+    status_code: npt.NDArray[np.int32]
+    iterations: npt.NDArray[np.int32]
+    residual_evaluations: npt.NDArray[np.int32]
+    residual: FloatArray
+    max_strain: FloatArray
+    rod_steps: npt.NDArray[np.int32]
+    stable: npt.NDArray[np.bool_]
+    stability_margin: FloatArray
+    singularity: FloatArray
+    position_error_estimate: FloatArray  # m
+    angle_error_estimate: FloatArray  # rad
+    shapes: Optional[list[Optional[list[FloatArray]]]]
+    def __len__(self) -> int: ...
+
+class SpatialRobot:
+    name: str
+    rods: list[SpatialLimb]
+    platform_mass: float  # kg
+    @property
+    def num_rods(self) -> int: ...
+    @property
+    def platform_centre_of_mass(self) -> FloatArray: ...  # (3,) m, in P (a view)
+    @platform_centre_of_mass.setter
+    def platform_centre_of_mass(self, value: Vector) -> None: ...
+    @property
+    def gravity(self) -> FloatArray: ...  # (3,) m/s^2, in W
+    @gravity.setter
+    def gravity(self, value: Vector) -> None: ...
+    @property
+    def external_force(self) -> FloatArray: ...  # (3,) N, in W, at P's origin
+    @external_force.setter
+    def external_force(self, value: Vector) -> None: ...
+    @property
+    def external_moment(self) -> FloatArray: ...  # (3,) N m, in W
+    @external_moment.setter
+    def external_moment(self, value: Vector) -> None: ...
+    def __init__(self) -> None: ...
+    @staticmethod
+    def reference() -> SpatialRobot: ...
+    @staticmethod
+    def load(path: StrPath) -> SpatialRobot: ...
+    @staticmethod
+    def from_json(text: str, source: str = "<string>") -> SpatialRobot: ...
+    def save(self, path: StrPath) -> None: ...
+    def to_json(self) -> str: ...
+    def copy(self) -> SpatialRobot: ...
+    def replace(self, **changes: Any) -> SpatialRobot: ...
+    @overload
+    def forward(self, q: Sequence[float], *, warm_start: Optional[SpatialSolution] = None,
+                shapes: bool = False, options: Optional[SolverOptions] = None,
+                path: bool = False) -> SpatialSolution: ...
+    @overload
+    def forward(self, q: ArrayLike, *, warm_start: Optional[SpatialSolution] = None,
+                shapes: bool = False, options: Optional[SolverOptions] = None,
+                path: bool = False) -> Union[SpatialSolution, SpatialBatchResult]: ...
+    # The orientation at most once, by keyword (none: the identity); (N, ...) rows -> a batch.
+    def inverse(self, position: ArrayLike, *, rotation: Optional[ArrayLike] = None,
+                quaternion: Optional[ArrayLike] = None,
+                rotation_vector: Optional[ArrayLike] = None,
+                warm_start: Optional[SpatialSolution] = None, shapes: bool = False,
+                options: Optional[SolverOptions] = None,
+                path: bool = False) -> Union[SpatialSolution, SpatialBatchResult]: ...
+    def forward_batch(self, q: ArrayLike, *, warm_start: Optional[SpatialSolution] = None,
+                      shapes: bool = False, options: Optional[SolverOptions] = None,
+                      path: bool = False) -> SpatialBatchResult: ...
+    def inverse_batch(self, position: ArrayLike, *, rotation: Optional[ArrayLike] = None,
+                      quaternion: Optional[ArrayLike] = None,
+                      rotation_vector: Optional[ArrayLike] = None,
+                      warm_start: Optional[SpatialSolution] = None, shapes: bool = False,
+                      options: Optional[SolverOptions] = None,
+                      path: bool = False) -> SpatialBatchResult: ...
+    def home(self, *, shapes: bool = False,
+             options: Optional[SolverOptions] = None) -> SpatialSolution: ...
 
 # ---- calibration (when has_calibration) ----------------------------------------------------
 class VirtualRobot:

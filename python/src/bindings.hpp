@@ -28,6 +28,7 @@ namespace py = pybind11;
 
 void wrap_robot(py::module_& m);
 void wrap_kinematics(py::module_& m);
+void wrap_spatial(py::module_& m);
 void wrap_sensitivity(py::module_& m);         // needs pcr::calib
 void wrap_virtual_robot(py::module_& m);       // needs pcr::calib
 void wrap_dataset(py::module_& m);             // needs pcr::calib
@@ -40,6 +41,18 @@ void wrap_accuracy(py::module_& m);            // needs pcr::calib
 void wrap_predicted_accuracy(py::module_& m);  // needs pcr::calib
 void wrap_method(py::module_& m);              // needs pcr::calib
 void wrap_vision(py::module_& m);              // needs pcr::vision
+
+/// A property's getter and setter that reach one field of an owner's rod (Limb and
+/// LimbUncertainty keep their flat Python names l, d, E, precurvature...; SpatialLimb the file's
+/// names length, diameter, young_modulus...).
+template <class Owner, class RodFields, class Field = double>
+auto rod_field(Field RodFields::*field) {
+  return [field](const Owner& owner) { return owner.rod.*field; };
+}
+template <class Owner, class RodFields, class Field = double>
+auto rod_setter(Field RodFields::*field) {
+  return [field](Owner& owner, Field v) { owner.rod.*field = v; };
+}
 
 /// A solved configuration (FK or IK) as Python sees it: the solver's result plus, on request,
 /// the rods' shapes (one (steps + 1, 4) array per rod: s, x, y, theta in m, m, m, rad).

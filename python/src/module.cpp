@@ -7,12 +7,14 @@
 
 PYBIND11_MODULE(_pcr, m) {
   namespace py = pybind11;
-  m.doc() = "pcr: planar parallel continuum robots (C++ bindings). SI units: m, rad, N, Pa.";
+  m.doc() =
+      "pcr: planar and spatial parallel continuum robots (C++ bindings). SI units: m, rad, N, Pa.";
   m.attr("__version__") = PCR_VERSION;
   // pcr::InputError derives from std::invalid_argument, which pybind11 already maps to
   // ValueError; other std::exception types become RuntimeError. Both keep the C++ message.
   pcr::python::wrap_robot(m);
   pcr::python::wrap_kinematics(m);
+  pcr::python::wrap_spatial(m);
 #ifdef PCR_PYTHON_HAS_CALIB
   pcr::python::wrap_sensitivity(m);
   pcr::python::wrap_virtual_robot(m);

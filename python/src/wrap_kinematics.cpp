@@ -7,6 +7,7 @@
 
 #include "bindings.hpp"
 #include "solve.hpp"
+#include "summary.hpp"
 
 namespace pcr::python {
 
@@ -19,29 +20,12 @@ namespace {
 
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-/// Arrays of a batch. `status` holds names (str array), `status_code` the SolveStatus values.
-struct BatchResult {
-  py::array_t<double> q, pose, wrenches, residual, max_strain, stability_margin, singularity;
-  py::array_t<bool> converged, stable;
-  py::array_t<int> status_code, iterations, rod_steps;
-  py::object status = py::none();
-  py::object shapes = py::none();
+/// Arrays of a batch: the values, and the summary arrays.
+struct BatchResult : SummaryArrays {
+  py::array_t<double> q, pose, wrenches;
+  /// Every field, in the order of its pickled state.
+  auto fields() { return std::tuple_cat(std::tie(q, pose, wrenches), SummaryArrays::fields()); }
 };
-
-/// Every field of a BatchResult, in the order of its pickled state.
-auto batch_fields(BatchResult& b) {
-  return std::tie(b.q, b.pose, b.wrenches, b.residual, b.max_strain, b.stability_margin,
-                  b.singularity, b.converged, b.stable, b.status_code, b.iterations, b.rod_steps,
-                  b.status, b.shapes);
-}
-
-/// Every field of a SolverSummary, in the order of a pickled Solution's summary.
-auto summary_fields(SolverSummary& s) {
-  return std::tie(s.status, s.iterations, s.residual_evaluations, s.continuation_steps,
-                  s.initial_residual_norm, s.final_residual_norm, s.max_strain, s.rod_steps,
-                  s.position_error_estimate, s.angle_error_estimate, s.path_fraction, s.stability,
-                  s.stability_margin, s.singularity, s.folds_passed, s.first_fold);
-}
 
 /// The rods' shapes of a solution: one (steps + 1, 4) array per rod (s, x, y, theta).
 py::list rod_shapes(const RobotParams<double>& robot, const JointVector& q,
@@ -91,41 +75,13 @@ InverseSolution as_inverse(const Solution& s) {
   return out;
 }
 
-py::object status_names(const py::array_t<int>& codes) {
-  py::list names;
-  const int* c = codes.data();
-  for (py::ssize_t r = 0; r < codes.size(); ++r) {
-    names.append(to_string(static_cast<SolveStatus>(c[r])));
-  }
-  return py::module_::import("numpy").attr("array")(names, py::arg("dtype") = "U14");
-}
-
 BatchResult allocate_batch(py::ssize_t rows, int n, BatchBuffers& buffers) {
   BatchResult b;
   b.q = py::array_t<double>({rows, static_cast<py::ssize_t>(n)});
   b.pose = py::array_t<double>({rows, py::ssize_t{3}});
   b.wrenches = py::array_t<double>({rows, static_cast<py::ssize_t>(n), py::ssize_t{3}});
-  b.converged = py::array_t<bool>(rows);
-  b.status_code = py::array_t<int>(rows);
-  b.iterations = py::array_t<int>(rows);
-  b.residual = py::array_t<double>(rows);
-  b.max_strain = py::array_t<double>(rows);
-  b.rod_steps = py::array_t<int>(rows);
-  b.stable = py::array_t<bool>(rows);
-  b.stability_margin = py::array_t<double>(rows);
-  b.singularity = py::array_t<double>(rows);
-  buffers = BatchBuffers{b.q.mutable_data(),
-                         b.pose.mutable_data(),
-                         b.wrenches.mutable_data(),
-                         b.converged.mutable_data(),
-                         b.status_code.mutable_data(),
-                         b.iterations.mutable_data(),
-                         b.residual.mutable_data(),
-                         b.max_strain.mutable_data(),
-                         b.rod_steps.mutable_data(),
-                         b.stable.mutable_data(),
-                         b.stability_margin.mutable_data(),
-                         b.singularity.mutable_data()};
+  buffers = BatchBuffers{b.q.mutable_data(), b.pose.mutable_data(), b.wrenches.mutable_data(),
+                         b.allocate(rows)};
   return b;
 }
 
@@ -159,7 +115,7 @@ py::object forward(const RobotDescription& robot, const py::object& q_in,
     forward_batch(params, q.data(), rows, options, load, sequence_mode(path), buffers,
                   shapes ? solutions.data() : nullptr);
   }
-  batch.status = status_names(batch.status_code);
+  batch.name_statuses();
   if (shapes) {
     py::list all;
     for (const ForwardSolution& s : solutions) {
@@ -210,7 +166,7 @@ py::object inverse(const RobotDescription& robot, const py::object& pose_in,
     inverse_batch(params, poses.data(), rows, options, load, sequence_mode(path), buffers,
                   shapes ? solutions.data() : nullptr);
   }
-  batch.status = status_names(batch.status_code);
+  batch.name_statuses();
   if (shapes) {
     py::list all;
     for (const InverseSolution& s : solutions) {
@@ -290,9 +246,13 @@ void bind_solver_options(py::module_& m) {
 
 /// pcr.Solution: one solved configuration.
 void bind_solution(py::module_& m) {
-  py::class_<Solution>(m, "Solution",
-                       "One solved configuration. When the solve failed (converged is False; for "
-                       "IK also out_of_range is a valid equilibrium) q/pose/wrenches are NaN.")
+  auto solution = py::class_<Solution>(
+      m, "Solution",
+      "One solved configuration. When the solve failed (converged is False; for IK also "
+      "out_of_range is a valid equilibrium) q/pose/wrenches are NaN.");
+  def_summary_properties(solution);
+  def_solution_copies(solution);
+  solution
       .def_property_readonly(
           "q", [](const Solution& s) -> Eigen::VectorXd { return s.q; }, "joint values (m)")
       .def_property_readonly(
@@ -306,52 +266,6 @@ void bind_solution(py::module_& m) {
             return w;
           },
           "(n, 3) proximal wrench of each rod: nx, ny (N), m (N m)")
-      .def_property_readonly(
-          "converged", [](const Solution& s) { return s.summary.converged(); },
-          "the solve reached its input (status 'converged')")
-      .def_property_readonly(
-          "status", [](const Solution& s) { return std::string(to_string(s.summary.status)); },
-          "converged, singular, bifurcation, max_iterations, non_finite, out_of_range, "
-          "unstable, unsupported, invalid_input")
-      .def_property_readonly(
-          "status_code", [](const Solution& s) { return s.summary.status; },
-          "the status as a SolveStatus (s.status_code == pcr.SolveStatus.converged)")
-      .def_property_readonly(
-          "iterations", [](const Solution& s) { return s.summary.iterations; },
-          "Newton iterations (warm attempt and cold retry included)")
-      .def_property_readonly(
-          "residual", [](const Solution& s) { return s.summary.final_residual_norm; },
-          "final max-norm of the scaled shooting residual")
-      .def_property_readonly(
-          "max_strain", [](const Solution& s) { return s.summary.max_strain; },
-          "largest bending strain |kappa| d / 2 over the rods")
-      .def_property_readonly(
-          "rod_steps", [](const Solution& s) { return s.summary.rod_steps; },
-          "RK4 steps per rod of this solution")
-      .def_property_readonly(
-          "stable",
-          [](const Solution& s) -> std::optional<bool> {
-            if (s.summary.stability == Stability::kUnchecked) return std::nullopt;
-            return s.summary.stability == Stability::kStable;
-          },
-          "whether the equilibrium holds with the joints held (None: not checked)")
-      .def_property_readonly(
-          "stability_margin", [](const Solution& s) { return s.summary.stability_margin; },
-          "platform stiffness's eigenvalue nearest zero in units of EI / L, negated when "
-          "unstable (docs/stability.md)")
-      .def_property_readonly(
-          "singularity", [](const Solution& s) { return s.summary.singularity; },
-          "reciprocal condition number of the scaled forward Jacobian (zero at a fold)")
-      .def_property_readonly(
-          "position_error_estimate",
-          [](const Solution& s) { return s.summary.position_error_estimate; },
-          "estimated discretisation error of the solved lengths (m)")
-      .def_property_readonly(
-          "angle_error_estimate", [](const Solution& s) { return s.summary.angle_error_estimate; },
-          "estimated discretisation error of the solved angles (rad)")
-      .def_property_readonly(
-          "continuation_steps", [](const Solution& s) { return s.summary.continuation_steps; },
-          "sub-solves of the continuation (0: a direct solve)")
       .def_readonly("shapes", &Solution::shapes,
                     "None, or (with shapes=True) one (steps + 1, 4) array per rod: s, x, y (m), "
                     "theta (rad) along the rod, in W")
@@ -360,15 +274,6 @@ void bind_solution(py::module_& m) {
              return "<pcr.Solution " + std::string(to_string(s.summary.status)) + ", " +
                     std::to_string(s.summary.iterations) + " iterations>";
            })
-      .def("__copy__", [](const Solution& s) { return s; })
-      .def(
-          "__deepcopy__",
-          [](const Solution& s, const py::dict& memo) {
-            Solution out = s;
-            out.shapes = py::module_::import("copy").attr("deepcopy")(s.shapes, memo);
-            return out;
-          },
-          py::arg("memo"))
       // The solver's factorised Jacobian is not pickled: a warm start from an unpickled solution
       // evaluates its own first.
       .def(py::pickle(
@@ -403,41 +308,20 @@ void bind_solution(py::module_& m) {
 
 /// pcr.BatchResult: the arrays of a batch.
 void bind_batch_result(py::module_& m) {
-  py::class_<BatchResult>(m, "BatchResult",
-                          "Results of a batch, one row per input row. Rows that failed have NaN "
-                          "values (FK keeps its input q, IK its input pose).")
-      .def_readonly("q", &BatchResult::q, "(N, n) joint values (m)")
+  auto batch = py::class_<BatchResult>(
+      m, "BatchResult",
+      "Results of a batch, one row per input row. Rows that failed have NaN values (FK keeps its "
+      "input q, IK its input pose).");
+  def_summary_arrays(batch, "BatchResult",
+                     "None, or a list (one per row) of None or per-rod (steps + 1, 4) arrays");
+  batch.def_readonly("q", &BatchResult::q, "(N, n) joint values (m)")
       .def_readonly("pose", &BatchResult::pose, "(N, 3) platform poses x, y (m), theta (rad)")
       .def_readonly("wrenches", &BatchResult::wrenches, "(N, n, 3) proximal wrenches (N, N, N m)")
-      .def_readonly("converged", &BatchResult::converged, "(N,) bool")
-      .def_readonly("status", &BatchResult::status, "(N,) status names (str)")
-      .def_readonly("status_code", &BatchResult::status_code, "(N,) SolveStatus values (int)")
-      .def_readonly("iterations", &BatchResult::iterations, "(N,) Newton iterations")
-      .def_readonly("residual", &BatchResult::residual, "(N,) final scaled residual max-norm")
-      .def_readonly("max_strain", &BatchResult::max_strain, "(N,) largest bending strain")
-      .def_readonly("rod_steps", &BatchResult::rod_steps, "(N,) RK4 steps per rod")
-      .def_readonly("stable", &BatchResult::stable,
-                    "(N,) bool: the equilibrium holds (False when not checked)")
-      .def_readonly("stability_margin", &BatchResult::stability_margin,
-                    "(N,) see Solution.stability_margin (NaN when not checked)")
-      .def_readonly("singularity", &BatchResult::singularity,
-                    "(N,) reciprocal condition number of the scaled forward Jacobian")
-      .def_readonly("shapes", &BatchResult::shapes,
-                    "None, or a list (one per row) of None or per-rod (steps + 1, 4) arrays")
-      .def("__len__", [](const BatchResult& b) { return b.converged.size(); })
-      .def("__repr__",
-           [](const BatchResult& b) {
-             const auto rows = b.converged.size();
-             const bool* converged = b.converged.data();
-             const auto count = std::count(converged, converged + rows, true);
-             return "<pcr.BatchResult " + std::to_string(rows) + " rows, " + std::to_string(count) +
-                    " converged>";
-           })
       // Pickling (and with it copy.copy and copy.deepcopy): the arrays, field by field.
-      .def(py::pickle([](BatchResult b) { return fields_to_tuple(batch_fields(b)); },
+      .def(py::pickle([](BatchResult b) { return fields_to_tuple(b.fields()); },
                       [](const py::tuple& state) {
                         BatchResult b;
-                        fields_from_tuple(batch_fields(b), state, "BatchResult");
+                        fields_from_tuple(b.fields(), state, "BatchResult");
                         return b;
                       }));
 }

@@ -7,6 +7,7 @@
 
 #include "bindings.hpp"
 #include "pcr/parameters.hpp"
+#include "pcr/spatial/robot_io.hpp"
 
 namespace pcr::python {
 
@@ -149,17 +150,6 @@ void set_limbs(RobotDescription& robot, const std::vector<LimbParams<double>>& l
   for (std::size_t i = 0; i < static_cast<std::size_t>(kMaxLimbs); ++i) {
     robot.params.limbs[i] = i < limbs.size() ? limbs[i] : LimbParams<double>();
   }
-}
-
-/// A property's getter and setter that reach one field of an owner's rod (Limb and
-/// LimbUncertainty keep their flat Python names l, d, E, precurvature...).
-template <class Owner, class RodFields>
-auto rod_field(double RodFields::*field) {
-  return [field](const Owner& owner) { return owner.rod.*field; };
-}
-template <class Owner, class RodFields>
-auto rod_setter(double RodFields::*field) {
-  return [field](Owner& owner, double v) { owner.rod.*field = v; };
 }
 
 /// pcr.Pose: a planar pose that also reads as [x, y, theta].
@@ -441,12 +431,29 @@ void bind_robot_description(py::module_& m) {
       .def_static("default", &default_robot,
                   "The paper's 3-PF robot (femto-3pf) with the paper's uncertainty intervals.")
       .def_static(
-          "load", [](const std::filesystem::path& path) { return load_robot(input_path(path)); },
+          "load",
+          [](const std::filesystem::path& path) -> py::object {
+            const std::string file = input_path(path);
+            if (load_robot_kind(file) == RobotKind::kSpatial) {
+              return py::cast(load_spatial_robot(file));
+            }
+            return py::cast(load_robot(file));
+          },
           py::arg("path"),
-          "Reads a pcr-robot JSON file (str or os.PathLike): FileNotFoundError when it does not "
-          "exist, ValueError naming the file, field and value when it is not a valid robot.")
-      .def_static("from_json", &parse_robot, py::arg("text"), py::arg("source") = "<string>",
-                  "Parses pcr-robot JSON text; `source` names it in error messages.")
+          "Reads a pcr-robot JSON file (str or os.PathLike): a Robot, or a SpatialRobot when the "
+          "file says \"kind\": \"spatial\". FileNotFoundError when it does not exist, ValueError "
+          "naming the file, field and value when it is not a valid robot.")
+      .def_static(
+          "from_json",
+          [](const std::string& text, const std::string& source) -> py::object {
+            if (robot_kind(text, source) == RobotKind::kSpatial) {
+              return py::cast(parse_spatial_robot(text, source));
+            }
+            return py::cast(parse_robot(text, source));
+          },
+          py::arg("text"), py::arg("source") = "<string>",
+          "Parses pcr-robot JSON text (a Robot, or a SpatialRobot for a spatial one); `source` "
+          "names it in error messages.")
       .def(
           "save",
           [](const RobotDescription& r, const std::filesystem::path& path) {

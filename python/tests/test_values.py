@@ -114,7 +114,7 @@ def test_solves_run_in_worker_processes(robot):
 def test_a_bad_pickled_state_is_refused():
     with pytest.raises(ValueError, match="Solution"):
         pcr.Solution.__new__(pcr.Solution).__setstate__((1, 2))
-    with pytest.raises(ValueError, match="BatchResult: a pickled state of 14 fields"):
+    with pytest.raises(ValueError, match="BatchResult: a pickled state of 17 fields"):
         pcr.BatchResult.__new__(pcr.BatchResult).__setstate__(())
 
 

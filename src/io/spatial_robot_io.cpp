@@ -26,13 +26,6 @@ constexpr double kMaxGravity = 100.0;     // m/s^2
 constexpr double kMaxForce = 1e4;         // N
 constexpr double kMaxMoment = 1e3;        // N m
 
-const char* actuation_name(SpatialActuation a) {
-  return a == SpatialActuation::kTranslatedClamp ? "translated_clamp" : "length_through_hole";
-}
-const char* attachment_name(SpatialAttachment a) {
-  return a == SpatialAttachment::kSpherical ? "spherical" : "clamped";
-}
-
 class SpatialReader : public JsonReader {
  public:
   using JsonReader::JsonReader;
@@ -214,11 +207,11 @@ std::string spatial_robot_to_json(const SpatialRobotDescription& robot) {
     l["shear_and_extension"] = limb.rod.shear_and_extension;
     l["A"] = array<3>(limb.A);
     l["base_orientation"] = array<4>(limb.base_orientation);
-    l["actuation"] = actuation_name(limb.actuation);
+    l["actuation"] = to_string(limb.actuation);
     l["actuator_direction"] = array<3>(limb.actuator_direction);
     l["B"] = array<3>(limb.B);
     l["tip_orientation"] = array<4>(limb.tip_orientation);
-    l["attachment"] = attachment_name(limb.attachment);
+    l["attachment"] = to_string(limb.attachment);
     rods.push_back(l);
   }
   root["rods"] = rods;
@@ -238,6 +231,15 @@ void save_spatial_robot(const SpatialRobotDescription& robot, const std::string&
   // Never write a file that would not load: validate the text first.
   parse_spatial_robot(text, path + " (being written)");
   write_file_atomically(path, text);
+}
+
+const char* to_string(SpatialActuation actuation) {
+  return actuation == SpatialActuation::kTranslatedClamp ? "translated_clamp"
+                                                         : "length_through_hole";
+}
+
+const char* to_string(SpatialAttachment attachment) {
+  return attachment == SpatialAttachment::kSpherical ? "spherical" : "clamped";
 }
 
 }  // namespace pcr

@@ -29,6 +29,11 @@ inline SpatialRobotDescription continuum_stewart_gough_description() {
   return SpatialRobotDescription{"continuum-stewart-gough", continuum_stewart_gough()};
 }
 
+/// The file's name of an actuation ("length_through_hole", "translated_clamp") and of an
+/// attachment ("clamped", "spherical").
+const char* to_string(SpatialActuation actuation);
+const char* to_string(SpatialAttachment attachment);
+
 /// Parses and validates a spatial description; `source` names the file in error messages (an
 /// InputError naming the file, the field path and the value; a planar file names its kind).
 SpatialRobotDescription parse_spatial_robot(const std::string& json_text,

@@ -100,7 +100,7 @@ def robot_name(robot, name=None):
 
 
 def load_robot(robot):
-    """A pcr.Robot, or one loaded from its JSON file."""
+    """A pcr.Robot (or SpatialRobot), or one loaded from its JSON file."""
     import pcr
 
     return pcr.Robot.load(os.fspath(robot)) if isinstance(robot, (str, os.PathLike)) else robot

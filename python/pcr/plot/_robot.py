@@ -16,26 +16,43 @@ def _frame(ax, x, y, theta, length, label, colour):
     ax.text(x, y, f" {label}", color=colour, fontsize=8, va="top")
 
 
+_COLOURS = ["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink"]
+
+
+def _solutions(robot, configurations, solution_type, solve_args):
+    """The solutions to draw: given (one or a list, solved with shapes=True), or solved by FK
+    with shapes from a joint vector (n,) or an (N, n) array."""
+    if isinstance(configurations, solution_type):
+        return [configurations]
+    if isinstance(configurations, (list, tuple)) and configurations and isinstance(
+            configurations[0], solution_type):
+        return list(configurations)
+    q = np.atleast_2d(np.asarray(configurations, dtype=float))
+    return [robot.forward(row, shapes=True, **solve_args) for row in q]
+
+
+def _configurations_title(robot, count):
+    many = count > 1
+    return title(robot.name, f"{count} configuration{'s' if many else ''}"
+                 + (" (the last one darkest)" if many else ""))
+
+
 def plot_robot(robot, configurations, ax=None, path=None, frames=True, **solve_args):
     """The rods' shapes, proximal clamps A_i(q), distal clamps B_i, the platform and the frames
     W and P, for one configuration or a sequence.
 
-    robot: a pcr.Robot or its JSON file. configurations: a joint vector (n,) or an (N, n) array
-    (m), solved by FK with shapes, or a Solution / list of Solutions obtained with
-    ``shapes=True``.
+    robot: a pcr.Robot or a pcr.SpatialRobot, or its JSON file. configurations: a joint vector
+    (n,) or an (N, n) array (m), solved by FK with shapes, or a Solution (SpatialSolution) / list
+    of them obtained with ``shapes=True``. A spatial robot is drawn in 3-D (mplot3d; an ``ax``
+    given must be one, ``projection="3d"``): its rods, the holes or clamps they leave the base
+    from, the platform's polygon through its attachments and the frames W and P.
     """
     robot = load_robot(robot)
+    if isinstance(robot, pcr.SpatialRobot):
+        return _plot_spatial_robot(robot, configurations, ax, path, frames, solve_args)
     fig, ax = figure_and_axes(ax, (6.4, 6.4))
-    if isinstance(configurations, pcr.Solution):
-        solutions = [configurations]
-    elif isinstance(configurations, (list, tuple)) and configurations and isinstance(
-            configurations[0], pcr.Solution):
-        solutions = list(configurations)
-    else:
-        q = np.atleast_2d(np.asarray(configurations, dtype=float))
-        solutions = [robot.forward(row, shapes=True, **solve_args) for row in q]
+    solutions = _solutions(robot, configurations, pcr.Solution, solve_args)
     scale = max(l.l for l in robot.limbs)
-    colours = ["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink"]
     many = len(solutions) > 1
     for k, s in enumerate(solutions):
         if s.shapes is None:
@@ -44,7 +61,7 @@ def plot_robot(robot, configurations, ax=None, path=None, frames=True, **solve_a
         pose = s.pose
         distal = []
         for i, (limb, shape) in enumerate(zip(robot.limbs, s.shapes)):
-            ax.plot(shape[:, 1] * MM, shape[:, 2] * MM, color=colours[i % 6], alpha=alpha, lw=1.5,
+            ax.plot(shape[:, 1] * MM, shape[:, 2] * MM, color=_COLOURS[i % 6], alpha=alpha, lw=1.5,
                     label=f"rod {i}" if k == len(solutions) - 1 else None)
             ax.plot(shape[0, 1] * MM, shape[0, 2] * MM, "s", color="k", ms=5, alpha=alpha)
             c, sn = np.cos(pose.theta), np.sin(pose.theta)
@@ -61,9 +78,63 @@ def plot_robot(robot, configurations, ax=None, path=None, frames=True, **solve_a
     ax.set_aspect("equal")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
-    ax.set_title(title(robot.name, f"{len(solutions)} configuration{'s' if many else ''}"
-                       + (" (the last one darkest)" if many else "")))
+    ax.set_title(_configurations_title(robot, len(solutions)))
     ax.legend(loc="upper right", fontsize=8)
+    return save(fig, path)
+
+
+def _frame_3d(ax, origin, rotation, length, label, colour):
+    for axis, c in zip(rotation.T, ("tab:red", "tab:green", "tab:blue")):
+        end = origin + length * axis
+        ax.plot(*np.transpose([origin, end]) * MM, color=c, lw=1.2)
+    ax.text(*(origin * MM), f" {label}", color=colour, fontsize=8)
+
+
+def _plot_spatial_robot(robot, configurations, ax, path, frames, solve_args):
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    if ax is None:
+        fig = new_figure((7.0, 6.4))
+        ax = fig.add_subplot(projection="3d")
+    elif getattr(ax, "name", "") != "3d":
+        raise ValueError(f"ax: a spatial robot is drawn on a 3-D axes (projection='3d'), got "
+                         f"{getattr(ax, 'name', type(ax).__name__)!r}")
+    fig = ax.figure
+    solutions = _solutions(robot, configurations, pcr.SpatialSolution, solve_args)
+    rods = robot.rods
+    scale = max(rod.length for rod in rods)
+    many = len(solutions) > 1
+    points = [np.array([rod.A for rod in rods])]  # what the axes' limits must hold
+    for k, s in enumerate(solutions):
+        if s.shapes is None:
+            continue
+        alpha = 0.35 + 0.65 * (k + 1) / len(solutions) if many else 1.0
+        for i, shape in enumerate(s.shapes):
+            ax.plot(*shape[:, 1:4].T * MM, color=_COLOURS[i % 6], alpha=alpha, lw=1.5,
+                    label=f"rod {i}" if k == len(solutions) - 1 else None)
+            ax.plot(*shape[:1, 1:4].T * MM, "s", color="k", ms=4, alpha=alpha)  # hole or clamp
+            points.append(shape[:, 1:4])
+        distal = s.position + np.array([rod.B for rod in rods]) @ s.rotation.T
+        ax.add_collection3d(Poly3DCollection([distal * MM], facecolor="0.6",
+                                             alpha=0.25 * alpha, edgecolor="0.3"))
+        ax.plot(*distal.T * MM, "o", color="0.3", ms=4, alpha=alpha)
+        if frames and k == len(solutions) - 1:
+            _frame_3d(ax, s.position, s.rotation, 0.25 * scale, "P", "0.2")
+    if frames:
+        _frame_3d(ax, np.zeros(3), np.eye(3), 0.25 * scale, "W", "k")
+    # Equal scales on the three axes: the rods' bending is seen as it is.
+    every = np.vstack(points) * MM
+    centre = 0.5 * (every.min(axis=0) + every.max(axis=0))
+    half = 0.5 * max(float(np.ptp(every, axis=0).max()), 1e-9)
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_zlabel("z (mm)")
+    ax.set_title(_configurations_title(robot, len(solutions)))
+    ax.legend(loc="upper left", fontsize=8)
     return save(fig, path)
 
 
