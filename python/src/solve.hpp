@@ -151,9 +151,9 @@ inline void spatial_forward_batch(const SpatialRobotParams<double>& robot, const
   forward_rows(sequence, n, q, rows, out.q, store, solutions);
 }
 
-/// Spatial IK of every pose, as a sequence in `mode`: the requested positions echoed, and with
-/// six rods, which impose the whole pose, the requested orientations too (fewer rods leave some
-/// of it to the solve: the solved one, NaN on failure).
+/// Spatial IK of every pose, as a sequence in `mode`: the requested positions echoed, and where
+/// the rod count imposes the whole pose (spatial_inverse_free_angles), the requested orientations
+/// too (fewer rods leave some of it to the solve: the solved one, NaN on failure).
 inline void spatial_inverse_batch(const SpatialRobotParams<double>& robot,
                                   const SpatialPose<double>* poses, std::ptrdiff_t rows,
                                   const SolverOptions& options, SequenceMode mode,
@@ -164,7 +164,7 @@ inline void spatial_inverse_batch(const SpatialRobotParams<double>& robot,
   for (std::ptrdiff_t r = 0; r < rows; ++r) {
     const SpatialInverseSolution& s = sequence.solve(poses[r]);
     store_spatial_row(s, is_equilibrium(s.summary), n, r, out);
-    if (n == 6) {
+    if (spatial_inverse_free_angles(n) == 0) {
       store_spatial_pose(poses[r], true, r, out);
     } else {
       for (int k = 0; k < 3; ++k) out.position[r * 3 + k] = poses[r].position(k);

@@ -691,8 +691,10 @@ void bind_spatial_kinematics(py::module_& m) {
            py::arg("rotation") = py::none(), py::arg("quaternion") = py::none(),
            py::arg("rotation_vector") = py::none(), py::arg("warm_start") = py::none(),
            py::arg("shapes") = false, py::arg("options") = py::none(), py::arg("path") = false,
-           "Inverse kinematics (six rods: the whole pose imposed; rod counts the solver does not "
-           "take give status 'unsupported'). position: (3,) in W (m), with the platform's "
+           "Inverse kinematics: six rods impose the whole pose; five the position and the "
+           "platform's normal, three the position, the rest of the orientation solved (the "
+           "solution's is the solved one); other rod counts give status 'unsupported'. "
+           "position: (3,) in W (m), with the platform's "
            "orientation P -> W given at most once by keyword: rotation (a (3, 3) rotation "
            "matrix), quaternion (w, x, y, z, unit) or rotation_vector (angle times axis, rad, as "
            "`pcr ik`'s rx, ry, rz); none: the identity -> SpatialSolution. (N, 3) positions "

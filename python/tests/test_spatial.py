@@ -114,6 +114,25 @@ def test_forward_and_inverse_round_trip(spatial, fk):
         assert by_vector.q == pytest.approx(ik.q, abs=1e-10)
 
 
+@pytest.mark.parametrize("rods", [[0, 2, 4], [0, 1, 2, 3, 4]])
+def test_inverse_of_three_and_five_rods_solves_the_free_orientation(spatial, rods):
+    """Three rods impose the position, five also the platform's normal: IK of FK's pose gives back
+    the joints and solves the rest of the orientation (FK's), whatever rotation is passed for it."""
+    robot = spatial.copy()
+    robot.rods = [spatial.rods[i] for i in rods]
+    q = np.array([0.01, -0.005, 0.008, 0.0, 0.004])[: len(rods)]
+    s = robot.forward(q)
+    assert s.converged
+    twist = rodrigues(np.array([0.0, 0.0, 0.3])) if len(rods) == 5 else rodrigues(np.array([0.2, -0.1, 0.3]))
+    ik = robot.inverse(s.position, rotation=s.rotation @ twist)  # the free part turned away
+    assert ik.converged
+    assert ik.q == pytest.approx(q, abs=1e-9)
+    assert ik.position == pytest.approx(s.position, abs=0)
+    assert ik.rotation == pytest.approx(s.rotation, abs=1e-8)
+    batch = robot.inverse(np.array([s.position]), rotation=np.array([s.rotation @ twist]))
+    assert batch.rotation[0] == pytest.approx(s.rotation, abs=1e-8)  # the solved one, not echoed
+
+
 def test_rotation_forms_agree_with_closed_forms(fk):
     for k in range(len(Q)):
         R, h, v = fk.rotation[k], fk.quaternion[k], fk.rotation_vector[k]
