@@ -715,9 +715,17 @@ def command_path(robot: Robot, path: ArrayLike, *, strain_limit: float = 0.01,
                  options: Optional[SolverOptions] = None,
                  cold_start_fallback: bool = True) -> dict[str, Any]: ...  # q, poses, max_strain, iterations
 
+@overload
 def workspace_map(robot: Robot, *, theta: float = 0.0, grid: int = 200,
                   range: Optional[tuple[float, float, float, float]] = None,
                   force: Any = ..., moment: float = 0.0,
+                  options: Optional[SolverOptions] = None, threads: int = 0) -> dict[str, Any]: ...
+@overload
+def workspace_map(robot: SpatialRobot, *,
+                  plane: Literal["xy", "xz", "yz", "rxry", "rxrz", "ryrz"] = "xy",
+                  pose: Optional[tuple[float, float, float, float, float, float]] = None,
+                  range: Optional[tuple[float, float, float, float]] = None, grid: int = 40,
+                  stroke: Optional[tuple[float, float]] = None,
                   options: Optional[SolverOptions] = None, threads: int = 0) -> dict[str, Any]: ...
 def rotation_range(robot: Robot, x: float, y: float, *, theta: float = 0.0, force: Any = ...,
                    moment: float = 0.0,

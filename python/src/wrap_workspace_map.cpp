@@ -1,6 +1,9 @@
-// Workspace maps and rotation ranges (pcr/calib/workspace_map.hpp).
+// Workspace maps and rotation ranges (pcr/calib/workspace_map.hpp), and slices through a spatial
+// robot's workspace (pcr/spatial/workspace_map.hpp).
 #include "calibration_bindings.hpp"
 #include "pcr/calib/workspace_map.hpp"
+#include "pcr/spatial/robot_io.hpp"
+#include "pcr/spatial/workspace_map.hpp"
 
 namespace pcr::python {
 
@@ -46,6 +49,52 @@ py::dict workspace_map_dict(const WorkspaceMap& map, int n) {
   return d;
 }
 
+py::dict spatial_workspace_map_dict(const SpatialWorkspaceMap& map, int n) {
+  const auto nu = static_cast<py::ssize_t>(map.nu), nv = static_cast<py::ssize_t>(map.nv);
+  py::array_t<double> us(nu), vs(nv), q({nv, nu, static_cast<py::ssize_t>(n)}),
+      poses({nv, nu, py::ssize_t{6}}), held(py::ssize_t{6});
+  py::array_t<bool> visited({nv, nu}), reachable({nv, nu}), stable({nv, nu});
+  py::array_t<int> status({nv, nu});
+  py::array_t<double> max_strain({nv, nu}), margin({nv, nu}), singularity({nv, nu});
+  for (py::ssize_t i = 0; i < nu; ++i) us.mutable_at(i) = map.u(static_cast<int>(i));
+  for (py::ssize_t j = 0; j < nv; ++j) vs.mutable_at(j) = map.v(static_cast<int>(j));
+  for (py::ssize_t k = 0; k < 6; ++k) held.mutable_at(k) = map.pose[static_cast<std::size_t>(k)];
+  for (py::ssize_t j = 0; j < nv; ++j) {
+    for (py::ssize_t i = 0; i < nu; ++i) {
+      const SpatialWorkspaceMapPoint& p = map.points[static_cast<std::size_t>(j * nu + i)];
+      visited.mutable_at(j, i) = p.visited;
+      reachable.mutable_at(j, i) = p.reachable;
+      stable.mutable_at(j, i) = p.stable;
+      status.mutable_at(j, i) = p.visited ? static_cast<int>(p.status) : -1;
+      for (int k = 0; k < n; ++k) {
+        q.mutable_at(j, i, k) = p.q.size() == n ? p.q(k) : std::numeric_limits<double>::quiet_NaN();
+      }
+      for (int k = 0; k < 6; ++k) poses.mutable_at(j, i, k) = p.pose[static_cast<std::size_t>(k)];
+      max_strain.mutable_at(j, i) = p.max_strain;
+      margin.mutable_at(j, i) = p.stability_margin;
+      singularity.mutable_at(j, i) = p.singularity;
+    }
+  }
+  py::dict d;
+  d["plane"] = to_string(map.plane);
+  d["u"] = us;
+  d["v"] = vs;
+  d["pose"] = held;
+  d["poses"] = poses;
+  d["visited"] = visited;
+  d["reachable"] = reachable;
+  d["stable"] = stable;
+  d["status_code"] = status;
+  d["q"] = q;
+  d["max_strain"] = max_strain;
+  d["stability_margin"] = margin;
+  d["singularity"] = singularity;
+  d["reachable_area"] = map.reachable_area;
+  d["stable_area"] = map.stable_area;
+  d["seconds"] = map.seconds;
+  return d;
+}
+
 void wrap_workspace_map(py::module_& m) {
   m.def(
       "workspace_map",
@@ -80,6 +129,46 @@ void wrap_workspace_map(py::module_& m) {
       "n) m, max_strain, stability_margin, "
       "singularity, position_3sigma, orientation_3sigma, worst_position, worst_orientation (NaN "
       "without a covariance); reachable_area, stable_area (m^2), seconds. Releases the GIL.");
+
+  m.def(
+      "workspace_map",
+      [](const SpatialRobotDescription& robot, const std::string& plane,
+         const std::optional<std::array<double, 6>>& pose,
+         const std::optional<std::array<double, 4>>& range, int grid,
+         const std::optional<std::array<double, 2>>& stroke,
+         const std::optional<SolverOptions>& solver, int threads) {
+        SpatialWorkspaceMapOptions o;
+        if (!spatial_map_plane_from_string(plane, o.plane)) {
+          throw std::invalid_argument("plane: expected xy, xz, yz, rxry, rxrz or ryrz, got '" +
+                                      plane + "'");
+        }
+        o.pose = pose;
+        o.range = range;
+        o.grid = grid;
+        o.stroke = stroke;
+        o.solver = options_or_default(solver);
+        o.threads = threads;
+        checked_options(o);
+        SpatialWorkspaceMap map;
+        {
+          py::gil_scoped_release release;
+          map = spatial_workspace_map(robot.params, o);
+        }
+        return spatial_workspace_map_dict(map, robot.params.num_rods);
+      },
+      py::arg("robot"), py::kw_only(), py::arg("plane") = "xy", py::arg("pose") = py::none(),
+      py::arg("range") = py::none(), py::arg("grid") = SpatialWorkspaceMapOptions().grid,
+      py::arg("stroke") = py::none(), py::arg("options") = py::none(), py::arg("threads") = 0,
+      "A spatial robot's workspace slice (six rods), as `pcr map` maps a spatial file: IK over a "
+      "grid x grid of two pose coordinates, plane 'xy', 'xz', 'yz' (positions, m) or 'rxry', "
+      "'rxrz', 'ryrz' (rotation vector, rad), the other four held at pose (x, y, z, rx, ry, rz; "
+      "default: the home pose); range (u_min, u_max, v_min, v_max), default centred on the pose; "
+      "stroke (q_min, q_max) m for every rod, default none. Each point warm-started from a solved "
+      "neighbour, outward from home, on `threads` threads (the map does not depend on them). "
+      "Returns a dict: plane, u (grid,), v (grid,), pose (6,) the held coordinates, and (grid, "
+      "grid) arrays indexed [iv, iu]: visited, reachable, stable, status_code (-1 where not "
+      "visited), q (grid, grid, n) m, poses (grid, grid, 6), max_strain, stability_margin, "
+      "singularity; reachable_area, stable_area (m^2 or rad^2), seconds. Releases the GIL.");
 
   m.def(
       "rotation_range",

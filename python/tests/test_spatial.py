@@ -2,8 +2,11 @@
 against each other, the rotation's three forms against closed forms (Rodrigues, the half-angle
 quaternion), pickling, batches in any order, bad inputs, the 3-D plot."""
 import copy
+import csv
+import io
 import os
 import pickle
+import subprocess
 
 import numpy as np
 import pytest
@@ -271,6 +274,32 @@ def test_bad_inputs_say_what_they_got(spatial):
     assert four.inverse(p).status == "unsupported"  # the solver's verdict, not an exception
     with pytest.raises(ValueError, match="warm_start: a solution of a robot with 6 rods"):
         four.forward([0.0] * 4, warm_start=spatial.home())
+
+
+def test_workspace_map_slice_matches_fk_and_the_cli(cli, spatial):
+    """A 3 x 3 x-y slice around home: every point reachable, FK of its joints at its pose, and the
+    joints `pcr map` writes for the same slice (stdout: the rows in the same order)."""
+    span = (-0.01, 0.01, -0.01, 0.01)
+    m = pcr.workspace_map(spatial, plane="xy", range=span, grid=3, threads=1)
+    assert m["plane"] == "xy" and m["q"].shape == (3, 3, 6) and m["poses"].shape == (3, 3, 6)
+    assert m["u"] == pytest.approx([-0.01, 0.0, 0.01]) and m["reachable"].all()
+    assert m["reachable_area"] == pytest.approx(0.02 * 0.02)
+    for iv in range(3):
+        for iu in range(3):
+            pose = m["poses"][iv, iu]
+            assert pose[0] == pytest.approx(m["u"][iu]) and pose[1] == pytest.approx(m["v"][iv])
+            s = spatial.forward(m["q"][iv, iu])
+            assert s.position == pytest.approx(pose[:3], abs=1e-9)
+            assert s.rotation_vector == pytest.approx(pose[3:], abs=1e-8)
+    out = subprocess.run([cli, "map", "--robot", SPATIAL_FILE, "--grid", "3", "--range",
+                          ",".join(repr(v) for v in span), "--threads", "1"],
+                         capture_output=True, text=True, check=True, timeout=120)
+    rows = list(csv.DictReader(io.StringIO(out.stdout)))
+    assert len(rows) == 9
+    for k, row in enumerate(rows):
+        assert m["q"][k // 3, k % 3] == pytest.approx([float(row[q]) for q in JOINTS], abs=1e-12)
+    with pytest.raises(ValueError, match="plane"):
+        pcr.workspace_map(spatial, plane="xw")
 
 
 def test_plot_robot_draws_in_3d(spatial, fk, tmp_path):

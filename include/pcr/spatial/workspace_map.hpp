@@ -120,7 +120,8 @@ SpatialPoseCoordinates spatial_pose_coordinates(const SpatialPose<double>& pose)
 /// or not (SolverOptions::stable_inverse is not used: where the branch turns unstable the point
 /// says so, as on a planar map). The result does not depend on the number of threads.
 ///
-/// Six-rod robots only (their IK is square); throws InputError on another rod count, on options
+/// Six-rod robots only (their IK imposes the whole pose; with 3 or 5 rods it solves part of the
+/// orientation, spatial_inverse_free_angles); throws InputError on another rod count, on options
 /// is_valid refuses (naming the field and the value), and when the home solution fails (no
 /// default pose, no seed).
 SpatialWorkspaceMap spatial_workspace_map(const SpatialRobotParams<double>& robot,
