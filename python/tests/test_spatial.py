@@ -283,7 +283,7 @@ def test_workspace_map_slice_matches_fk_and_the_cli(cli, spatial):
     m = pcr.workspace_map(spatial, plane="xy", range=span, grid=3, threads=1)
     assert m["plane"] == "xy" and m["q"].shape == (3, 3, 6) and m["poses"].shape == (3, 3, 6)
     assert m["u"] == pytest.approx([-0.01, 0.0, 0.01]) and m["reachable"].all()
-    assert m["reachable_area"] == pytest.approx(0.02 * 0.02)
+    assert m["reachable_area"] == pytest.approx(9 * 0.01 * 0.01)  # points times a cell
     for iv in range(3):
         for iu in range(3):
             pose = m["poses"][iv, iu]
