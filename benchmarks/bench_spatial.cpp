@@ -280,6 +280,31 @@ void BM_SpatialForwardCold(benchmark::State& state) {
 }
 BENCHMARK(BM_SpatialForwardCold)->Arg(1)->Unit(benchmark::kMicrosecond);
 
+/// IK that converges on an equilibrium that would not hold and looks for a stable one at the pose
+/// (SolverOptions::stable_inverse, a rare fallback): from the first unstable equilibrium the
+/// buckled seeds give at the reference pose (one rod looped), 1 mm away.
+void BM_SpatialInverseStableSearch(benchmark::State& state) {
+  const ReferencePath& path = reference_path();
+  SolverOptions keep;
+  keep.stable_inverse = false;
+  const SpatialInverseSolution normal =
+      spatial_inverse_kinematics(path.robot, path.reference, path.ik[0], keep);
+  SpatialInverseSolution looped;
+  for (int k = 0; k < kSpatialBuckledSeedsPerRod * 6; ++k) {
+    looped = spatial_inverse_kinematics(path.robot, path.reference,
+                                        spatial_buckled_seed(path.robot, normal, k), keep);
+    if (looped.summary.converged() && looped.summary.stability == Stability::kUnstable) break;
+  }
+  SpatialPose<double> moved = path.reference;
+  moved.position.x() += 1e-3;
+  time_solves(state, [&] {
+    const SpatialInverseSolution ik = spatial_inverse_kinematics(path.robot, moved, looped);
+    benchmark::DoNotOptimize(ik.q.data());
+    return ik.summary;
+  });
+}
+BENCHMARK(BM_SpatialInverseStableSearch)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 
 BENCHMARK_MAIN();
