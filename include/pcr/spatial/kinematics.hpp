@@ -24,7 +24,7 @@ namespace pcr {
 /// not act on their tips): Newton's globalised phase from there (line searches, Levenberg steps)
 /// takes tens of iterations, where a warm start takes a few. On 12 random robots around the
 /// reference, 11 solved from straight rods within 100 iterations, most within 40; the twelfth by
-/// the bowed cold start (spatial_homotopy_solve), in 134 steps.
+/// the bowed cold start (spatial_homotopy_solve), in 137 continuation steps.
 inline constexpr int kColdIterationFactor = 5;
 
 namespace internal {
@@ -530,7 +530,7 @@ inline SpatialShootingPoint<double> spatial_secant_prediction(
 /// (spatial_blended_robot), each step from a secant predictor, halved on failure and doubled (up to
 /// a half) on success. Where straight rods are too far from the equilibrium for Newton, the rods
 /// bow gradually as the attachments move into place and the loads come on; the path can turn
-/// sharply (one random robot around the reference took 134 steps), so it has kColdIterationFactor
+/// sharply (one random robot around the reference took 137 steps), so it has kColdIterationFactor
 /// times options.max_continuation_steps. kConverged with x the robot's equilibrium.
 inline SolveStatus spatial_homotopy_solve(const SpatialRobotParams<double>& robot,
                                           SpatialShootingPoint<double>& x, int rod_steps,
