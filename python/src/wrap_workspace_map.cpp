@@ -67,7 +67,7 @@ py::dict spatial_workspace_map_dict(const SpatialWorkspaceMap& map, int n) {
       stable.mutable_at(j, i) = p.stable;
       status.mutable_at(j, i) = p.visited ? static_cast<int>(p.status) : -1;
       for (int k = 0; k < n; ++k) {
-        q.mutable_at(j, i, k) = p.q.size() == n ? p.q(k) : std::numeric_limits<double>::quiet_NaN();
+        q.mutable_at(j, i, k) = p.q(k);  // NaN where IK found no equilibrium
       }
       for (int k = 0; k < 6; ++k) poses.mutable_at(j, i, k) = p.pose[static_cast<std::size_t>(k)];
       max_strain.mutable_at(j, i) = p.max_strain;
