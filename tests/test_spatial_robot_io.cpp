@@ -8,7 +8,9 @@
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <random>
+#include <utility>
 
 #include "pcr/robot_io.hpp"
 #include "pcr/spatial/robot_io.hpp"
@@ -40,7 +42,12 @@ const char* const kValid = R"({
   "platform_centre_of_mass": [0, 0, 0.01],
   "gravity": [0, 0, -9.81],
   "external_force": [1, 2, 3],
-  "external_moment": [0.1, 0.2, 0.3]
+  "external_moment": [0.1, 0.2, 0.3],
+  "extrinsics": {"tracker": {"position": [0.5, -0.25, 1.5], "orientation": [0, 0, 0.6, 0.8]},
+                 "marker": {"position": [0, 0, -0.01]}},
+  "uncertainty": {"l": 5e-4, "A": [1e-4, 2e-4, 3e-4], "tip_rotation": [5e-3, 5e-3, 0],
+                  "tracker": [1e-3, 1e-3, 2e-3, 0.05, 0.05, 0.1],
+                  "rods": [{}, {"l": 1e-3, "G": 4e9, "base_rotation": [0, 0, 0.01]}]}
 })";
 
 Json valid() { return Json::parse(kValid); }
@@ -100,6 +107,33 @@ void expect_same(const pcr::SpatialRobotParams<double>& a,
   EXPECT_TRUE(same(a.gravity, b.gravity));
   EXPECT_TRUE(same(a.external_force, b.external_force));
   EXPECT_TRUE(same(a.external_moment, b.external_moment));
+  for (const auto& [x, y] : {std::pair(a.extrinsics.tracker, b.extrinsics.tracker),
+                             std::pair(a.extrinsics.marker, b.extrinsics.marker)}) {
+    EXPECT_TRUE(same(x.position, y.position));
+    EXPECT_TRUE(same(x.orientation, y.orientation));
+  }
+}
+
+void expect_same(const pcr::SpatialRodUncertainty& a, const pcr::SpatialRodUncertainty& b) {
+  EXPECT_TRUE(same(a.young_modulus, b.young_modulus));
+  EXPECT_TRUE(same(a.shear_modulus, b.shear_modulus));
+  EXPECT_TRUE(same(a.diameter, b.diameter));
+  EXPECT_TRUE(same(a.length, b.length));
+  EXPECT_TRUE(same(a.A, b.A));
+  EXPECT_TRUE(same(a.base_rotation, b.base_rotation));
+  EXPECT_TRUE(same(a.B, b.B));
+  EXPECT_TRUE(same(a.tip_rotation, b.tip_rotation));
+}
+
+void expect_same(const std::optional<pcr::SpatialUncertainty>& a,
+                 const std::optional<pcr::SpatialUncertainty>& b) {
+  ASSERT_EQ(a.has_value(), b.has_value());
+  if (!a) return;
+  expect_same(a->global, b->global);
+  ASSERT_EQ(a->rods.size(), b->rods.size());
+  for (std::size_t i = 0; i < a->rods.size(); ++i) expect_same(a->rods[i], b->rods[i]);
+  EXPECT_TRUE(same(a->tracker, b->tracker));
+  EXPECT_TRUE(same(a->marker, b->marker));
 }
 
 TEST(SpatialRobotIo, ParsesAValidFile) {
@@ -134,6 +168,28 @@ TEST(SpatialRobotIo, ParsesAValidFile) {
   EXPECT_EQ(p.gravity, pcr::Vector3<double>(0, 0, -9.81));
   EXPECT_EQ(p.external_force, pcr::Vector3<double>(1, 2, 3));
   EXPECT_EQ(p.external_moment, pcr::Vector3<double>(0.1, 0.2, 0.3));
+  EXPECT_EQ(p.extrinsics.tracker.position, pcr::Vector3<double>(0.5, -0.25, 1.5));
+  EXPECT_EQ(p.extrinsics.tracker.orientation, pcr::Vector4<double>(0, 0, 0.6, 0.8));
+  EXPECT_EQ(p.extrinsics.marker.position, pcr::Vector3<double>(0, 0, -0.01));
+  EXPECT_EQ(p.extrinsics.marker.orientation, pcr::Vector4<double>(1, 0, 0, 0));  // the default
+  ASSERT_TRUE(r.uncertainty.has_value());
+  const pcr::SpatialUncertainty& u = *r.uncertainty;
+  ASSERT_EQ(u.rods.size(), 2u);
+  for (const pcr::SpatialRodUncertainty& rod : {u.global, u.rods[0], u.rods[1]}) {
+    EXPECT_EQ(rod.A, Eigen::Vector3d(1e-4, 2e-4, 3e-4));
+    EXPECT_EQ(rod.tip_rotation, Eigen::Vector3d(5e-3, 5e-3, 0));
+    EXPECT_EQ(rod.young_modulus, 0.0);
+    EXPECT_EQ(rod.B, Eigen::Vector3d::Zero());
+  }
+  EXPECT_EQ(u.rods[0].length, 5e-4);
+  EXPECT_EQ(u.rods[0].shear_modulus, 0.0);
+  EXPECT_EQ(u.rods[1].length, 1e-3);
+  EXPECT_EQ(u.rods[1].shear_modulus, 4e9);
+  EXPECT_EQ(u.rods[1].base_rotation, Eigen::Vector3d(0, 0, 0.01));
+  EXPECT_EQ(u.global.base_rotation, Eigen::Vector3d::Zero());
+  EXPECT_EQ(u.tracker(2), 2e-3);
+  EXPECT_EQ(u.tracker(5), 0.1);
+  EXPECT_EQ(u.marker, (Eigen::Matrix<double, 6, 1>::Zero()));
 }
 
 TEST(SpatialRobotIo, ShippedFileIsTheReferenceRobot) {
@@ -141,6 +197,7 @@ TEST(SpatialRobotIo, ShippedFileIsTheReferenceRobot) {
       pcr::load_spatial_robot(std::string(PCR_SOURCE_DIR) + "/robots/continuum-stewart-gough.json");
   EXPECT_EQ(r.name, "continuum-stewart-gough");
   expect_same(r.params, pcr::continuum_stewart_gough());
+  expect_same(r.uncertainty, std::optional(pcr::continuum_stewart_gough_uncertainty()));
   EXPECT_EQ(
       pcr::load_robot_kind(std::string(PCR_SOURCE_DIR) + "/robots/continuum-stewart-gough.json"),
       pcr::RobotKind::kSpatial);
@@ -192,13 +249,42 @@ TEST(SpatialRobotIo, RoundTripIsBitExact) {
     p.gravity = vector();
     p.external_force = vector();
     p.external_moment = vector();
+    p.extrinsics.tracker = pcr::SpatialPose<double>{vector(), unit4()};
+    p.extrinsics.marker = pcr::SpatialPose<double>{vector(), unit4()};
+    if (trial % 3 != 0) {
+      // Half-widths from 1e-12 up (a position's to 0.1 m, a turn's to 1 rad), some rods overridden.
+      auto width = [&](double hi) { return random_double(rng, -11.7, hi, true); };
+      auto widths = [&](double hi) { return Eigen::Vector3d(width(hi), width(hi), width(hi)); };
+      auto rod = [&] {
+        pcr::SpatialRodUncertainty u;
+        u.young_modulus = random_double(rng, 3.1, 11.6, true);
+        u.shear_modulus = random_double(rng, 3.1, 11.6, true);
+        u.diameter = width(-2.4);
+        u.length = width(-1.4);
+        u.A = widths(-1.4);
+        u.base_rotation = widths(-0.4);
+        u.B = widths(-1.4);
+        u.tip_rotation = widths(-0.4);
+        return u;
+      };
+      pcr::SpatialUncertainty u;
+      u.global = rod();
+      for (int i = 0; i < p.num_rods; ++i) u.rods.push_back(i % 2 ? rod() : u.global);
+      for (int k = 0; k < 6; ++k) {
+        u.tracker(k) = width(k < 3 ? -1.4 : -0.4);
+        u.marker(k) = width(k < 3 ? -1.4 : -0.4);
+      }
+      r.uncertainty = u;
+    }
 
     const pcr::SpatialRobotDescription text =
         pcr::parse_spatial_robot(pcr::spatial_robot_to_json(r), "memory");
     EXPECT_EQ(text.name, r.name);
     expect_same(text.params, p);
+    expect_same(text.uncertainty, r.uncertainty);
     pcr::save_spatial_robot(r, path);
     expect_same(pcr::load_spatial_robot(path).params, p);
+    expect_same(pcr::load_spatial_robot(path).uncertainty, r.uncertainty);
     if (HasFailure()) break;
   }
   // A description that would not load is refused and nothing is written.
@@ -278,6 +364,31 @@ TEST(SpatialRobotIo, BadFieldsAreNamedWithTheirValues) {
   j = valid();
   j["external_force"][2] = "3";
   EXPECT_MESSAGE(error_of(j), "external_force[2]", "expected a number");
+
+  j = valid();
+  j["uncertainty"]["l"] = -5e-4;
+  EXPECT_MESSAGE(error_of(j), "uncertainty.l", "half-width", "-0.0005");
+  j = valid();
+  j["uncertainty"]["A"] = {1e-4, 0.5, 0};  // half a metre: a unit typo
+  EXPECT_MESSAGE(error_of(j), "uncertainty.A[1]", "half-width", "0.5");
+  j = valid();
+  j["uncertainty"]["tracker"] = {1e-3, 1e-3, 1e-3, 0.05, 0.05};
+  EXPECT_MESSAGE(error_of(j), "uncertainty.tracker", "array of 6 numbers");
+  j = valid();
+  j["uncertainty"]["rods"].push_back(Json::object());
+  EXPECT_MESSAGE(error_of(j), "uncertainty.rods", "array of 2 objects");
+  j = valid();
+  j["uncertainty"]["rods"][1]["alpha"] = 5e-3;  // a planar field
+  EXPECT_MESSAGE(error_of(j), "uncertainty.rods[1].alpha", "unknown field");
+  j = valid();
+  j["uncertainty"]["limbs"] = Json::array();
+  EXPECT_MESSAGE(error_of(j), "uncertainty.limbs", "unknown field");
+  j = valid();
+  j["extrinsics"]["tracker"]["orientation"] = {0, 0, 0.6, 0.81};
+  EXPECT_MESSAGE(error_of(j), "extrinsics.tracker.orientation", "unit norm");
+  j = valid();
+  j["extrinsics"]["camera"] = Json::object();
+  EXPECT_MESSAGE(error_of(j), "extrinsics.camera", "unknown field");
 
   // Non-finite numbers, including a literal that overflows a double.
   std::string text = valid().dump();

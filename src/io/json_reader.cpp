@@ -167,6 +167,19 @@ double JsonReader::in_range(const Json& value, const std::string& path, double l
   return x;
 }
 
+double JsonReader::half_width(const Json& value, const std::string& path, double min, double max,
+                              const char* unit) const {
+  const double x = number(value, path);
+  if (x == 0.0) return x;
+  if (!(x >= min && x <= max)) {
+    fail(path,
+         std::string("a half-width must be 0 or in [") + format_double(min) + ", " +
+             format_double(max) + "] " + unit,
+         value);
+  }
+  return x;
+}
+
 RobotKind robot_kind(const JsonReader& reader, const Json& root) {
   if (!root.is_object() || !root.contains("kind")) return RobotKind::kPlanar;
   const Json& kind = root["kind"];

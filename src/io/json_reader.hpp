@@ -63,6 +63,11 @@ class JsonReader {
   double in_range(const Json& value, const std::string& path, double lo, double hi,
                   const char* unit) const;
 
+  /// A half-width: 0 (the parameter is known) or in [min, max]. Below min a bound would be
+  /// indistinguishable from the value itself (a denormal aborts the bounded solver).
+  double half_width(const Json& value, const std::string& path, double min, double max,
+                    const char* unit) const;
+
   template <int N>
   Eigen::Matrix<double, N, 1> vector(const Json& value, const std::string& path) const {
     if (!value.is_array() || value.size() != static_cast<std::size_t>(N)) {
@@ -71,6 +76,15 @@ class JsonReader {
     Eigen::Matrix<double, N, 1> out;
     for (int i = 0; i < N; ++i) out(i) = number(value[static_cast<std::size_t>(i)], index(path, i));
     return out;
+  }
+  /// An array of N half-widths (half_width).
+  template <int N>
+  Eigen::Matrix<double, N, 1> half_widths(const Json& value, const std::string& path, double min,
+                                          double max, const char* unit) const {
+    const Eigen::Matrix<double, N, 1> v = vector<N>(value, path);
+    for (int i = 0; i < N; ++i)
+      half_width(value[static_cast<std::size_t>(i)], index(path, i), min, max, unit);
+    return v;
   }
   /// An array of N numbers, each in [lo, hi].
   template <int N>

@@ -24,25 +24,8 @@ class Reader : public JsonReader {
  public:
   using JsonReader::JsonReader;
 
-  /// A half-width: 0 (the parameter is known) or in [min, max]. Below min a bound would be
-  /// indistinguishable from the value itself (a denormal aborts the bounded solver).
-  double half_width(const Json& value, const std::string& path, double min, double max,
-                    const char* unit) const {
-    const double x = number(value, path);
-    if (x == 0.0) return x;
-    if (!(x >= min && x <= max)) {
-      fail(path,
-           std::string("a half-width must be 0 or in [") + format_double(min) + ", " +
-               format_double(max) + "] " + unit,
-           value);
-    }
-    return x;
-  }
-
   Eigen::Vector2d position_half_widths(const Json& value, const std::string& path) const {
-    const Eigen::Vector2d v = vector<2>(value, path);
-    for (std::size_t i = 0; i < 2; ++i) half_width(value[i], index(path, i), 1e-12, 0.1, "m");
-    return v;
+    return half_widths<2>(value, path, 1e-12, 0.1, "m");
   }
 
   Eigen::Vector3d pose_half_widths(const Json& value, const std::string& path) const {

@@ -116,12 +116,83 @@ class SpatialReader : public JsonReader {
     return limb;
   }
 
+  /// A pose {"position": [x, y, z], "orientation": [w, x, y, z]}, both optional (identity).
+  SpatialPose<double> frame(const Json& value, const std::string& path) const {
+    check_object(value, path, {"position", "orientation"});
+    SpatialPose<double> pose;
+    if (value.contains("position"))
+      pose.position = point(value["position"], join(path, "position"));
+    if (value.contains("orientation")) {
+      pose.orientation =
+          unit<4>(value["orientation"], join(path, "orientation"), "a quaternion (w, x, y, z)");
+    }
+    return pose;
+  }
+
+  /// Reads the rod uncertainty fields present in `object` over `out` (overrides).
+  void rod_uncertainty(const Json& object, const std::string& path,
+                       SpatialRodUncertainty& out) const {
+    for (auto it = object.begin(); it != object.end(); ++it) {
+      const std::string key = it.key();
+      const std::string p = join(path, key);
+      if (key == "E") out.young_modulus = half_width(*it, p, 1e3, 1e12, "Pa");
+      if (key == "G") out.shear_modulus = half_width(*it, p, 1e3, 1e12, "Pa");
+      if (key == "d") out.diameter = half_width(*it, p, 1e-12, 1e-2, "m");
+      if (key == "l") out.length = half_width(*it, p, 1e-12, 0.1, "m");
+      if (key == "A") out.A = half_widths<3>(*it, p, 1e-12, 0.1, "m");
+      if (key == "base_rotation") out.base_rotation = half_widths<3>(*it, p, 1e-12, 1.0, "rad");
+      if (key == "B") out.B = half_widths<3>(*it, p, 1e-12, 0.1, "m");
+      if (key == "tip_rotation") out.tip_rotation = half_widths<3>(*it, p, 1e-12, 1.0, "rad");
+    }
+  }
+
+  /// Half-widths of a frame's (x, y, z) in m, then (rx, ry, rz) in rad.
+  Eigen::Matrix<double, 6, 1> frame_half_widths(const Json& value, const std::string& path) const {
+    Eigen::Matrix<double, 6, 1> v = vector<6>(value, path);
+    for (std::size_t i = 0; i < 6; ++i) {
+      half_width(value[i], index(path, i), 1e-12, i < 3 ? 0.1 : 1.0, i < 3 ? "m" : "rad");
+    }
+    return v;
+  }
+
+  SpatialUncertainty uncertainty(const Json& object, int num_rods) const {
+    const std::string path = "uncertainty";
+    check_object(object, path,
+                 {"E", "G", "d", "l", "A", "base_rotation", "B", "tip_rotation", "tracker",
+                  "marker", "rods"});
+    SpatialUncertainty u;
+    rod_uncertainty(object, path, u.global);
+    if (object.contains("tracker")) {
+      u.tracker = frame_half_widths(object["tracker"], join(path, "tracker"));
+    }
+    if (object.contains("marker")) {
+      u.marker = frame_half_widths(object["marker"], join(path, "marker"));
+    }
+    u.rods.assign(static_cast<std::size_t>(num_rods), u.global);
+    if (object.contains("rods")) {
+      const Json& rods = object["rods"];
+      const std::string rpath = join(path, "rods");
+      if (!rods.is_array() || rods.size() != static_cast<std::size_t>(num_rods)) {
+        fail(rpath,
+             "expected an array of " + std::to_string(num_rods) +
+                 " objects (one per rod; {} for no override)",
+             rods);
+      }
+      for (std::size_t i = 0; i < rods.size(); ++i) {
+        check_object(rods[i], index(rpath, i),
+                     {"E", "G", "d", "l", "A", "base_rotation", "B", "tip_rotation"});
+        rod_uncertainty(rods[i], index(rpath, i), u.rods[i]);
+      }
+    }
+    return u;
+  }
+
   SpatialRobotDescription robot(const Json& root) const {
     if (!root.is_object()) fail("<root>", "expected an object", root);
     require_kind(*this, root, RobotKind::kSpatial);  // first: a planar file's fields are unknown
     check_object(root, "",
                  {"pcr_robot", "kind", "name", "rods", "platform_mass", "platform_centre_of_mass",
-                  "gravity", "external_force", "external_moment"});
+                  "gravity", "external_force", "external_moment", "extrinsics", "uncertainty"});
     const Json& version = required(root, "", "pcr_robot");
     if (!version.is_number_integer() || version.get<long long>() != kFormatVersion) {
       fail("pcr_robot",
@@ -161,6 +232,16 @@ class SpatialReader : public JsonReader {
       params.external_moment = vector_in_range<3>(root["external_moment"], "external_moment",
                                                   -kMaxMoment, kMaxMoment, "N m");
     }
+    if (root.contains("extrinsics")) {
+      const Json& e = root["extrinsics"];
+      check_object(e, "extrinsics", {"tracker", "marker"});
+      if (e.contains("tracker"))
+        params.extrinsics.tracker = frame(e["tracker"], "extrinsics.tracker");
+      if (e.contains("marker")) params.extrinsics.marker = frame(e["marker"], "extrinsics.marker");
+    }
+    if (root.contains("uncertainty")) {
+      out.uncertainty = uncertainty(root["uncertainty"], params.num_rods);
+    }
     return out;
   }
 };
@@ -169,6 +250,33 @@ template <int N>
 Ordered array(const Eigen::Matrix<double, N, 1>& v) {
   Ordered out = Ordered::array();
   for (int i = 0; i < N; ++i) out.push_back(v(i));
+  return out;
+}
+
+Ordered frame_json(const SpatialPose<double>& pose) {
+  Ordered out = Ordered::object();
+  out["position"] = array<3>(pose.position);
+  out["orientation"] = array<4>(pose.orientation);
+  return out;
+}
+
+/// Uncertainty fields of `u` that differ from `base` (all of them when base is null).
+Ordered rod_uncertainty_json(const SpatialRodUncertainty& u, const SpatialRodUncertainty* base) {
+  Ordered out = Ordered::object();
+  const auto differs = [&](const auto& a, const auto& b) { return !base || !same_bits(a, b); };
+  const auto same3 = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return same_bits(a(0), b(0)) && same_bits(a(1), b(1)) && same_bits(a(2), b(2));
+  };
+  if (differs(u.young_modulus, base ? base->young_modulus : 0.0)) out["E"] = u.young_modulus;
+  if (differs(u.shear_modulus, base ? base->shear_modulus : 0.0)) out["G"] = u.shear_modulus;
+  if (differs(u.diameter, base ? base->diameter : 0.0)) out["d"] = u.diameter;
+  if (differs(u.length, base ? base->length : 0.0)) out["l"] = u.length;
+  if (!base || !same3(u.A, base->A)) out["A"] = array<3>(u.A);
+  if (!base || !same3(u.base_rotation, base->base_rotation))
+    out["base_rotation"] = array<3>(u.base_rotation);
+  if (!base || !same3(u.B, base->B)) out["B"] = array<3>(u.B);
+  if (!base || !same3(u.tip_rotation, base->tip_rotation))
+    out["tip_rotation"] = array<3>(u.tip_rotation);
   return out;
 }
 
@@ -220,6 +328,30 @@ std::string spatial_robot_to_json(const SpatialRobotDescription& robot) {
   root["gravity"] = array<3>(params.gravity);
   root["external_force"] = array<3>(params.external_force);
   root["external_moment"] = array<3>(params.external_moment);
+  Ordered extrinsics = Ordered::object();
+  extrinsics["tracker"] = frame_json(params.extrinsics.tracker);
+  extrinsics["marker"] = frame_json(params.extrinsics.marker);
+  root["extrinsics"] = extrinsics;
+  if (robot.uncertainty) {
+    const SpatialUncertainty& u = *robot.uncertainty;
+    if (!u.rods.empty() && u.rods.size() != static_cast<std::size_t>(params.num_rods)) {
+      throw InputError("spatial_robot_to_json: robot '" + robot.name + "': uncertainty.rods has " +
+                       std::to_string(u.rods.size()) + " entries for " +
+                       std::to_string(params.num_rods) + " rods");
+    }
+    Ordered uj = rod_uncertainty_json(u.global, nullptr);
+    uj["tracker"] = array<6>(u.tracker);
+    uj["marker"] = array<6>(u.marker);
+    bool overridden = false;
+    Ordered overrides = Ordered::array();
+    for (const SpatialRodUncertainty& r : u.rods) {
+      Ordered o = rod_uncertainty_json(r, &u.global);
+      overridden = overridden || !o.empty();
+      overrides.push_back(o);
+    }
+    if (overridden) uj["rods"] = overrides;
+    root["uncertainty"] = uj;
+  }
   std::ostringstream out;
   print(root, 0, out);
   out << "\n";

@@ -16,6 +16,51 @@
 
 namespace pcr {
 
+/// A rigid pose, e.g. ^W T_P: the position of the child frame's origin in the parent frame (m)
+/// and its orientation child -> parent.
+template <class T>
+struct SpatialPose {
+  Vector3<T> position = Vector3<T>::Zero();           ///< m
+  Vector4<T> orientation = identity_quaternion<T>();  ///< (w, x, y, z)
+  Matrix3<T> rotation() const { return rotation_of(orientation); }
+
+  /// ^A T_C = ^A T_B * ^B T_C.
+  SpatialPose operator*(const SpatialPose& other) const {
+    return SpatialPose{position + rotation() * other.position,
+                       quaternion_product(orientation, other.orientation)};
+  }
+  SpatialPose inverse() const {
+    const Vector4<T> conjugate(orientation(0), -orientation(1), -orientation(2), -orientation(3));
+    return SpatialPose{-(rotation().transpose() * position), conjugate};
+  }
+  template <class U>
+  SpatialPose<U> cast() const {
+    return SpatialPose<U>{position.template cast<U>(), orientation.template cast<U>()};
+  }
+};
+
+/// Where the measuring system sees the platform from (Mauze et al. 2021, Eq. 5, in 3-D): it
+/// measures the pose ^S T_M of a marker frame M fixed to the platform (a tag board, a tracker's
+/// rigid body) in its own frame S (a camera, a tracker's base).
+template <class T>
+struct SpatialExtrinsics {
+  SpatialPose<T> tracker;  ///< ^W T_S: the measuring system's frame in W
+  SpatialPose<T> marker;   ///< ^M T_P: the platform frame in the marker frame
+
+  /// What the measuring system reports for a platform pose ^W T_P: (^W T_S)^-1 ^W T_P (^M T_P)^-1.
+  SpatialPose<T> measurement_from_platform(const SpatialPose<T>& world_T_platform) const {
+    return tracker.inverse() * world_T_platform * marker.inverse();
+  }
+  /// The platform pose in W of a measurement ^S T_M.
+  SpatialPose<T> platform_from_measurement(const SpatialPose<T>& tracker_T_marker) const {
+    return tracker * tracker_T_marker * marker;
+  }
+  template <class U>
+  SpatialExtrinsics<U> cast() const {
+    return SpatialExtrinsics<U>{tracker.template cast<U>(), marker.template cast<U>()};
+  }
+};
+
 /// Fixed capacity, so the hot path never allocates.
 inline constexpr int kMaxSpatialRods = 8;
 
@@ -94,6 +139,8 @@ struct SpatialRobotParams {
   /// External wrench on the platform: a force at the origin of P and a moment, both in W.
   Vector3<T> external_force = Vector3<T>::Zero();   ///< N
   Vector3<T> external_moment = Vector3<T>::Zero();  ///< N m
+  /// The measuring system's frames (identity unless a calibration or a file says otherwise).
+  SpatialExtrinsics<T> extrinsics{};
 
   const SpatialLimbParams<T>& limb(int i) const { return limbs[static_cast<std::size_t>(i)]; }
   SpatialLimbParams<T>& limb(int i) { return limbs[static_cast<std::size_t>(i)]; }
@@ -108,6 +155,7 @@ struct SpatialRobotParams {
     out.gravity = gravity.template cast<U>();
     out.external_force = external_force.template cast<U>();
     out.external_moment = external_moment.template cast<U>();
+    out.extrinsics = extrinsics.template cast<U>();
     return out;
   }
 };

@@ -6,10 +6,12 @@
 // model; a quaternion whose norm is not 1 within kUnitQuaternionTolerance is refused, not
 // normalised (a typo in one component would otherwise turn the frame silently).
 
+#include <optional>
 #include <string>
 
 #include "pcr/input_error.hpp"
 #include "pcr/robot_io.hpp"
+#include "pcr/spatial/parameters.hpp"
 #include "pcr/spatial/robot.hpp"
 
 namespace pcr {
@@ -17,16 +19,41 @@ namespace pcr {
 /// How far from 1 the norm of a quaternion (or a unit direction) in a file may be.
 inline constexpr double kUnitQuaternionTolerance = 1e-9;
 
-/// A spatial robot as its file describes it: its name and its parameters.
+/// A spatial robot as its file describes it: its name, its parameters (the measuring system's
+/// extrinsics included) and the intervals its uncertain parameters lie in.
 struct SpatialRobotDescription {
   std::string name;
   SpatialRobotParams<double> params;
+  /// Half-widths, rods resolved (one entry per rod); absent: every parameter known.
+  std::optional<SpatialUncertainty> uncertainty;
 };
 
-/// The reference continuum Stewart-Gough robot (continuum_stewart_gough()), as
+/// The reference robot's intervals, a lab's tolerances for a robot of this size (the paper's for
+/// its angles and its camera, Section 4): holes and attachment points within 0.1 mm along each
+/// axis, their frames within 5 mrad about each axis, the free length at q = 0 within 0.5 mm (the
+/// actuators' zero), the wire's diameter within 10 um, E and G within 5 %, the tracker's frame
+/// within 1 mm and 50 mrad, the marker's within 1 mm and 50 mrad.
+inline SpatialUncertainty continuum_stewart_gough_uncertainty(int num_rods = 6) {
+  SpatialUncertainty u;
+  u.global.young_modulus = 10e9;
+  u.global.shear_modulus = 4e9;
+  u.global.diameter = 10e-6;
+  u.global.length = 0.5e-3;
+  u.global.A = Eigen::Vector3d::Constant(0.1e-3);
+  u.global.base_rotation = Eigen::Vector3d::Constant(5e-3);
+  u.global.B = Eigen::Vector3d::Constant(0.1e-3);
+  u.global.tip_rotation = Eigen::Vector3d::Constant(5e-3);
+  u.rods.assign(static_cast<std::size_t>(num_rods), u.global);
+  u.tracker << 1e-3, 1e-3, 1e-3, 50e-3, 50e-3, 50e-3;
+  u.marker << 1e-3, 1e-3, 1e-3, 50e-3, 50e-3, 50e-3;
+  return u;
+}
+
+/// The reference continuum Stewart-Gough robot (continuum_stewart_gough()) with its intervals, as
 /// robots/continuum-stewart-gough.json describes it.
 inline SpatialRobotDescription continuum_stewart_gough_description() {
-  return SpatialRobotDescription{"continuum-stewart-gough", continuum_stewart_gough()};
+  return SpatialRobotDescription{"continuum-stewart-gough", continuum_stewart_gough(),
+                                 continuum_stewart_gough_uncertainty()};
 }
 
 /// The file's name of an actuation ("length_through_hole", "translated_clamp") and of an

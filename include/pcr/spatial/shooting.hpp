@@ -57,14 +57,6 @@ using SpatialJacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0,
 using SpatialInputJacobian =
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxSpatialUnknowns, kMaxSpatialRods>;
 
-/// A rigid pose: ^W T_P.
-template <class T>
-struct SpatialPose {
-  Vector3<T> position = Vector3<T>::Zero();           ///< m, in W
-  Vector4<T> orientation = identity_quaternion<T>();  ///< (w, x, y, z), P -> W
-  Matrix3<T> rotation() const { return rotation_of(orientation); }
-};
-
 /// A force (N) and a moment (N m), in W.
 template <class T>
 struct SpatialWrench {
