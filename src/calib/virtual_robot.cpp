@@ -4,18 +4,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "virtual_robot_rules.hpp"
+
 namespace pcr {
 namespace {
-
-/// nominal + U(-h, h), or nominal +- fraction h with the sign drawn when fraction > 0; h = 0
-/// leaves the value unchanged (and still consumes one draw, so the stream does not depend on which
-/// half-widths are zero).
-double draw(std::mt19937_64& rng, double nominal, double half_width, double fraction = 0.0) {
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const double x = u(rng);
-  if (fraction > 0.0) return nominal + half_width * (x < 0.0 ? -fraction : fraction);
-  return nominal + half_width * x;
-}
 
 std::string format_q(const JointVector& q) {
   std::ostringstream out;
@@ -52,34 +44,35 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
   RobotParams<double>& p = truth_.params;
   // One material and one wire: E and d are drawn once for all limbs (relative to limb 0's
   // nominal offset, so per-limb nominal differences are kept).
-  const double e_offset = draw(rng, 0.0, u.global.rod.young_modulus, f);
-  const double d_offset = draw(rng, 0.0, u.global.rod.diameter, f);
+  const double e_offset = internal::draw_within(rng, 0.0, u.global.rod.young_modulus, f);
+  const double d_offset = internal::draw_within(rng, 0.0, u.global.rod.diameter, f);
   truth_.young_modulus = nominal.young_modulus + e_offset;
   for (int i = 0; i < n; ++i) {
     const LimbUncertainty& h = u.limbs[static_cast<std::size_t>(i)];
     LimbParams<double>& limb = p.limb(i);
     limb.rod.young_modulus += e_offset;
     limb.rod.diameter += d_offset;
-    limb.rod.length = draw(rng, limb.rod.length, h.rod.length, f);
-    limb.A.x() = draw(rng, limb.A.x(), h.A.x(), f);
-    limb.A.y() = draw(rng, limb.A.y(), h.A.y(), f);
-    limb.alpha = draw(rng, limb.alpha, h.alpha, f);
-    limb.B.x() = draw(rng, limb.B.x(), h.B.x(), f);
-    limb.B.y() = draw(rng, limb.B.y(), h.B.y(), f);
-    limb.beta = draw(rng, limb.beta, h.beta, f);
-    limb.gamma = draw(rng, limb.gamma, h.gamma, f);
+    limb.rod.length = internal::draw_within(rng, limb.rod.length, h.rod.length, f);
+    limb.A.x() = internal::draw_within(rng, limb.A.x(), h.A.x(), f);
+    limb.A.y() = internal::draw_within(rng, limb.A.y(), h.A.y(), f);
+    limb.alpha = internal::draw_within(rng, limb.alpha, h.alpha, f);
+    limb.B.x() = internal::draw_within(rng, limb.B.x(), h.B.x(), f);
+    limb.B.y() = internal::draw_within(rng, limb.B.y(), h.B.y(), f);
+    limb.beta = internal::draw_within(rng, limb.beta, h.beta, f);
+    limb.gamma = internal::draw_within(rng, limb.gamma, h.gamma, f);
     // Drawn when declared only: the paper's robots keep their truths seed for seed.
     if (h.rod.precurvature > 0)
-      limb.rod.precurvature = draw(rng, limb.rod.precurvature, h.rod.precurvature, f);
+      limb.rod.precurvature =
+          internal::draw_within(rng, limb.rod.precurvature, h.rod.precurvature, f);
   }
   Pose2<double>& camera = p.extrinsics.camera;
   Pose2<double>& pattern = p.extrinsics.pattern;
-  camera.x = draw(rng, camera.x, u.camera.x(), f);
-  camera.y = draw(rng, camera.y, u.camera.y(), f);
-  camera.theta = draw(rng, camera.theta, u.camera.z(), f);
-  pattern.x = draw(rng, pattern.x, u.pattern.x(), f);
-  pattern.y = draw(rng, pattern.y, u.pattern.y(), f);
-  pattern.theta = draw(rng, pattern.theta, u.pattern.z(), f);
+  camera.x = internal::draw_within(rng, camera.x, u.camera.x(), f);
+  camera.y = internal::draw_within(rng, camera.y, u.camera.y(), f);
+  camera.theta = internal::draw_within(rng, camera.theta, u.camera.z(), f);
+  pattern.x = internal::draw_within(rng, pattern.x, u.pattern.x(), f);
+  pattern.y = internal::draw_within(rng, pattern.y, u.pattern.y(), f);
+  pattern.theta = internal::draw_within(rng, pattern.theta, u.pattern.z(), f);
 
   // Unmodelled effects: each from its own stream, so switching one on does not change the others
   // nor the base truth above.
@@ -88,15 +81,16 @@ VirtualRobot::VirtualRobot(const RobotDescription& nominal, const VirtualRobotOp
     std::seed_seq seq{options.seed, std::uint64_t{0x6d6973616c}};
     std::mt19937_64 r(seq);
     for (int i = 0; i < n; ++i) {
-      p.limb(i).beta = draw(r, p.limb(i).beta, fx.misalignment_half_width);
-      p.limb(i).gamma = draw(r, p.limb(i).gamma, fx.misalignment_half_width);
+      p.limb(i).beta = internal::draw_within(r, p.limb(i).beta, fx.misalignment_half_width);
+      p.limb(i).gamma = internal::draw_within(r, p.limb(i).gamma, fx.misalignment_half_width);
     }
   }
   if (fx.unequal_diameters) {
     std::seed_seq seq{options.seed, std::uint64_t{0x6469616d}};
     std::mt19937_64 r(seq);
     for (int i = 0; i < n; ++i) {
-      p.limb(i).rod.diameter = draw(r, p.limb(i).rod.diameter, fx.diameter_half_width);
+      p.limb(i).rod.diameter =
+          internal::draw_within(r, p.limb(i).rod.diameter, fx.diameter_half_width);
       if (!(p.limb(i).rod.diameter > 0)) {
         throw InputError("VirtualRobot: effects.diameter_half_width " +
                          std::to_string(fx.diameter_half_width) + " makes a diameter <= 0");
@@ -113,12 +107,9 @@ VirtualMeasurement VirtualRobot::measure(const JointVector& q) {
   const RobotParams<double>& robot = truth_.params;
   const ForwardSolution& fk = sequence_.solve(q);
   m.summary = fk.summary;
-  if (!is_equilibrium(fk.summary)) return m;
-  if (fk.summary.stability == Stability::kUnstable) {
-    // A real robot does not hold an unstable equilibrium: it snaps to another one, which no
-    // statics model can say. Not measured; the robot is homed again, as a lab does after a snap.
-    m.summary.status = SolveStatus::kUnstable;
-    return_home();
+  bool home_again = false;
+  if (!internal::measured_equilibrium(m.summary, &home_again)) {
+    if (home_again) return_home();
     return m;
   }
   m.ok = true;

@@ -16,6 +16,7 @@
 #include "pcr/robot_description.hpp"
 #include "pcr/se2.hpp"
 #include "pcr/shooting.hpp"
+#include "pcr/spatial/shooting.hpp"
 
 namespace pcr {
 
@@ -46,6 +47,31 @@ Dataset read_dataset(const std::string& path, int num_joints = -1);
 std::string dataset_to_csv(const Dataset& data);
 /// Temporary file + rename.
 void write_dataset(const Dataset& data, const std::string& path);
+
+/// A spatial robot's dataset: header `q1,...,qn,x,y,z,rx,ry,rz`, one row per configuration: the
+/// joint values (m, n up to kMaxSpatialRods) and the measured marker pose ^S T_M, its position (m)
+/// and its orientation M -> S as a rotation vector (rad: angle times unit axis, as `pcr fk`
+/// writes a spatial pose). The same rules as Dataset's; the rotation vector's components are
+/// angles (within kMaxDatasetAngle).
+struct SpatialDataset {
+  int num_joints = 0;
+  std::vector<SpatialJointVector> q;       ///< joint values (m)
+  std::vector<SpatialPose<double>> poses;  ///< measured ^S T_M
+  std::vector<int> line_numbers;           ///< 1-based source line of each row (empty if built)
+
+  std::size_t size() const { return q.size(); }
+  void add(const SpatialJointVector& joints, const SpatialPose<double>& pose);
+};
+
+/// "q1", ..., "qn", "x", "y", "z", "rx", "ry", "rz".
+std::vector<std::string> spatial_dataset_columns(int num_joints);
+SpatialDataset parse_spatial_dataset(std::istream& in, const std::string& source,
+                                     int num_joints = -1);
+SpatialDataset read_spatial_dataset(const std::string& path, int num_joints = -1);
+/// The orientation as quaternion_log's rotation vector (angle in [0, pi]).
+std::string spatial_dataset_to_csv(const SpatialDataset& data);
+/// Temporary file + rename.
+void write_spatial_dataset(const SpatialDataset& data, const std::string& path);
 
 /// Joint configurations, header `q1,...,qn` (num_joints < 0: from the file).
 std::vector<JointVector> parse_configurations(std::istream& in, const std::string& source,
