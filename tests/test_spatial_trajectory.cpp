@@ -205,6 +205,12 @@ TEST(SpatialTrajectory, RangesNameTheField) {
   helix.turns = 0;
   EXPECT_FALSE(helix.is_valid(&error));
   EXPECT_EQ(error, "turns: expected a number from 0.001 to 1000, got 0");
+  helix.turns = 1;
+  helix.axis_orientation *= 1e-9;
+  EXPECT_FALSE(helix.is_valid(&error));
+  EXPECT_EQ(error, "|axis_orientation|: expected a number from 1e-06 to 1000000, got 1e-09");
+  helix.axis_orientation = identity_quaternion<double>();
+  helix.turns = 0;
   try {
     spatial_helix_path(helix);
     ADD_FAILURE() << "no exception";

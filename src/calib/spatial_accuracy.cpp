@@ -88,25 +88,23 @@ SpatialPathCommand spatial_command_path(const SpatialRobotParams<double>& model,
   command.poses.reserve(path.size());
   for (std::size_t k = 0; k < path.size(); ++k) {
     const SpatialPose<double>& pose = path[k];
-    const std::string where = "pose " + std::to_string(k) + " " + format_pose(pose) + ": ";
-    if (!internal::spatial_pose_valid(pose)) {
-      throw InputError(where + "not finite (or a zero quaternion)");
-    }
+    const auto fail = [&](const std::string& reason) {
+      throw InputError("pose " + std::to_string(k) + " " + format_pose(pose) + ": " + reason);
+    };
+    if (!internal::spatial_pose_valid(pose)) fail("not finite (or a zero quaternion)");
     const SpatialInverseSolution& solution = sequence.solve(pose);
     const SolverSummary& s = solution.summary;
     if (s.status == SolveStatus::kUnstable) {
-      throw InputError(where +
-                       "the only equilibrium inverse kinematics found would not hold (unstable)");
+      fail("the only equilibrium inverse kinematics found would not hold (unstable)");
     }
     if (!s.converged()) {
-      throw InputError(where + "no inverse-kinematics solution (solver status " +
-                       to_string(s.status) + "): outside the workspace");
+      fail("no inverse-kinematics solution (solver status " + std::string(to_string(s.status)) +
+           "): outside the workspace");
     }
     if (!(s.max_strain <= options.strain_limit)) {
       std::ostringstream msg;
-      msg << where << "bending strain " << s.max_strain << " exceeds the limit "
-          << options.strain_limit;
-      throw InputError(msg.str());
+      msg << "bending strain " << s.max_strain << " exceeds the limit " << options.strain_limit;
+      fail(msg.str());
     }
     command.q.push_back(solution.q);
     command.poses.push_back(solution.pose);

@@ -22,13 +22,7 @@ namespace pcr {
 
 namespace internal {
 
-/// Whether a quaternion of a path is usable (finite, non-zero); the range is on its norm.
-inline bool check_quaternion(const Vector4<double>& h, const OptionRange& norm_range,
-                             std::string* error, const char* prefix) {
-  return norm_range.check(h.norm(), error, prefix);
-}
-
-/// The point (u, v) of a plane's frame in W, about `centre`.
+/// The point (u, v, w) of a plane's frame in W, the frame's origin at `centre`.
 inline Vector3<double> point_in_plane(const Vector3<double>& centre, const Vector4<double>& plane,
                                       double u, double v, double w = 0.0) {
   return centre + rotation_of(plane) * Vector3<double>(u, v, w);
@@ -61,17 +55,17 @@ struct SpatialSquarePath {
   /// As SolverOptions::is_valid, naming the field with `prefix` ("square." when nested).
   bool is_valid(std::string* error = nullptr, const char* prefix = "") const {
     return kSide.check(side, error, prefix) &&
-           valid_frame(centre, plane_orientation, error, prefix) &&
+           valid_frame(centre, plane_orientation, kPlaneNorm, error, prefix) &&
            kStart.check(start, error, prefix) &&
-           internal::check_quaternion(orientation, kOrientationNorm, error, prefix) &&
+           kOrientationNorm.check(orientation.norm(), error, prefix) &&
            kNumPoses.check(num_poses, error, prefix);
   }
-  /// The centre's and the plane's checks, shared by the spatial paths.
-  static bool valid_frame(const Vector3<double>& centre, const Vector4<double>& plane,
-                          std::string* error, const char* prefix) {
+  /// The centre's and the plane's (or axis') frame's checks, shared by the spatial paths.
+  static bool valid_frame(const Vector3<double>& centre, const Vector4<double>& frame,
+                          const OptionRange& frame_norm, std::string* error, const char* prefix) {
     return kCentre.check(centre.x(), error, prefix) && kCentre.check(centre.y(), error, prefix) &&
            kCentre.check(centre.z(), error, prefix) &&
-           internal::check_quaternion(plane, kPlaneNorm, error, prefix);
+           frame_norm.check(frame.norm(), error, prefix);
   }
 
   /// The pose at `fraction` of the perimeter from pose 0 (wrapped into [0, 1)).
@@ -92,11 +86,11 @@ struct SpatialSquarePath {
 /// from the polar angle `start` (about the plane's e3, from its e1), at the constant platform
 /// orientation; closed like SpatialSquarePath.
 struct SpatialCirclePath {
-  Vector3<double> centre = Vector3<double>::Zero();
-  Vector4<double> plane_orientation = identity_quaternion<double>();
-  double diameter = kPaperCircleDiameter;  ///< m
-  double start = 0.0;                      ///< rad, polar angle of pose 0
-  Vector4<double> orientation = identity_quaternion<double>();
+  Vector3<double> centre = Vector3<double>::Zero();                   ///< m, in W
+  Vector4<double> plane_orientation = identity_quaternion<double>();  ///< e3 the plane's normal
+  double diameter = kPaperCircleDiameter;                             ///< m
+  double start = 0.0;                                           ///< rad, polar angle of pose 0
+  Vector4<double> orientation = identity_quaternion<double>();  ///< the platform's, P -> W
   int num_poses = 36;
 
   static constexpr OptionRange kDiameter = CirclePath::kDiameter;
@@ -106,10 +100,10 @@ struct SpatialCirclePath {
   /// As SpatialSquarePath::is_valid.
   bool is_valid(std::string* error = nullptr, const char* prefix = "") const {
     return kDiameter.check(diameter, error, prefix) &&
-           SpatialSquarePath::valid_frame(centre, plane_orientation, error, prefix) &&
+           SpatialSquarePath::valid_frame(centre, plane_orientation, SpatialSquarePath::kPlaneNorm,
+                                          error, prefix) &&
            kStart.check(start, error, prefix) &&
-           internal::check_quaternion(orientation, SpatialSquarePath::kOrientationNorm, error,
-                                      prefix) &&
+           SpatialSquarePath::kOrientationNorm.check(orientation.norm(), error, prefix) &&
            kNumPoses.check(num_poses, error, prefix);
   }
 
@@ -133,19 +127,21 @@ struct SpatialCirclePath {
 /// centre + pitch turns / 2 e3, at the constant platform orientation. Not closed: pose 0 is the
 /// start, pose num_poses - 1 the end.
 struct SpatialHelixPath {
-  Vector3<double> centre = Vector3<double>::Zero();
+  Vector3<double> centre = Vector3<double>::Zero();  ///< m, in W: the midpoint of the axis
   Vector4<double> axis_orientation = identity_quaternion<double>();  ///< e3 the helix's axis
   double diameter = kPaperCircleDiameter;                            ///< m
   double pitch = 1e-3;                                               ///< m per turn
   double turns = 2.0;
-  double start = 0.0;  ///< rad, polar angle of pose 0
-  Vector4<double> orientation = identity_quaternion<double>();
-  int num_poses = 73;  ///< 36 a turn, both ends included
+  double start = 0.0;                                           ///< rad, polar angle of pose 0
+  Vector4<double> orientation = identity_quaternion<double>();  ///< the platform's, P -> W
+  int num_poses = 73;                                           ///< 36 a turn, both ends included
 
   static constexpr OptionRange kDiameter = CirclePath::kDiameter;
   /// Up or down, as far as a side or diameter: pitch 0 retraces a circle.
   static constexpr OptionRange kPitch{"pitch", -SquarePath::kSide.hi, SquarePath::kSide.hi, "m"};
   static constexpr OptionRange kTurns{"turns", 1e-3, 1000};
+  static constexpr OptionRange kAxisNorm{"|axis_orientation|", SpatialSquarePath::kPlaneNorm.lo,
+                                         SpatialSquarePath::kPlaneNorm.hi};
   static constexpr OptionRange kStart = SpatialCirclePath::kStart;
   static constexpr OptionRange kNumPoses = SquarePath::kNumPoses;
 
@@ -153,10 +149,9 @@ struct SpatialHelixPath {
   bool is_valid(std::string* error = nullptr, const char* prefix = "") const {
     return kDiameter.check(diameter, error, prefix) && kPitch.check(pitch, error, prefix) &&
            kTurns.check(turns, error, prefix) &&
-           SpatialSquarePath::valid_frame(centre, axis_orientation, error, prefix) &&
+           SpatialSquarePath::valid_frame(centre, axis_orientation, kAxisNorm, error, prefix) &&
            kStart.check(start, error, prefix) &&
-           internal::check_quaternion(orientation, SpatialSquarePath::kOrientationNorm, error,
-                                      prefix) &&
+           SpatialSquarePath::kOrientationNorm.check(orientation.norm(), error, prefix) &&
            kNumPoses.check(num_poses, error, prefix);
   }
 
