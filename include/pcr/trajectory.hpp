@@ -97,9 +97,11 @@ struct CirclePath {
   int size() const noexcept { return num_poses; }
 };
 
-/// Writes min(path.size(), capacity) poses into `out`; returns how many were written.
-template <class Path>
-int fill_path(const Path& path, Pose2<double>* out, int capacity) noexcept {
+/// Writes min(path.size(), capacity) poses into `out`; returns how many were written. Any path
+/// with size() and pose(k): Pose2<double> for the planar ones, SpatialPose<double> for those of
+/// pcr/spatial/trajectory.hpp.
+template <class Path, class Pose>
+int fill_path(const Path& path, Pose* out, int capacity) noexcept {
   const int count = path.size() < capacity ? path.size() : capacity;
   for (int k = 0; k < count; ++k) out[k] = path.pose(k);
   return count < 0 ? 0 : count;

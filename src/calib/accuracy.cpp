@@ -13,14 +13,6 @@
 namespace pcr {
 namespace {
 
-template <class Path>
-std::vector<Pose2<double>> path_poses(const Path& spec, const char* name) {
-  require_valid(spec, name);
-  std::vector<Pose2<double>> out(static_cast<std::size_t>(spec.num_poses));
-  fill_path(spec, out.data(), spec.num_poses);
-  return out;
-}
-
 std::string format_pose(const Pose2<double>& p) {
   std::ostringstream s;
   s.precision(9);
@@ -30,22 +22,6 @@ std::string format_pose(const Pose2<double>& p) {
 
 bool finite(const Pose2<double>& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta);
-}
-
-Iso9283Stats stats_of(const std::vector<Iso9283Pose>& poses, double (*value)(const Iso9283Pose&)) {
-  Iso9283Stats s;
-  if (poses.empty()) return s;
-  s.max = -INFINITY;
-  s.min = INFINITY;
-  double sum = 0;
-  for (const Iso9283Pose& p : poses) {
-    const double v = value(p);
-    s.max = std::max(s.max, v);
-    s.min = std::min(s.min, v);
-    sum += v;
-  }
-  s.mean = sum / static_cast<double>(poses.size());
-  return s;
 }
 
 }  // namespace
@@ -179,11 +155,11 @@ Iso9283Result iso9283(const std::vector<Pose2<double>>& commanded,
     p.rp_theta = 3.0 * p.s_theta;
     result.poses.push_back(p);
   }
-  result.ap_p = stats_of(result.poses, [](const Iso9283Pose& p) { return p.ap_p; });
+  result.ap_p = iso9283_stats(result.poses, [](const Iso9283Pose& p) { return p.ap_p; });
   result.ap_theta_abs =
-      stats_of(result.poses, [](const Iso9283Pose& p) { return std::abs(p.ap_theta); });
-  result.rp_l = stats_of(result.poses, [](const Iso9283Pose& p) { return p.rp_l; });
-  result.rp_theta = stats_of(result.poses, [](const Iso9283Pose& p) { return p.rp_theta; });
+      iso9283_stats(result.poses, [](const Iso9283Pose& p) { return std::abs(p.ap_theta); });
+  result.rp_l = iso9283_stats(result.poses, [](const Iso9283Pose& p) { return p.rp_l; });
+  result.rp_theta = iso9283_stats(result.poses, [](const Iso9283Pose& p) { return p.rp_theta; });
   return result;
 }
 

@@ -13,14 +13,28 @@
 //   S_theta.
 // Table 4 of the paper is the max, mean and min over the path of AP_p and |AP_theta|.
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "pcr/calib/virtual_robot.hpp"
+#include "pcr/input_error.hpp"
 #include "pcr/trajectory.hpp"
 
 namespace pcr {
+
+/// The poses of any path with num_poses and pose(k) (pcr/trajectory.hpp,
+/// pcr/spatial/trajectory.hpp) as a vector; InputError "`what`: <is_valid's message>" when the
+/// path lies out of its ranges.
+template <class Path>
+auto path_poses(const Path& spec, const std::string& what) {
+  require_valid(spec, what);
+  std::vector<decltype(spec.pose(0))> out(static_cast<std::size_t>(spec.num_poses));
+  fill_path(spec, out.data(), spec.num_poses);
+  return out;
+}
 
 /// The poses of a path as a vector (SquarePath / CirclePath in pcr/trajectory.hpp).
 std::vector<Pose2<double>> square_path(const SquarePath& spec = SquarePath());
@@ -66,6 +80,24 @@ struct Iso9283Pose {
 struct Iso9283Stats {
   double max = 0, mean = 0, min = 0;
 };
+
+/// The max, mean and min of value(item) over a path's per-pose statistics (zeros when empty).
+template <class Item, class Value>
+Iso9283Stats iso9283_stats(const std::vector<Item>& items, Value&& value) {
+  Iso9283Stats s;
+  if (items.empty()) return s;
+  s.max = -INFINITY;
+  s.min = INFINITY;
+  double sum = 0;
+  for (const Item& item : items) {
+    const double v = value(item);
+    s.max = std::max(s.max, v);
+    s.min = std::min(s.min, v);
+    sum += v;
+  }
+  s.mean = sum / static_cast<double>(items.size());
+  return s;
+}
 
 struct Iso9283Result {
   std::vector<Iso9283Pose> poses;
