@@ -10,6 +10,8 @@
 #include <Eigen/Core>
 #include <cmath>
 
+#include "pcr/scalar_traits.hpp"
+
 namespace pcr {
 
 template <class T>
@@ -85,17 +87,22 @@ Vector4<T> quaternion_of(const Matrix3<T>& R) {
 }
 
 /// The rotation vector (rad) of h / |h|: angle times axis, the angle in [0, pi] (of h and -h, the
-/// one with w >= 0). The inverse of quaternion_exp (pcr/spatial/kinematics.hpp). atan2 keeps
-/// full precision at small and at large angles.
+/// one with w >= 0). The inverse of quaternion_exp (pcr/spatial/shooting.hpp). atan2 keeps
+/// full precision at small and at large angles; below 1e-6 rad the series 2 v / w (1 - |v|^2 /
+/// (3 w^2)), exact to rounding there, keeps the derivatives a Jet carries through the identity.
 template <class T>
 Vector3<T> quaternion_log(const Vector4<T>& h) {
   using std::atan2;
   using std::sqrt;
   const T sign = h[0] < T(0) ? T(-1) : T(1);
   const Vector3<T> v = sign * h.template tail<3>();
-  const T n = sqrt(v.squaredNorm());
-  if (n == T(0)) return Vector3<T>::Zero();
-  return (T(2) * atan2(n, sign * h[0]) / n) * v;
+  const T w = sign * h[0];
+  const T n2 = v.squaredNorm();
+  if (scalar_value(n2) < 1e-12 * scalar_value(w * w)) {
+    return (T(2) / w * (T(1) - n2 / (T(3) * w * w))) * v;
+  }
+  const T n = sqrt(n2);
+  return (T(2) * atan2(n, w) / n) * v;
 }
 
 }  // namespace pcr
