@@ -180,12 +180,13 @@ TEST(SpatialParameters, MeasurementIsEquationFiveInThreeDimensions) {
                                             random_unit_quaternion(rng)};
     const Eigen::Isometry3d expected =
         isometry(e.tracker).inverse() * isometry(platform) * isometry(e.marker).inverse();
+    // Three rotations composed: a few ulps of each entry.
     const pcr::SpatialPose<double> measured = e.measurement_from_platform(platform);
-    EXPECT_LT((measured.position - expected.translation()).norm(), 1e-15);
-    EXPECT_LT((measured.rotation() - expected.linear()).norm(), 1e-15);
+    EXPECT_LT((measured.position - expected.translation()).norm(), 1e-14);
+    EXPECT_LT((measured.rotation() - expected.linear()).norm(), 1e-14);
     const pcr::SpatialPose<double> back = e.platform_from_measurement(measured);
-    EXPECT_LT((back.position - platform.position).norm(), 1e-15);
-    EXPECT_LT((back.rotation() - platform.rotation()).norm(), 1e-15);
+    EXPECT_LT((back.position - platform.position).norm(), 1e-14);
+    EXPECT_LT((back.rotation() - platform.rotation()).norm(), 1e-14);
   }
 }
 

@@ -72,7 +72,8 @@ Eigen::Matrix<T, 6, 1> row_residual(const SpatialPose<T>& platform,
   Eigen::Matrix<T, 6, 1> r;
   r.template head<3>() = (predicted.position - measured.position.cast<T>()) / T(scale);
   r.template tail<3>() =
-      quaternion_log<T>(quaternion_product<T>(conjugate, predicted.orientation)) * T(weight / scale);
+      quaternion_log<T>(quaternion_product<T>(conjugate, predicted.orientation)) *
+      T(weight / scale);
   return r;
 }
 
