@@ -73,6 +73,11 @@ std::vector<std::optional<ForwardSolution>> equilibria_measured_instead(
 std::vector<int> stage_free_indices(const CalibrationStage& stage,
                                     const std::vector<double>& half_widths, int n);
 
+/// Throws InputError naming `source` on no stage, a kind `known` refuses (the message ends with
+/// `unknown_hint`) or a non-positive bounds scale: the one check of the planar and spatial stages.
+void validate_stage_list(const std::vector<CalibrationStage>& stages, const std::string& source,
+                         bool (*known)(const std::string&), const std::string& unknown_hint);
+
 // registration.cpp
 
 /// The extrinsics of Eq. 5, P_j = C M_j Pm, from the platform poses P_j of the nominal geometry

@@ -90,17 +90,7 @@ std::vector<CalibrationStage> with_load_stage(std::vector<CalibrationStage> stag
 }
 
 void validate_stages(const std::vector<CalibrationStage>& stages, const std::string& source) {
-  if (stages.empty()) throw InputError(source + ": no stage");
-  for (std::size_t s = 0; s < stages.size(); ++s) {
-    const std::string where = source + ": stages[" + std::to_string(s) + "]";
-    for (const std::string& kind : stages[s].free) {
-      if (!known_kind(kind)) throw InputError(where + ".free: unknown kind \"" + kind + "\"");
-    }
-    if (!(stages[s].bounds_scale > 0) || !std::isfinite(stages[s].bounds_scale)) {
-      throw InputError(where + ".bounds_scale: must be positive, got " +
-                       format_number(stages[s].bounds_scale));
-    }
-  }
+  calib_internal::validate_stage_list(stages, source, known_kind, "");
 }
 
 std::vector<double> parameter_half_widths(const RobotUncertainty& u, int num_limbs) {
@@ -151,5 +141,26 @@ void check_enough_measurements(const std::vector<CalibrationStage>& stages,
                    " free parameters of stage '" + largest->name + "': at least " +
                    std::to_string((free + 2) / 3) + " configurations are needed");
 }
+
+namespace calib_internal {
+
+void validate_stage_list(const std::vector<CalibrationStage>& stages, const std::string& source,
+                         bool (*known)(const std::string&), const std::string& unknown_hint) {
+  if (stages.empty()) throw InputError(source + ": no stage");
+  for (std::size_t s = 0; s < stages.size(); ++s) {
+    const std::string where = source + ": stages[" + std::to_string(s) + "]";
+    for (const std::string& kind : stages[s].free) {
+      if (!known(kind)) {
+        throw InputError(where + ".free: unknown kind \"" + kind + "\"" + unknown_hint);
+      }
+    }
+    if (!(stages[s].bounds_scale > 0) || !std::isfinite(stages[s].bounds_scale)) {
+      throw InputError(where + ".bounds_scale: must be positive, got " +
+                       format_number(stages[s].bounds_scale));
+    }
+  }
+}
+
+}  // namespace calib_internal
 
 }  // namespace pcr

@@ -386,21 +386,10 @@ std::vector<CalibrationStage> default_spatial_stages() {
 
 void validate_spatial_stages(const std::vector<CalibrationStage>& stages,
                              const std::string& source) {
-  if (stages.empty()) throw InputError(source + ": no stage");
-  for (std::size_t s = 0; s < stages.size(); ++s) {
-    const std::string where = source + ": stages[" + std::to_string(s) + "]";
-    for (const std::string& kind : stages[s].free) {
-      if (!known_kind(kind)) {
-        throw InputError(where + ".free: unknown kind \"" + kind +
-                         "\" for a spatial robot (a kind of pcr/spatial/parameters.hpp, A, B, "
-                         "base_rotation, tip_rotation, tracker, marker, extrinsics or all)");
-      }
-    }
-    if (!(stages[s].bounds_scale > 0) || !std::isfinite(stages[s].bounds_scale)) {
-      throw InputError(where + ".bounds_scale: must be positive, got " +
-                       format_number(stages[s].bounds_scale));
-    }
-  }
+  calib_internal::validate_stage_list(
+      stages, source, known_kind,
+      " for a spatial robot (a kind of pcr/spatial/parameters.hpp, A, B, base_rotation, "
+      "tip_rotation, tracker, marker, extrinsics or all)");
 }
 
 bool SpatialCalibrationOptions::is_valid(std::string* error) const {
@@ -501,7 +490,6 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     // would project each step onto the box, and with steps along singular vectors that mix many
     // parameters, one held coordinate shortens every step: Levenberg-Marquardt then crawls.
     std::vector<int> moving = free;
-    std::vector<int> held;
     for (int round = 0; round <= kMaxBoundRounds && !moving.empty(); ++round) {
       const StageSolve solve = solve_stage(problem, rows, options, stage.name, moving, &u);
       report.unseen_directions = solve.unseen;
@@ -520,10 +508,7 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
         past.push_back(k);
       }
       if (past.empty()) break;
-      for (const int k : past) {
-        held.push_back(k);
-        moving.erase(std::find(moving.begin(), moving.end(), k));
-      }
+      for (const int k : past) moving.erase(std::find(moving.begin(), moving.end(), k));
       if (round == kMaxBoundRounds) {  // the last clamp is not solved again: say so
         result.warnings.push_back("stage '" + stage.name +
                                   "': parameters still past a bound after " +

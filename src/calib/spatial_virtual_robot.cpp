@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "pcr/csv_io.hpp"  // format_double
 #include "virtual_robot_rules.hpp"
 
 namespace pcr {
@@ -77,8 +78,8 @@ SpatialVirtualRobot::SpatialVirtualRobot(const SpatialRobotDescription& nominal,
       throw InputError(
           "SpatialVirtualRobot: robot '" + nominal.name + "': the intervals of rod " +
           std::to_string(i) + " reach a diameter, a modulus or a length <= 0 (drawn: d " +
-          std::to_string(rod.diameter) + " m, E " + std::to_string(rod.young_modulus) + " Pa, G " +
-          std::to_string(rod.shear_modulus) + " Pa, l " + std::to_string(rod.length) + " m)");
+          format_double(rod.diameter) + " m, E " + format_double(rod.young_modulus) + " Pa, G " +
+          format_double(rod.shear_modulus) + " Pa, l " + format_double(rod.length) + " m)");
     }
   }
   // A robot moves from configuration to configuration: each measurement continues from the last.

@@ -135,9 +135,9 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
                                            const SpatialCalibrationOptions& options = {});
 
 /// One row's whitened residual (6, as the stages see it) at `nominal` moved by the flat deviations
-/// `deviations` (SI units), FK from home at q, and its exact derivative by the implicit function
-/// theorem with respect to the deviations (6 x num_spatial_parameters, SI units). False when FK
-/// does not converge at q.
+/// `deviations` (SI units), FK cold at q (from straight rods), and its exact derivative by the
+/// implicit function theorem with respect to the deviations (6 x num_spatial_parameters, SI units).
+/// False when FK does not converge at q.
 bool spatial_measurement_jacobian(const SpatialRobotDescription& nominal,
                                   const std::vector<double>& deviations,
                                   const SpatialJointVector& q, const SpatialPose<double>& measured,
