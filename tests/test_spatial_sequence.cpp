@@ -1,6 +1,6 @@
 // Sequences of spatial FK and IK inputs (pcr/spatial/sequence.hpp): independent inputs give the
 // cold solve's result whatever the order, to the bit; a path gives the same equilibria, warm; IK
-// of FK's poses gives back the joints.
+// of FK's poses gives back the joints; a long jump stays on its start's branch.
 
 #include <gtest/gtest.h>
 
@@ -117,6 +117,45 @@ TEST(SpatialSequence, APathReachesTheSameEquilibriaWarm) {
   EXPECT_LT(worst_pose, 1e-9);
   EXPECT_LT(worst_joints, 1e-9);
   EXPECT_LT(path_evaluations, cold_evaluations);
+}
+
+/// A warm solve over a long jump of the inputs lands where the robot goes when it moves there:
+/// on the branch of its start, as a path of short steps (each 1/50 of the jump) follows it. Pairs
+/// drawn anywhere in the joint range, in no order; a pair whose short-step path does not reach its
+/// end (a fold on the way: the robot would snap) says nothing and is not counted.
+TEST(SpatialSequence, ALongJumpLandsOnItsStartsBranch) {
+  const SpatialRobotParams<double> robot = continuum_stewart_gough();
+  const std::vector<SpatialJointVector> ends = random_joints(40, 21);
+  constexpr int kShortSteps = 50;
+  int compared = 0;
+  double worst_fk = 0, worst_ik = 0;
+  for (std::size_t p = 0; p + 1 < ends.size(); p += 2) {
+    const SpatialForwardSolution start = spatial_forward_kinematics(robot, ends[p]);
+    ASSERT_TRUE(start.summary.converged()) << "pair " << p;
+    SpatialForwardSolution fine = start;
+    bool reached = true;
+    for (int k = 1; k <= kShortSteps && reached; ++k) {
+      const double t = static_cast<double>(k) / kShortSteps;
+      fine = spatial_forward_kinematics(robot, (1 - t) * ends[p] + t * ends[p + 1], fine);
+      reached = fine.summary.converged() && fine.summary.path_fraction == 1.0;
+    }
+    if (!reached) continue;
+    ++compared;
+    const SpatialForwardSolution jump = spatial_forward_kinematics(robot, ends[p + 1], start);
+    ASSERT_TRUE(jump.summary.converged()) << "pair " << p;
+    worst_fk = std::max(worst_fk, (jump.pose.position - fine.pose.position).norm());
+    // IK over the same jump of poses, from the start's equilibrium, gives the joints back.
+    const SpatialInverseSolution ik = spatial_inverse_kinematics(robot, fine.pose, start);
+    ASSERT_TRUE(ik.summary.converged()) << "pair " << p;
+    worst_ik = std::max(worst_ik, (ik.q - ends[p + 1]).lpNorm<Eigen::Infinity>());
+  }
+  std::printf(
+      "%d long jumps of %zu: FK within %.2e m of the short-step paths, IK joints within "
+      "%.2e m\n",
+      compared, ends.size() / 2, worst_fk, worst_ik);
+  EXPECT_GE(compared, 15);
+  EXPECT_LT(worst_fk, 1e-9);
+  EXPECT_LT(worst_ik, 1e-9);
 }
 
 TEST(SpatialSequence, IkOfAnotherRodCountIsUnsupported) {

@@ -92,39 +92,53 @@ struct Problem {
   }
 };
 
-/// A row's last equilibrium, continued as the parameters move.
+/// A row's equilibrium, continued as the parameters move. FK depends on the rods' parameters
+/// only: the extrinsics move the measurement, not the robot, so a step of theirs reuses the
+/// solution and its derivative.
 struct RowState {
   SpatialJointVector q;
   SpatialPose<double> measured;
-  SpatialForwardSolution solution;  ///< the last converged one
-  SpatialForwardSolution start;     ///< on the nominal robot, the fallback start
-  std::vector<double> at;           ///< the parameters (half-width units) `solution` is at
-  int failures = 0;
+  SpatialForwardSolution solution;  ///< at the rods' parameters `at`
+  std::vector<double> at;           ///< the rods' parameters (half-width units) of `solution`
+  /// d pose / d (rods' deviations, SI) at `solution` (6 x 16 n: position in m, turn on the
+  /// right), when `derivative_valid`.
+  Eigen::MatrixXd pose_derivative;
+  bool derivative_valid = false;
+  /// The solution at the last accepted parameters: every trial starts from it, so that a
+  /// rejected step's equilibrium (perhaps on another branch) never starts the next one.
+  SpatialForwardSolution anchor;
+  SpatialForwardSolution start;  ///< on the nominal robot, the fallback start
 };
 
-/// FK of a row at deviations d, continued from its last solution (then from its nominal one).
+/// Whether a row's solution is at the rods' parameters of u.
+bool solved_at(const Problem& problem, const RowState& row, const double* u) {
+  const int rods = kSpatialRodParameters * problem.nominal->params.num_rods;
+  return static_cast<int>(row.at.size()) == rods && std::equal(row.at.begin(), row.at.end(), u);
+}
+
+/// FK of a row at deviations d, continued from its anchor (then from its nominal solution).
 bool solve_row(const Problem& problem, RowState& row, const double* u,
                const SpatialRobotParams<double>& robot) {
-  if (!row.at.empty() && std::equal(row.at.begin(), row.at.end(), u)) return true;
-  for (const SpatialForwardSolution* warm : {&row.solution, &row.start}) {
+  if (solved_at(problem, row, u)) return true;
+  for (const SpatialForwardSolution* warm : {&row.anchor, &row.start}) {
     SpatialForwardSolution s = spatial_forward_kinematics(robot, row.q, *warm, problem.fk);
     if (is_equilibrium(s.summary)) {
       row.solution = s;
-      row.at.assign(u, u + problem.count);
+      row.at.assign(u, u + kSpatialRodParameters * robot.num_rods);
+      row.derivative_valid = false;
       return true;
     }
   }
-  ++row.failures;
+  row.at.clear();
   return false;
 }
 
-/// d (whitened residual) / d (flat deviations) of a row at its solution, by the implicit function
-/// theorem (see the header): 6 x count, row-major.
-void row_jacobian(const Problem& problem, const RowState& row,
-                  const SpatialRobotParams<double>& robot, const std::vector<double>& d,
-                  RowMajor& out) {
+/// d pose / d (rods' deviations) of a row at its solution, by the implicit function theorem (see
+/// the header): 6 x 16 n, the position in m, the turn on the right.
+Eigen::MatrixXd pose_derivative(const Problem& problem, const RowState& row,
+                                const SpatialRobotParams<double>& robot,
+                                const std::vector<double>& d) {
   using Jet16 = ceres::Jet<double, kSpatialRodParameters>;
-  using Jet18 = ceres::Jet<double, 18>;
   const int n = robot.num_rods;
   const SpatialForwardSolution& s = row.solution;
   SpatialShootingPoint<double> x;
@@ -180,6 +194,23 @@ void row_jacobian(const Problem& problem, const RowState& row,
     }
   }
   const Eigen::MatrixXd dz = -lu.solve(Fp);
+  Eigen::MatrixXd out(6, kSpatialRodParameters * n);
+  out.topRows(3) = scale.length * dz.middleRows(6 * n, 3);
+  out.bottomRows(3) = dz.middleRows(6 * n + 3, 3);
+  return out;
+}
+
+/// d (whitened residual) / d (flat deviations) of a row at its solution, by the implicit function
+/// theorem (see the header): 6 x count, row-major.
+void row_jacobian(const Problem& problem, RowState& row, const SpatialRobotParams<double>& robot,
+                  const std::vector<double>& d, RowMajor& out) {
+  using Jet18 = ceres::Jet<double, 18>;
+  const int n = robot.num_rods;
+  const SpatialForwardSolution& s = row.solution;
+  if (!row.derivative_valid) {
+    row.pose_derivative = pose_derivative(problem, row, robot, d);
+    row.derivative_valid = true;
+  }
 
   // The measurement: the pose's change (position in m, turn on the right) and the extrinsics'.
   Jet18 e[12];
@@ -199,11 +230,8 @@ void row_jacobian(const Problem& problem, const RowState& row,
       row_residual(platform, extrinsics, row.measured, problem.weight, problem.scale);
   Eigen::Matrix<double, 6, 18> D;
   for (int k = 0; k < 6; ++k) D.row(k) = m(k).v.transpose();
-  Eigen::MatrixXd pose_per_rod(6, kSpatialRodParameters * n);
-  pose_per_rod.topRows(3) = scale.length * dz.middleRows(6 * n, 3);
-  pose_per_rod.bottomRows(3) = dz.middleRows(6 * n + 3, 3);
   out.resize(6, problem.count);
-  out.leftCols(kSpatialRodParameters * n) = D.leftCols(6) * pose_per_rod;
+  out.leftCols(kSpatialRodParameters * n) = D.leftCols(6) * row.pose_derivative;
   out.rightCols(12) = D.rightCols(12);
   for (int k = 0; k < problem.count; ++k) out.col(k) *= problem.half_widths[k];
 }
@@ -258,19 +286,32 @@ bool stacked_jacobian(const Problem& problem, std::vector<RowState>& rows, const
   return jacobian->allFinite() && residual->allFinite();
 }
 
-/// The options' progress lines, one per Levenberg-Marquardt iteration.
-class StageProgress final : public ceres::IterationCallback {
+/// After each Levenberg-Marquardt iteration: the rows' anchors moved to an accepted step's
+/// parameters (u, updated every iteration; Ceres has evaluated the Jacobian there), and the
+/// options' progress line.
+class StageCallback final : public ceres::IterationCallback {
  public:
-  StageProgress(const SpatialCalibrationOptions& options, std::string stage)
-      : options_(options), stage_(std::move(stage)) {}
+  StageCallback(const Problem& problem, std::vector<RowState>& rows, const double* u,
+                const SpatialCalibrationOptions& options, std::string stage)
+      : problem_(problem), rows_(rows), u_(u), options_(options), stage_(std::move(stage)) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    options_.progress("stage " + stage_ + ": iteration " + std::to_string(s.iteration) + ", cost " +
-                      format_number(s.cost) + ", step " + format_number(s.step_norm) +
-                      " half-widths");
+    if (s.step_is_successful) {
+      for (RowState& row : rows_) {
+        if (solved_at(problem_, row, u_)) row.anchor = row.solution;
+      }
+    }
+    if (options_.progress) {
+      options_.progress("stage " + stage_ + ": iteration " + std::to_string(s.iteration) +
+                        ", cost " + format_number(s.cost) + ", step " + format_number(s.step_norm) +
+                        " half-widths");
+    }
     return ceres::SOLVER_CONTINUE;
   }
 
  private:
+  const Problem& problem_;
+  std::vector<RowState>& rows_;
+  const double* u_;
   const SpatialCalibrationOptions& options_;
   std::string stage_;
 };
@@ -320,6 +361,7 @@ StageSolve solve_stage(const Problem& problem, std::vector<RowState>& rows,
     out.termination = "the model cannot be evaluated at the stage's start";
     return out;
   }
+  for (RowState& row : rows) row.anchor = row.solution;  // the stage's start is accepted
   Eigen::MatrixXd on_moving(jacobian.rows(), static_cast<Eigen::Index>(moving.size()));
   for (std::size_t c = 0; c < moving.size(); ++c) on_moving.col(c) = jacobian.col(moving[c]);
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(on_moving, Eigen::ComputeFullV);
@@ -362,8 +404,9 @@ StageSolve solve_stage(const Problem& problem, std::vector<RowState>& rows,
   solver.jacobi_scaling = false;
   solver.min_lm_diagonal = 1.0;
   solver.max_lm_diagonal = 1.0;
-  StageProgress progress(options, stage);
-  if (options.progress) solver.callbacks.push_back(&progress);
+  StageCallback callback(problem, rows, u->data(), options, stage);
+  solver.callbacks.push_back(&callback);
+  solver.update_state_every_iteration = true;  // the callback reads u
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &ceres_problem, &summary);
   out.initial_cost = summary.initial_cost;
@@ -377,9 +420,12 @@ StageSolve solve_stage(const Problem& problem, std::vector<RowState>& rows,
 }  // namespace
 
 std::vector<CalibrationStage> default_spatial_stages() {
+  // No middle stage (the paper's influential geometry with the extrinsics): the last stage holds
+  // the directions the data do not see, which the middle stage's order was there to protect. On
+  // five hidden truths the three stages reached the same validation errors (within 2 %) in ten
+  // times the time (20 to 40 s), their bound rounds restarting Levenberg-Marquardt.
   return {
       {"extrinsics", {"extrinsics"}, 1.0},
-      {"geometry", {"l", "A", "B", "base_rotation", "tip_rotation", "extrinsics"}, 1.0},
       {"all", {"all"}, 1.0},
   };
 }
@@ -457,7 +503,8 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     }
     rows[j].q = data.q[j];
     rows[j].measured = data.poses[j];
-    rows[j].solution = rows[j].start = s;
+    rows[j].solution = rows[j].anchor = rows[j].start = s;
+    rows[j].at.assign(static_cast<std::size_t>(kSpatialRodParameters * n), 0.0);
   }
 
   std::vector<double> u(static_cast<std::size_t>(problem.count), 0.0);

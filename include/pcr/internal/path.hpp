@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pcr/internal/branch_rule.hpp"
 #include "pcr/internal/newton.hpp"
 #include "pcr/internal/shooting_problem.hpp"
 #include "pcr/robot.hpp"
@@ -84,24 +85,11 @@ inline bool stalled_at_bifurcation(const ShootingProblem& problem, const Shootin
   return g_norm > 0.0 && std::abs(svd.matrixU().col(m - 1).dot(g)) <= 0.01 * g_norm;
 }
 
-/// The largest corrector a path step may take, as a share of its tangent predictor's own step.
-/// Along a branch of curvature k the tangent predictor of a step h misses it by about k h^2 / 2:
-/// a share of 1/4 lets the tangent turn by up to half a radian over a step (the step length
-/// control of predictor-corrector continuation, Allgower and Georg, Introduction to Numerical
-/// Continuation Methods, 6.1). A corrector that goes further may have converged on another branch
-/// (another equilibrium at the same input), so the step is shortened instead.
-inline constexpr double kMaxCorrectorShare = 0.25;
-
-/// Scaled distance below which a corrector is rounding, whatever the step (3e-10 m on a 30 mm
-/// rod): two branches are never that close but at a fold, where the path stops.
-inline constexpr double kCorrectorFloor = 1e-8;
-
 /// Whether a corrector from the tangent predictor z_predicted of a step from z_start stayed on the
 /// branch it predicted: it moved z by at most kMaxCorrectorShare of the predictor's step.
 inline bool stayed_on_branch(const ShootingVector& z_start, const ShootingVector& z_predicted,
                              const ShootingVector& z) {
-  return (z - z_predicted).norm() <=
-         kMaxCorrectorShare * (z_predicted - z_start).norm() + kCorrectorFloor;
+  return corrector_on_branch((z - z_predicted).norm(), (z_predicted - z_start).norm());
 }
 
 /// The tangent predictor of a step du of the input from the solution z: z - J^-1 (dr/du) du, with

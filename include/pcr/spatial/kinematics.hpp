@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pcr/internal/branch_rule.hpp"
 #include "pcr/internal/rod_step_ladder.hpp"
 #include "pcr/solver.hpp"
 #include "pcr/spatial/shooting.hpp"
@@ -28,6 +29,23 @@ namespace pcr {
 inline constexpr int kColdIterationFactor = 5;
 
 namespace internal {
+
+/// The rotation vector w of R_from^T R_to (to = from exp(w), |w| <= pi), of unit quaternions.
+inline Vector3<double> relative_turn(const Vector4<double>& from, const Vector4<double>& to) {
+  const Vector4<double> conjugate(from(0), -from(1), -from(2), -from(3));
+  return quaternion_log<double>(quaternion_product<double>(conjugate, to));
+}
+
+/// The scaled wrench steps from `from` to `to` (the first 6 n entries of dz), as both shooting
+/// problems' unknowns step.
+inline void wrench_steps(const SpatialShootingPoint<double>& from,
+                         const SpatialShootingPoint<double>& to, int n, const ShootingScale& scale,
+                         SpatialVector& dz) {
+  for (int i = 0; i < n; ++i) {
+    dz.segment<3>(6 * i) = (to.wrenches[i].force - from.wrenches[i].force) / scale.force;
+    dz.segment<3>(6 * i + 3) = (to.wrenches[i].moment - from.wrenches[i].moment) / scale.moment();
+  }
+}
 
 /// The largest |entry|, NaN when any is not finite (lpNorm<Infinity> can skip a NaN).
 template <class Derived>
@@ -74,6 +92,16 @@ class SpatialForwardProblem {
         x.pose.orientation, quaternion_exp<double>(dz.segment<3>(6 * n_ + 3)));
     out.pose.orientation = h / h.norm();
     return out;
+  }
+
+  /// The scaled step dz with retract(from, dz) = to (the turn's rotation vector below pi).
+  SpatialVector step_between(const SpatialShootingPoint<double>& from,
+                             const SpatialShootingPoint<double>& to) const {
+    SpatialVector dz(size());
+    wrench_steps(from, to, n_, scale_, dz);
+    dz.segment<3>(6 * n_) = (to.pose.position - from.pose.position) / scale_.length;
+    dz.segment<3>(6 * n_ + 3) = relative_turn(from.pose.orientation, to.pose.orientation);
+    return dz;
   }
 
   void evaluate(const SpatialShootingPoint<double>& x, SpatialVector& r, SpatialJacobian* J) const {
@@ -327,11 +355,13 @@ SolveStatus spatial_refine_rod_steps(Problem& problem, SpatialShootingPoint<doub
   return status;
 }
 
-/// Solves at joints q1 from the solution x at q0 (x updated): the whole step first, predicted
-/// along the tangent when `warm` holds the Jacobian at x, then, if that fails and
+/// Solves at joints q1 from the solution x at q0 (x updated), on x's branch: the whole step first,
+/// predicted along the tangent when `warm` holds the Jacobian at x, then, if that fails and
 /// options.continuation, natural continuation in joint space with step halving (each step
-/// predicted along the tangent at the last solved point). On a failure x is the last solved
-/// point and summary.path_fraction says where it lies.
+/// predicted along the tangent at the last solved point). As on the planar paths
+/// (pcr/internal/path.hpp), a predicted step is kept only when its corrector stayed near the
+/// predictor (corrector_on_branch): a long jump of the joints never lands on another equilibrium.
+/// On a failure x is the last solved point and summary.path_fraction says where it lies.
 inline SolveStatus spatial_solve_path(SpatialForwardProblem& problem,
                                       SpatialShootingPoint<double>& x, const SpatialJointVector& q0,
                                       const SpatialJointVector& q1, SpatialWarmStart& warm,
@@ -341,13 +371,24 @@ inline SolveStatus spatial_solve_path(SpatialForwardProblem& problem,
   const auto set_q = [&](SpatialShootingPoint<double>& p, const SpatialJointVector& q) {
     for (int i = 0; i < n; ++i) p.q[i] = q(i);
   };
+  // The predictor's scaled length, or -1 when there is no tangent to predict along. With no input
+  // change there is no branch to follow (the same joints on another robot): no check.
   const auto predict = [&](const SpatialShootingPoint<double>& from, const SpatialJointVector& step,
                            SpatialShootingPoint<double>& to) {
     to = from;
-    if (warm.valid && warm.lu.rows() == problem.size()) {
+    if (warm.valid && warm.lu.rows() == problem.size() && (step.array() != 0.0).any()) {
       const SpatialVector dz = -warm.lu.solve(warm.input_jacobian * step);
-      if (dz.allFinite()) to = problem.retract(from, dz);
+      if (dz.allFinite()) {
+        to = problem.retract(from, dz);
+        return dz.norm();
+      }
     }
+    return -1.0;
+  };
+  const auto on_branch = [&](double predictor, const SpatialShootingPoint<double>& predicted,
+                             const SpatialShootingPoint<double>& solved) {
+    return predictor < 0.0 ||
+           corrector_on_branch(problem.step_between(predicted, solved).norm(), predictor);
   };
   // After a converged solve: the Jacobian there and d r / d q, for the next predictor.
   const auto keep_tangent = [&](const SpatialShootingPoint<double>& at,
@@ -360,13 +401,18 @@ inline SolveStatus spatial_solve_path(SpatialForwardProblem& problem,
   double initial_norm, final_norm;
   Eigen::PartialPivLU<SpatialJacobian> lu;
   SpatialShootingPoint<double> trial;
-  predict(x0, dq, trial);
+  double predictor = predict(x0, dq, trial);
   set_q(trial, q1);
+  SpatialShootingPoint<double> predicted = trial;
   const auto carried = [&] { return warm.valid ? &warm.lu : nullptr; };
   SolveStatus status = spatial_newton(problem, trial, options, options.max_iterations, summary, lu,
                                       initial_norm, final_norm, carried());
   summary.initial_residual_norm = initial_norm;
   summary.final_residual_norm = final_norm;
+  // A corrector that left the branch is a step too long, as one that did not converge.
+  if (status == SolveStatus::kConverged && !on_branch(predictor, predicted, trial)) {
+    status = SolveStatus::kMaxIterations;
+  }
   if (status == SolveStatus::kConverged) {
     x = trial;
     keep_tangent(x, lu);
@@ -384,10 +430,14 @@ inline SolveStatus spatial_solve_path(SpatialForwardProblem& problem,
     }
     ++summary.continuation_steps;
     const double t_next = std::min(1.0, t + dt);
-    predict(last, (t_next - t) * dq, trial);
-    set_q(trial, q0 + t_next * dq);
+    predictor = predict(last, (t_next - t) * dq, trial);
+    set_q(trial, t_next == 1.0 ? q1 : SpatialJointVector(q0 + t_next * dq));  // q1 to the bit
+    predicted = trial;
     status = spatial_newton(problem, trial, options, options.max_continuation_iterations, summary,
                             lu, initial_norm, final_norm, carried());
+    if (status == SolveStatus::kConverged && !on_branch(predictor, predicted, trial)) {
+      status = SolveStatus::kMaxIterations;
+    }
     if (status == SolveStatus::kConverged) {
       last = trial;
       t = t_next;
@@ -730,6 +780,20 @@ class SpatialInverseProblem {
     return out;
   }
 
+  /// The scaled step dz with retract(from, dz) = to, for points at the same imposed pose but for
+  /// the free angles.
+  SpatialVector step_between(const SpatialShootingPoint<double>& from,
+                             const SpatialShootingPoint<double>& to) const {
+    SpatialVector dz(size());
+    wrench_steps(from, to, n_, scale_, dz);
+    for (int i = 0; i < n_; ++i) dz(6 * n_ + i) = (to.q[i] - from.q[i]) / scale_.length;
+    if (free_ > 0) {
+      dz.segment(7 * n_, free_) =
+          relative_turn(from.pose.orientation, to.pose.orientation).tail(free_);
+    }
+    return dz;
+  }
+
   /// The Jacobian's joint columns are d r / d q (spatial_input_column): exact for translated
   /// clamps, within RK4's error for rods pushed through their holes, which leaves Newton a linear
   /// rate of about that error (1e-9 at 256 steps) instead of a quadratic one.
@@ -815,8 +879,9 @@ namespace internal {
 /// first, predicted along the tangent -J^-1 (d r / d pose) d pose when `warm` holds them, with
 /// chord steps on its factorisation; on failure (and options.continuation), natural continuation
 /// along the straight pose path (a line for the position, a constant-rate turn for the
-/// orientation), halving the step on failure. Returns the status and sets summary.path_fraction; x
-/// is the last point solved, `warm` what it leaves for the next solve.
+/// orientation), halving the step on failure. A predicted step is kept only on its branch
+/// (corrector_on_branch), as in spatial_solve_path. Returns the status and sets
+/// summary.path_fraction; x is the last point solved, `warm` what it leaves for the next solve.
 inline SolveStatus spatial_inverse_path(SpatialInverseProblem& problem,
                                         SpatialShootingPoint<double>& x,
                                         const SpatialPose<double>& request, SpatialWarmStart& warm,
@@ -832,15 +897,23 @@ inline SolveStatus spatial_inverse_path(SpatialInverseProblem& problem,
                                                 quaternion_exp<double>(t * whole.tail<3>()));
     return at;
   };
+  // The predictor's scaled length, or -1 when there is no tangent to predict along (or no pose
+  // change: no branch to follow).
   const auto predict = [&](const SpatialShootingPoint<double>& from, const SpatialPose<double>& to,
                            SpatialShootingPoint<double>& trial) {
     trial = from;
-    if (warm.valid && warm.lu.rows() == problem.size() && warm.input_jacobian.cols() == 6) {
-      const SpatialVector dz =
-          -warm.lu.solve(warm.input_jacobian * problem.pose_step(from.pose, to));
-      if (dz.allFinite()) trial = problem.retract(from, dz);
+    double length = -1.0;
+    const Eigen::Matrix<double, 6, 1> step = problem.pose_step(from.pose, to);
+    if (warm.valid && warm.lu.rows() == problem.size() && warm.input_jacobian.cols() == 6 &&
+        (step.array() != 0.0).any()) {
+      const SpatialVector dz = -warm.lu.solve(warm.input_jacobian * step);
+      if (dz.allFinite()) {
+        trial = problem.retract(from, dz);
+        length = dz.norm();
+      }
     }
     trial.pose = to;
+    return length;
   };
   Eigen::PartialPivLU<SpatialJacobian> lu;
   double initial_norm, final_norm, t = 0.0, dt = 1.0;
@@ -855,11 +928,17 @@ inline SolveStatus spatial_inverse_path(SpatialInverseProblem& problem,
     }
     const double t_next = std::min(1.0, t + dt);
     SpatialShootingPoint<double> trial;
-    predict(x, pose_at(t_next), trial);
+    const double predictor = predict(x, pose_at(t_next), trial);
+    const SpatialShootingPoint<double> predicted = trial;
     status = spatial_newton(problem, trial, options,
                             first ? options.max_iterations : options.max_continuation_iterations,
                             summary, lu, initial_norm, final_norm, warm.valid ? &warm.lu : nullptr);
     if (first) summary.initial_residual_norm = initial_norm;
+    // A corrector that left the branch is a step too long, as one that did not converge.
+    if (status == SolveStatus::kConverged && predictor >= 0.0 &&
+        !corrector_on_branch(problem.step_between(predicted, trial).norm(), predictor)) {
+      status = SolveStatus::kMaxIterations;
+    }
     if (status == SolveStatus::kConverged) {
       x = trial;
       t = t_next;

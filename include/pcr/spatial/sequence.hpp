@@ -4,7 +4,9 @@
 //   kIndependent: each input exactly as its cold solve gives it, whatever came before: FK from
 //     straight rods at q (spatial_forward_kinematics(robot, q)), IK from the home solution
 //     (q = 0), solved once.
-//   kPath: each input warm-started from the last usable solution, retried cold when that fails.
+//   kPath: each input continued from the last usable solution on its branch (a long jump of the
+//     inputs as a path of steps where one step would leave it: spatial_solve_path), retried cold
+//     when that fails.
 // There is no fold tracing for spatial robots yet: SolverOptions::through_folds has no effect.
 
 #include "pcr/kinematics.hpp"
