@@ -83,10 +83,10 @@ std::string spatial_calibration_report_text(const SpatialCalibrationResult& resu
   out << "(nominal model: the nominal robot as described, its extrinsics included)\n\nstages:\n";
   for (const SpatialStageReport& s : result.stages) {
     out << report_internal::stage_line(s, " (whitened)") << "  " << s.unseen_directions
-        << " unseen directions  " << s.termination << "\n";
+        << " unseen directions\n    " << s.termination << "\n";
   }
-  out << "\nparameters (deviation from nominal, std, half-width; SI, shown in um, mrad, MPa or "
-         "GPa as the kind's unit):\n";
+  out << "\nparameters (free: deviation from nominal, std, half-width; in the kind's display "
+         "unit):\n";
   std::vector<std::string> at_bound;
   for (const SpatialParameterEstimate& p : result.parameters) {
     if (p.free) {
