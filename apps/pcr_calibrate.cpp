@@ -161,15 +161,11 @@ int calibrate_spatial_robot(const Arguments& a) {
   }
   const pcr::SpatialRobotDescription nominal = pcr::load_spatial_robot(a.robot_path);
   const int n = nominal.params.num_rods;
+  pcr::SpatialCalibrationOptions options;
+  if (!a.stages_path.empty()) options.stages = pcr::load_spatial_calibration_stages(a.stages_path);
   const pcr::SpatialDataset calibration = spatial_rows(a.data_path, n, "calibration");
   pcr::SpatialDataset validation;
   if (!a.validation_path.empty()) validation = spatial_rows(a.validation_path, n, "validation");
-
-  pcr::SpatialCalibrationOptions options;
-  if (!a.stages_path.empty()) {
-    options.stages = pcr::load_calibration_stages(a.stages_path);
-    pcr::validate_spatial_stages(options.stages, a.stages_path);
-  }
   if (a.weight_given) options.orientation_weight = a.weight;  // else the library's default
   options.robust_scale = a.robust_scale;
   if (!a.quiet) options.progress = [](const std::string& line) { std::cerr << line << "\n"; };

@@ -155,6 +155,20 @@ TEST(PcrCalibrateSpatial, RefusesPlanarFlagsWrongColumnsAndOverwritingAnInput) {
   }
   EXPECT_EQ(run(common + dir.file("out.json"), dir, &err), 1);
   EXPECT_NE(err.find(dir.file("planar.csv")), std::string::npos) << err;
+  // Stages files: the spatial kinds are taken (the data is refused next), a planar one is not.
+  {
+    std::ofstream(dir.file("spatial_stages.json")) << R"([{"name": "s", "free": ["tracker"]}])";
+    std::ofstream(dir.file("planar_stages.json")) << R"([{"name": "s", "free": ["camera"]}])";
+  }
+  EXPECT_EQ(run(common + dir.file("out.json") + " --stages " + dir.file("spatial_stages.json"), dir,
+                &err),
+            1);
+  EXPECT_NE(err.find(dir.file("planar.csv")), std::string::npos) << err;
+  EXPECT_EQ(
+      run(common + dir.file("out.json") + " --stages " + dir.file("planar_stages.json"), dir, &err),
+      1);
+  EXPECT_NE(err.find(dir.file("planar_stages.json")), std::string::npos) << err;
+  EXPECT_NE(err.find("camera"), std::string::npos) << err;
   EXPECT_EQ(run(common + robot, dir, &err), 1);
   EXPECT_NE(err.find("refusing to overwrite the input"), std::string::npos) << err;
   EXPECT_EQ(slurp(robot), robot_text);
