@@ -126,6 +126,22 @@ TEST(PcrCalibrateSpatial, IdentifiesAHiddenRobotToTheNoiseFloor) {
   EXPECT_EQ(report.at("parameters").at(0).at("name"),
             spatial_parameter_name(spatial_parameter_id(0, 6)));
 
+  // --weight and --stages reach the library: the extrinsics alone, at w = 0.05 m/rad.
+  std::ofstream(dir.file("stages.json")) << R"([{"name": "tracker", "free": ["extrinsics"]}])";
+  ASSERT_EQ(run("--robot " + dir.file("nominal.json") + " --data " + dir.file("calibration.csv") +
+                    " --stages " + dir.file("stages.json") + " --weight 0.05 --output " +
+                    dir.file("extrinsics.json") + " --report " + dir.file("extrinsics.report") +
+                    " --quiet",
+                dir, &err),
+            0)
+      << err;
+  const nlohmann::json extrinsics = nlohmann::json::parse(slurp(dir.file("extrinsics.report")));
+  EXPECT_EQ(extrinsics.at("orientation_weight_m_per_rad").get<double>(), 0.05);
+  EXPECT_EQ(extrinsics.at("inputs").at("orientation_weight_m_per_rad").get<double>(), 0.05);
+  ASSERT_EQ(extrinsics.at("stages").size(), 1u);
+  EXPECT_EQ(extrinsics.at("stages").at(0).at("name"), "tracker");
+  EXPECT_EQ(extrinsics.at("free_parameters"), 12);
+
   // The residuals: one row per calibration row, under the documented header.
   std::istringstream residuals(slurp(dir.file("residuals.csv")));
   std::string line;
