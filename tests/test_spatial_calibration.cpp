@@ -12,36 +12,15 @@
 
 #include "pcr/calib/spatial_calibrator.hpp"
 #include "pcr/calib/spatial_virtual_robot.hpp"
+#include "spatial_calibration_support.hpp"
 
 namespace {
 
 using pcr::SpatialDataset;
 using pcr::SpatialJointVector;
 
-/// Joints drawn uniformly in [lo, hi] per rod, in the order a robot visits them (long jumps).
-std::vector<SpatialJointVector> random_joints(std::mt19937_64& rng, int rows, double lo,
-                                              double hi) {
-  std::uniform_real_distribution<double> joint(lo, hi);
-  std::vector<SpatialJointVector> out;
-  for (int r = 0; r < rows; ++r) {
-    SpatialJointVector q(6);
-    for (int i = 0; i < 6; ++i) q(i) = joint(rng);
-    out.push_back(q);
-  }
-  return out;
-}
-
-/// The rows a virtual robot measured (those it could).
-SpatialDataset measured(pcr::SpatialVirtualRobot& robot, const std::vector<SpatialJointVector>& q,
-                        bool exact = false) {
-  SpatialDataset data;
-  data.num_joints = 6;
-  const std::vector<pcr::SpatialVirtualMeasurement> m = robot.measure_dataset(q);
-  for (std::size_t r = 0; r < q.size(); ++r) {
-    if (m[r].ok) data.add(q[r], exact ? m[r].exact : m[r].measured);
-  }
-  return data;
-}
+using pcr::testing::measured;
+using pcr::testing::random_joints;
 
 TEST(SpatialCalibration, DerivativesMatchCentralDifferences) {
   const pcr::SpatialRobotDescription nominal = pcr::continuum_stewart_gough_description();

@@ -661,6 +661,21 @@ def calibrate(nominal: Robot, q: ArrayLike, measured: ArrayLike,
               progress: Optional[Callable[[str], None]] = None,
               **changes: Any) -> tuple[Robot, CalibrationResult]: ...
 
+# The spatial calibration (pcr/calib/spatial_calibrator.hpp); the result's fields as a dict.
+def default_spatial_stages() -> list[dict[str, Any]]: ...
+def calibrate_spatial(nominal: SpatialRobot, q: ArrayLike, measured: ArrayLike,
+                      validation_q: Optional[ArrayLike] = None,
+                      validation_measured: Optional[ArrayLike] = None, *,
+                      stages: Optional[Union[Sequence[dict[str, Any]], StrPath]] = None,
+                      orientation_weight: float = ..., residual_scale: float = ...,
+                      robust_scale: float = 5.0, max_iterations: int = 100,
+                      function_tolerance: float = 1e-8, compute_covariance: bool = True,
+                      progress: Optional[Callable[[str], None]] = None
+                      ) -> tuple[SpatialRobot, dict[str, Any]]: ...
+def simulate_spatial_measurements(nominal: SpatialRobot, q: ArrayLike, *, seed: int = 1,
+                                  truth_at_fraction: float = 0.0, noise_position: float = ...,
+                                  noise_angle: float = 1.2e-6) -> dict[str, Any]: ...
+
 class ModelSelection:
     @property
     def load_chosen(self) -> bool: ...

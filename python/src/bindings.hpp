@@ -29,18 +29,19 @@ namespace py = pybind11;
 void wrap_robot(py::module_& m);
 void wrap_kinematics(py::module_& m);
 void wrap_spatial(py::module_& m);
-void wrap_sensitivity(py::module_& m);         // needs pcr::calib
-void wrap_virtual_robot(py::module_& m);       // needs pcr::calib
-void wrap_dataset(py::module_& m);             // needs pcr::calib
-void wrap_workspace_map(py::module_& m);       // needs pcr::calib
-void wrap_sampling(py::module_& m);            // needs pcr::calib
-void wrap_calibration_stages(py::module_& m);  // needs pcr::calib
-void wrap_pose_errors(py::module_& m);         // needs pcr::calib
-void wrap_calibration(py::module_& m);         // needs pcr::calib
-void wrap_accuracy(py::module_& m);            // needs pcr::calib
-void wrap_predicted_accuracy(py::module_& m);  // needs pcr::calib
-void wrap_method(py::module_& m);              // needs pcr::calib
-void wrap_vision(py::module_& m);              // needs pcr::vision
+void wrap_sensitivity(py::module_& m);          // needs pcr::calib
+void wrap_virtual_robot(py::module_& m);        // needs pcr::calib
+void wrap_dataset(py::module_& m);              // needs pcr::calib
+void wrap_workspace_map(py::module_& m);        // needs pcr::calib
+void wrap_sampling(py::module_& m);             // needs pcr::calib
+void wrap_calibration_stages(py::module_& m);   // needs pcr::calib
+void wrap_pose_errors(py::module_& m);          // needs pcr::calib
+void wrap_calibration(py::module_& m);          // needs pcr::calib
+void wrap_spatial_calibration(py::module_& m);  // needs pcr::calib
+void wrap_accuracy(py::module_& m);             // needs pcr::calib
+void wrap_predicted_accuracy(py::module_& m);   // needs pcr::calib
+void wrap_method(py::module_& m);               // needs pcr::calib
+void wrap_vision(py::module_& m);               // needs pcr::vision
 
 /// A property's getter and setter that reach one field of an owner's rod (Limb and
 /// LimbUncertainty keep their flat Python names l, d, E, precurvature...; SpatialLimb the file's

@@ -102,7 +102,7 @@ py::list stages_list(const std::vector<CalibrationStage>& stages);
 
 /// A stages argument as a list of dicts (name, free, bounds_scale; default_stages() gives them)
 /// or a stages JSON file's path (a str or an os.PathLike). ValueError naming the stage and the
-/// field otherwise.
-std::vector<CalibrationStage> stages_from(const py::handle& object);
+/// field otherwise. `spatial`: the kinds are a spatial robot's (validate_spatial_stages).
+std::vector<CalibrationStage> stages_from(const py::handle& object, bool spatial = false);
 
 }  // namespace pcr::python

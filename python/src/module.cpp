@@ -25,7 +25,8 @@ PYBIND11_MODULE(_pcr, m) {
   pcr::python::wrap_pose_errors(m);
   // after wrap_pose_errors: CalibrationTable's fields are PoseErrorStats
   pcr::python::wrap_calibration(m);
-  pcr::python::wrap_accuracy(m);  // after wrap_virtual_robot: uses VirtualRobot
+  pcr::python::wrap_spatial_calibration(m);  // after wrap_spatial: returns SpatialRobot
+  pcr::python::wrap_accuracy(m);             // after wrap_virtual_robot: uses VirtualRobot
   pcr::python::wrap_predicted_accuracy(m);
   pcr::python::wrap_method(m);  // last: its result holds the classes above
   m.attr("has_calibration") = true;

@@ -1,5 +1,6 @@
 // Calibration stages as lists of dicts, and the stages JSON files (pcr/calib/calibrator.hpp).
 #include "calibration_bindings.hpp"
+#include "pcr/calib/spatial_calibrator.hpp"
 
 namespace pcr::python {
 
@@ -15,9 +16,10 @@ py::list stages_list(const std::vector<CalibrationStage>& stages) {
   return out;
 }
 
-std::vector<CalibrationStage> stages_from(const py::handle& object) {
+std::vector<CalibrationStage> stages_from(const py::handle& object, bool spatial) {
   if (py::isinstance<py::str>(object) || py::hasattr(object, "__fspath__")) {
-    return load_calibration_stages(input_path(object.cast<std::filesystem::path>()));
+    const std::string path = input_path(object.cast<std::filesystem::path>());
+    return spatial ? load_spatial_calibration_stages(path) : load_calibration_stages(path);
   }
   if (!py::isinstance<py::sequence>(object) || py::isinstance<py::bytes>(object)) {
     throw InputError(
@@ -65,7 +67,11 @@ std::vector<CalibrationStage> stages_from(const py::handle& object) {
     }
     stages.push_back(stage);
   }
-  validate_stages(stages, "stages");
+  if (spatial) {
+    validate_spatial_stages(stages, "stages");
+  } else {
+    validate_stages(stages, "stages");
+  }
   return stages;
 }
 

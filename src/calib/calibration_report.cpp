@@ -5,21 +5,19 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "pcr/calib/model_selection.hpp"
 #include "pcr/csv_io.hpp"
+#include "report_internal.hpp"
 
 namespace pcr {
-namespace {
+namespace report_internal {
 
-using nlohmann::ordered_json;
-
-ordered_json stats_json(const PoseErrorStats& s) {
+ordered_json stats_json(const PoseErrorStats& s, const char* angle_key) {
   return ordered_json{
       {"e_p_m", {{"max", s.max_p}, {"mean", s.mean_p}, {"min", s.min_p}}},
-      {"e_theta_rad", {{"max", s.max_theta}, {"mean", s.mean_theta}, {"min", s.min_theta}}},
+      {angle_key, {{"max", s.max_theta}, {"mean", s.mean_theta}, {"min", s.min_theta}}},
       {"configurations", s.count},
       {"failed", s.failed},
       {"branch_mismatches", s.branch_mismatches}};
@@ -39,7 +37,22 @@ std::string stats_line(const char* label, const PoseErrorStats& s) {
   return buf;
 }
 
-}  // namespace
+std::vector<double> whitened_norms(const std::vector<double>& e_p,
+                                   const std::vector<double>& e_angle, double weight,
+                                   double scale) {
+  std::vector<double> out(e_p.size());
+  for (std::size_t j = 0; j < out.size(); ++j) {
+    const double weighted = weight * e_angle[j];
+    out[j] = std::sqrt(e_p[j] * e_p[j] + weighted * weighted) / scale;
+  }
+  return out;
+}
+
+}  // namespace report_internal
+
+using report_internal::ordered_json;
+using report_internal::stats_json;
+using report_internal::stats_line;
 
 std::vector<CalibrationSample> calibration_samples(const Dataset& data, const std::string& source) {
   std::vector<CalibrationSample> out;
@@ -136,14 +149,7 @@ std::string calibration_report_text(const CalibrationResult& result,
                                     const CalibrationTable& table) {
   std::ostringstream out;
   out << calibration_table_text(table) << "\nstages:\n";
-  for (const StageReport& s : result.stages) {
-    char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "  %-12s %2zu free  cost %.4e -> %.4e m^2  %3d iterations  %.2f s\n",
-                  s.name.c_str(), s.free_parameters.size(), s.initial_cost, s.final_cost,
-                  s.iterations, s.time_s);
-    out << buf;
-  }
+  for (const StageReport& s : result.stages) out << report_internal::stage_line(s, " m^2") << "\n";
   out << "\nparameters (value, nominal, deviation from nominal, std; limb-0 gauge; SI, the "
          "deviation in um, mrad or MPa; box: the deviation in half-widths where the bounds "
          "apply, the stages' frame before the gauge fix, +-1 at a bound):\n";
@@ -212,33 +218,23 @@ std::string calibration_report_text(const CalibrationResult& result,
 
 std::vector<double> whitened_error_norms(const ConfigurationErrors& errors,
                                          const CalibrationOptions& options) {
-  std::vector<double> out(errors.e_p.size());
-  for (std::size_t j = 0; j < out.size(); ++j) {
-    const double weighted = options.orientation_weight * errors.e_theta[j];
-    out[j] =
-        std::sqrt(errors.e_p[j] * errors.e_p[j] + weighted * weighted) / options.residual_scale;
-  }
-  return out;
+  return report_internal::whitened_norms(errors.e_p, errors.e_theta, options.orientation_weight,
+                                         options.residual_scale);
 }
 
 std::string residuals_csv(const CalibrationResult& result, const CalibrationTable& table,
                           const std::vector<CalibrationSample>& calibration,
                           const CalibrationOptions& options) {
   const ConfigurationErrors& errors = table.identified_calibration_errors;
-  const int n = calibration.empty() ? 0 : static_cast<int>(calibration.front().q.size());
-  std::string out = "row,line";
-  for (int i = 1; i <= n; ++i) out += ",q" + std::to_string(i);
-  out += ",e_p,e_theta,residual_norm,outlier\n";
-  const std::vector<double> norms = whitened_error_norms(errors, options);
-  for (std::size_t j = 0; j < calibration.size() && j < errors.e_p.size(); ++j) {
-    const double norm = norms[j];
-    out += std::to_string(j + 1) + "," + std::to_string(calibration[j].line);
-    for (int i = 0; i < n; ++i) out += "," + format_double(calibration[j].q[i]);
-    out += "," + format_double(errors.e_p[j]) + "," + format_double(errors.e_theta[j]) + "," +
-           format_double(norm) + "," +
-           (result.outlier_threshold > 0 && norm > result.outlier_threshold ? "1" : "0") + "\n";
+  std::vector<JointVector> q;
+  std::vector<int> lines;
+  for (const CalibrationSample& sample : calibration) {
+    q.push_back(sample.q);
+    lines.push_back(sample.line);
   }
-  return out;
+  return report_internal::residuals_csv_text(q, lines, errors.e_p, errors.e_theta,
+                                             whitened_error_norms(errors, options),
+                                             result.outlier_threshold, "e_theta");
 }
 
 std::string calibration_report_json(const CalibrationResult& result,

@@ -5,14 +5,17 @@
 #include <vector>
 
 #include "pcr/calib/calibrator.hpp"
+#include "pcr/calib/spatial_calibrator.hpp"
 #include "pcr/files.hpp"
 #include "pcr/robot_io.hpp"
 
 namespace pcr {
+namespace {
 
 using nlohmann::json;
 
-std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
+/// The file's stages, their kinds not checked: the planar and the spatial readers check them.
+std::vector<CalibrationStage> read_stages(const std::string& path) {
   const std::string text = read_input_file(path, kMaxJsonFileBytes, "a calibration stages file");
   check_json_nesting(text, path);
   json j;
@@ -56,7 +59,20 @@ std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
     }
     stages.push_back(stage);
   }
+  return stages;
+}
+
+}  // namespace
+
+std::vector<CalibrationStage> load_calibration_stages(const std::string& path) {
+  std::vector<CalibrationStage> stages = read_stages(path);
   validate_stages(stages, path);
+  return stages;
+}
+
+std::vector<CalibrationStage> load_spatial_calibration_stages(const std::string& path) {
+  std::vector<CalibrationStage> stages = read_stages(path);
+  validate_spatial_stages(stages, path);
   return stages;
 }
 

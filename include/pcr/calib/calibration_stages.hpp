@@ -47,6 +47,9 @@ void check_enough_measurements(const std::vector<CalibrationStage>& stages,
 /// Reads a stages file: {"stages": [{"name": ..., "free": [kinds], "bounds_scale": 1}, ...]} or
 /// the bare list. Throws InputError naming the file, the field and the value.
 std::vector<CalibrationStage> load_calibration_stages(const std::string& path);
+/// The same file for a spatial robot: its kinds are the spatial ones (validate_spatial_stages,
+/// pcr/calib/spatial_calibrator.hpp).
+std::vector<CalibrationStage> load_spatial_calibration_stages(const std::string& path);
 
 /// The flat half-widths of `uncertainty` for a robot with `num_limbs` limbs.
 std::vector<double> parameter_half_widths(const RobotUncertainty& uncertainty, int num_limbs);

@@ -1,0 +1,73 @@
+"""Spatial calibration bindings: pcr.calibrate_spatial on a virtual spatial robot's measurements
+(pcr.simulate_spatial_measurements), the result's fields with the C++ parameter names, the report
+pcr_calibrate writes, and bad inputs."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+import pcr
+
+pytestmark = pytest.mark.skipif(not pcr.has_calibration, reason="pcr::calib not built")
+
+# The extrinsics alone: a few seconds, while the default stages take ~15 s (tests/
+# test_pcr_calibrate_spatial.cpp scores those against the noise floor).
+EXTRINSICS = [{"name": "extrinsics", "free": ["extrinsics"], "bounds_scale": 1.0}]
+
+
+@pytest.fixture(scope="module")
+def measured():
+    nominal = pcr.SpatialRobot.reference()
+    q = np.random.default_rng(3).uniform(0.0, 0.01, (24, 6))  # joints in [0, 10] mm
+    simulated = pcr.simulate_spatial_measurements(nominal, q, seed=5)
+    ok = simulated["ok"]
+    assert ok.sum() >= 20
+    return nominal, q[ok], simulated["measured"][ok], simulated
+
+
+def test_simulated_measurements_have_the_dataset_columns(measured):
+    nominal, q, poses, simulated = measured
+    assert poses.shape == (len(q), 6)
+    assert isinstance(simulated["truth"], pcr.SpatialRobot)
+    # The noise is of the declared size: measured less exact, well under 10 sigma per row.
+    exact = simulated["exact"][simulated["ok"]]
+    worst = np.abs(poses[:, :3] - exact[:, :3]).max()
+    print(f"worst position noise {worst:.3g} m, sigma {simulated['noise_position']:.3g} m")
+    assert 0 < worst < 10 * simulated["noise_position"]
+
+
+def test_calibrate_spatial_returns_the_results_fields(measured):
+    nominal, q, poses, _ = measured
+    identified, result = pcr.calibrate_spatial(nominal, q[:16], poses[:16], q[16:], poses[16:],
+                                               stages=EXTRINSICS)
+    assert isinstance(identified, pcr.SpatialRobot)
+    names = [p["name"] for p in result["parameters"]]
+    assert len(names) == 16 * 6 + 12
+    assert names[:2] == ["E[0]", "G[0]"] and "l[5]" in names and names[-1] == "marker_rz"
+    free = {p["name"] for p in result["parameters"] if p["free"]}
+    assert free == {p + a for p in ("tracker_", "marker_") for a in ("x", "y", "z", "rx", "ry",
+                                                                      "rz")}
+    assert [s["name"] for s in result["stages"]] == ["extrinsics"]
+    assert result["free_count"] == 12 and result["jacobian_rank"] <= 12
+    assert math.isfinite(result["orientation_weight"]) and result["orientation_weight"] > 0
+    report = json.loads(result["report_json"])
+    assert report["kind"] == "spatial"
+    errors = report["pose_errors"]
+    nominal_mean = errors["nominal_model_calibration_set"]["e_p_m"]["mean"]
+    print(f"extrinsics only: rms {result['rms_position']:.3g} m (nominal mean e_p "
+          f"{nominal_mean:.3g} m), validation rms {result['validation_rms_position']:.3g} m")
+    # The tracker's and the marker's 1 mm / 50 mrad errors are taken out; the rods' are not.
+    assert result["rms_position"] < 0.01 * nominal_mean
+    assert errors["identified_model_validation_set"]["configurations"] == len(q) - 16
+    assert "pose errors" in result["report"] and "stages:" in result["report"]
+
+
+def test_calibrate_spatial_refuses_bad_inputs(measured):
+    nominal, q, poses, _ = measured
+    with pytest.raises(ValueError, match="measured"):
+        pcr.calibrate_spatial(nominal, q, poses[:, :3], stages=EXTRINSICS)
+    with pytest.raises(ValueError, match="theta"):  # a planar kind
+        pcr.calibrate_spatial(nominal, q, poses, stages=[{"name": "x", "free": ["theta"]}])
+    with pytest.raises(ValueError, match="validation"):
+        pcr.calibrate_spatial(nominal, q, poses, q, stages=EXTRINSICS)

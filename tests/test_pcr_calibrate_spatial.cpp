@@ -1,0 +1,195 @@
+// pcr_calibrate on a spatial robot end to end: a hidden virtual spatial robot's measurements in
+// (seeded), an identified spatial robot file out, scored on validation rows against the noise
+// floor sqrt(3) sigma of a perfect model; the report's and the residuals' fields; the refusals.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include "pcr/calib/spatial_calibrator.hpp"
+#include "pcr/calib/spatial_virtual_robot.hpp"
+#include "pcr/spatial/robot_io.hpp"
+#include "scratch_directory.hpp"
+#include "spatial_calibration_support.hpp"
+
+namespace pcr {
+namespace {
+
+const std::string kTool = std::string(PCR_BINARY_DIR) + "/apps/pcr_calibrate";
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Runs pcr_calibrate; its exit status, its stderr in `err` and its stdout in `out`.
+int run(const std::string& args, const test::ScratchDirectory& dir, std::string* err = nullptr,
+        std::string* out = nullptr) {
+  const std::string command =
+      kTool + " " + args + " > " + dir.file("stdout.txt") + " 2> " + dir.file("stderr.txt");
+  const int status = std::system(command.c_str());
+  if (err) *err = slurp(dir.file("stderr.txt"));
+  if (out) *out = slurp(dir.file("stdout.txt"));
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(PcrCalibrateSpatial, IdentifiesAHiddenRobotToTheNoiseFloor) {
+  const test::ScratchDirectory dir("pcr_calibrate_spatial");
+  const SpatialRobotDescription nominal = continuum_stewart_gough_description();
+  save_spatial_robot(nominal, dir.file("nominal.json"));
+  SpatialVirtualRobotOptions options;
+  options.seed = 11;
+  SpatialVirtualRobot robot(nominal, options);
+  std::mt19937_64 rng(options.seed);
+  const SpatialDataset calibration =
+      testing::measured(robot, testing::random_joints(rng, 40, 0.0, 0.01));
+  const SpatialDataset validation =
+      testing::measured(robot, testing::random_joints(rng, 15, 0.0, 0.01));
+  ASSERT_GE(calibration.size(), 35u);
+  ASSERT_GE(validation.size(), 12u);
+  write_spatial_dataset(calibration, dir.file("calibration.csv"));
+  write_spatial_dataset(validation, dir.file("validation.csv"));
+
+  const auto start = std::chrono::steady_clock::now();
+  std::string err, text;
+  ASSERT_EQ(run("--robot " + dir.file("nominal.json") + " --data " + dir.file("calibration.csv") +
+                    " --validation " + dir.file("validation.csv") + " --output " +
+                    dir.file("identified.json") + " --report " + dir.file("report.json") +
+                    " --residuals " + dir.file("residuals.csv") + " --quiet",
+                dir, &err, &text),
+            0)
+      << err;
+  std::printf("%s", text.c_str());  // the text report
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // The identified file, scored with the library's FK on the validation rows (as read back).
+  const SpatialRobotDescription identified = load_spatial_robot(dir.file("identified.json"));
+  ASSERT_TRUE(identified.uncertainty.has_value());  // kept from the nominal file
+  const SpatialDataset validation_read = read_spatial_dataset(dir.file("validation.csv"), 6);
+  const SpatialPredictionErrors nominal_errors =
+      spatial_prediction_errors(nominal.params, validation_read);
+  const SpatialPredictionErrors errors =
+      spatial_prediction_errors(identified.params, validation_read);
+  const double floor_p = std::sqrt(3.0) * robot.noise_position();
+  const double floor_a = std::sqrt(3.0) * options.noise_angle;
+  std::printf(
+      "%zu + %zu rows, pcr_calibrate %.1f s; validation rms %.3g m %.3g rad (floor %.3g m %.3g "
+      "rad; nominal %.3g m %.3g rad)\n",
+      calibration.size(), validation.size(), seconds, errors.rms_position, errors.rms_angle,
+      floor_p, floor_a, nominal_errors.rms_position, nominal_errors.rms_angle);
+  EXPECT_EQ(errors.failures, 0);
+  EXPECT_GT(nominal_errors.rms_position, 100 * floor_p);  // there was something to identify
+  EXPECT_LT(errors.rms_position, 2 * floor_p);
+  EXPECT_LT(errors.rms_angle, 2 * floor_a);
+
+  // The report: every section, and the validation errors as the file's robot gives them.
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir.file("report.json")));
+  EXPECT_EQ(report.at("kind"), "spatial");
+  for (const char* key :
+       {"pose_errors", "stages", "parameters", "parameters_at_bound", "jacobian_rank",
+        "free_parameters", "unidentifiable_combinations", "residual_variance", "rms_position_m",
+        "rms_angle_rad", "orientation_weight_m_per_rad", "residual_scale_m", "warnings",
+        "inputs"}) {
+    EXPECT_TRUE(report.contains(key)) << key;
+  }
+  const nlohmann::json& set = report.at("pose_errors").at("identified_model_validation_set");
+  EXPECT_EQ(set.at("configurations"), static_cast<int>(validation.size()));
+  EXPECT_NEAR(set.at("rms_position_m").get<double>(), errors.rms_position,
+              1e-3 * errors.rms_position);
+  ASSERT_FALSE(report.at("stages").empty());
+  for (const nlohmann::json& stage : report.at("stages")) {
+    for (const char* key : {"name", "free_parameters", "initial_cost", "final_cost", "iterations",
+                            "time_s", "termination", "usable"}) {
+      EXPECT_TRUE(stage.contains(key)) << key;
+    }
+  }
+  ASSERT_EQ(report.at("parameters").size(), static_cast<std::size_t>(num_spatial_parameters(6)));
+  for (const nlohmann::json& p : report.at("parameters")) {
+    for (const char* key :
+         {"name", "unit", "deviation", "std", "half_width", "free", "at_bound", "identifiable"}) {
+      EXPECT_TRUE(p.contains(key)) << key;
+    }
+  }
+  EXPECT_EQ(report.at("parameters").at(0).at("name"),
+            spatial_parameter_name(spatial_parameter_id(0, 6)));
+
+  // --weight and --stages reach the library: the extrinsics alone, at w = 0.05 m/rad.
+  std::ofstream(dir.file("stages.json")) << R"([{"name": "tracker", "free": ["extrinsics"]}])";
+  ASSERT_EQ(run("--robot " + dir.file("nominal.json") + " --data " + dir.file("calibration.csv") +
+                    " --stages " + dir.file("stages.json") + " --weight 0.05 --output " +
+                    dir.file("extrinsics.json") + " --report " + dir.file("extrinsics.report") +
+                    " --quiet",
+                dir, &err),
+            0)
+      << err;
+  const nlohmann::json extrinsics = nlohmann::json::parse(slurp(dir.file("extrinsics.report")));
+  EXPECT_EQ(extrinsics.at("orientation_weight_m_per_rad").get<double>(), 0.05);
+  EXPECT_EQ(extrinsics.at("inputs").at("orientation_weight_m_per_rad").get<double>(), 0.05);
+  ASSERT_EQ(extrinsics.at("stages").size(), 1u);
+  EXPECT_EQ(extrinsics.at("stages").at(0).at("name"), "tracker");
+  EXPECT_EQ(extrinsics.at("free_parameters"), 12);
+
+  // The residuals: one row per calibration row, under the documented header.
+  std::istringstream residuals(slurp(dir.file("residuals.csv")));
+  std::string line;
+  std::getline(residuals, line);
+  EXPECT_EQ(line, "row,line,q1,q2,q3,q4,q5,q6,e_p,e_angle,residual_norm,outlier");
+  std::size_t rows = 0;
+  while (std::getline(residuals, line)) ++rows;
+  EXPECT_EQ(rows, calibration.size());
+}
+
+TEST(PcrCalibrateSpatial, RefusesPlanarFlagsWrongColumnsAndOverwritingAnInput) {
+  const test::ScratchDirectory dir("pcr_calibrate_spatial");
+  const std::string robot = dir.file("nominal.json");
+  save_spatial_robot(continuum_stewart_gough_description(), robot);
+  const std::string robot_text = slurp(robot);
+  {
+    std::ofstream planar(dir.file("planar.csv"));  // a planar robot's columns: 9, not 12
+    planar << "q1,q2,q3,q4,q5,q6,x,y,theta\n0,0,0,0,0,0,0,0,0\n";
+  }
+  const std::string common =
+      "--robot " + robot + " --data " + dir.file("planar.csv") + " --quiet --output ";
+  std::string err;
+  for (const char* flag : {"--identify-load", "--drop-unreachable"}) {
+    EXPECT_EQ(run(common + dir.file("out.json") + " " + flag, dir, &err), 1) << flag;
+    EXPECT_NE(err.find(flag), std::string::npos) << err;
+    EXPECT_NE(err.find("planar robots only"), std::string::npos) << err;
+  }
+  EXPECT_EQ(run(common + dir.file("out.json"), dir, &err), 1);
+  EXPECT_NE(err.find(dir.file("planar.csv")), std::string::npos) << err;
+  // Stages files: the spatial kinds are taken (the data is refused next), a planar one is not.
+  {
+    std::ofstream(dir.file("spatial_stages.json")) << R"([{"name": "s", "free": ["tracker"]}])";
+    std::ofstream(dir.file("planar_stages.json")) << R"([{"name": "s", "free": ["camera"]}])";
+  }
+  EXPECT_EQ(run(common + dir.file("out.json") + " --stages " + dir.file("spatial_stages.json"), dir,
+                &err),
+            1);
+  EXPECT_NE(err.find(dir.file("planar.csv")), std::string::npos) << err;
+  EXPECT_EQ(
+      run(common + dir.file("out.json") + " --stages " + dir.file("planar_stages.json"), dir, &err),
+      1);
+  EXPECT_NE(err.find(dir.file("planar_stages.json")), std::string::npos) << err;
+  EXPECT_NE(err.find("camera"), std::string::npos) << err;
+  EXPECT_EQ(run(common + robot, dir, &err), 1);
+  EXPECT_NE(err.find("refusing to overwrite the input"), std::string::npos) << err;
+  EXPECT_EQ(slurp(robot), robot_text);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out.json")));
+}
+
+}  // namespace
+}  // namespace pcr
