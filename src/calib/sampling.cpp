@@ -1,7 +1,5 @@
 #include "pcr/calib/sampling.hpp"
 
-#include <Eigen/Cholesky>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -15,25 +13,9 @@
 namespace pcr {
 namespace {
 
-struct Box {
-  JointVector lo, hi;
-  int dim() const { return static_cast<int>(lo.size()); }
-  bool contains(const JointVector& q) const {
-    for (int i = 0; i < dim(); ++i) {
-      if (!(q(i) >= lo(i) && q(i) <= hi(i))) return false;
-    }
-    return true;
-  }
-  double volume() const {
-    double v = 1.0;
-    for (int i = 0; i < dim(); ++i) v *= hi(i) - lo(i);
-    return v;
-  }
-};
-
-Box sampling_box(const RobotParams<double>& robot, const SamplingOptions& options) {
+JointBox sampling_box(const RobotParams<double>& robot, const SamplingOptions& options) {
   const int n = robot.num_limbs;
-  Box box;
+  JointBox box;
   box.lo.resize(n);
   box.hi.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -68,95 +50,38 @@ Box sampling_box(const RobotParams<double>& robot, const SamplingOptions& option
   return box;
 }
 
-class Sampler {
+/// The planar admission test: FK on the home branch (the first point from home, every later one by
+/// a straight continuation from the accepted point it was drawn around, itself reached from home),
+/// and the strain limit.
+class PlanarAdmission {
  public:
-  Sampler(const RobotParams<double>& robot, const SamplingOptions& options, const Box& box)
-      : robot_(robot), options_(options), box_(box) {}
+  PlanarAdmission(const RobotParams<double>& robot, const SamplingOptions& options)
+      : robot_(robot), options_(options) {}
 
-  /// One run of Bridson's algorithm with radius r: a maximal set of admissible points.
-  std::vector<JointVector> run(double r, std::uint64_t seed, SamplingResult* stats) {
-    std::seed_seq seq{seed, std::uint64_t{0x706f6973736f6e}};
-    std::mt19937_64 rng(seq);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::normal_distribution<double> gauss(0.0, 1.0);
-    const int n = box_.dim();
-    stats->candidates = stats->rejected_fk = stats->rejected_strain = 0;
-
-    std::vector<JointVector> points;
-    std::vector<ForwardSolution> solutions;  // warm starts: FK continues from the spawning point
-    std::vector<std::size_t> active;
-    // Seed point: uniform in the box until one is admissible.
-    const int max_seed_tries = 1000;
-    for (int t = 0; t < max_seed_tries && points.empty(); ++t) {
-      JointVector q(n);
-      for (int i = 0; i < n; ++i) q(i) = box_.lo(i) + (box_.hi(i) - box_.lo(i)) * unit(rng);
-      ForwardSolution fk = forward_kinematics(robot_, q, options_.solver, options_.load);
-      if (accept(fk, stats)) {
-        points.push_back(q);
-        solutions.push_back(fk);
-        active.push_back(0);
-      }
-    }
-    const double shell = std::pow(2.0, n) - 1.0;
-    while (!active.empty()) {
-      const std::size_t pick = static_cast<std::size_t>(unit(rng) * active.size()) % active.size();
-      const JointVector centre = points[active[pick]];
-      const ForwardSolution from = solutions[active[pick]];
-      bool found = false;
-      for (int k = 0; k < options_.attempts; ++k) {
-        // Uniform in the spherical shell r <= |d| <= 2r.
-        JointVector d(n);
-        for (int i = 0; i < n; ++i) d(i) = gauss(rng);
-        const double norm = d.norm();
-        if (!(norm > 0)) continue;
-        const double radius = r * std::pow(1.0 + shell * unit(rng), 1.0 / n);
-        const JointVector q = centre + d * (radius / norm);
-        if (!box_.contains(q)) continue;
-        bool far = true;
-        for (const JointVector& p : points) {
-          if ((p - q).squaredNorm() < r * r) {
-            far = false;
-            break;
-          }
-        }
-        if (!far) continue;
-        // A straight continuation from an accepted point, itself reached from home: the path
-        // q = 0 -> ... -> centre -> q stays on the home branch.
-        ForwardSolution fk = forward_kinematics(robot_, q, from, options_.solver, options_.load);
-        if (!accept(fk, stats)) continue;
-        points.push_back(q);
-        solutions.push_back(fk);
-        active.push_back(points.size() - 1);
-        found = true;
-        break;
-      }
-      if (!found) {
-        active[pick] = active.back();
-        active.pop_back();
-      }
-    }
-    // Seeded shuffle, so any prefix is spread over the whole region.
-    std::shuffle(points.begin(), points.end(), rng);
-    return points;
-  }
-
- private:
-  bool accept(const ForwardSolution& fk, SamplingResult* stats) const {
-    ++stats->candidates;
+  bool operator()(const Eigen::VectorXd& q, int from, AdmissionCounts* counts) {
+    if (from < 0) solutions_.clear();  // a new run
+    const JointVector joints = q;
+    ForwardSolution fk =
+        from < 0 ? forward_kinematics(robot_, joints, options_.solver, options_.load)
+                 : forward_kinematics(robot_, joints, solutions_[static_cast<std::size_t>(from)],
+                                      options_.solver, options_.load);
+    ++counts->candidates;
     if (!fk.summary.converged()) {
-      ++stats->rejected_fk;
+      ++counts->rejected_fk;
       return false;
     }
     if (!(fk.summary.max_strain <= options_.strain_limit)) {
-      ++stats->rejected_strain;
+      ++counts->rejected_strain;
       return false;
     }
+    solutions_.push_back(fk);
     return true;
   }
 
+ private:
   const RobotParams<double>& robot_;
   const SamplingOptions& options_;
-  Box box_;
+  std::vector<ForwardSolution> solutions_;  // warm starts, in the run's order of acceptance
 };
 
 }  // namespace
@@ -181,51 +106,24 @@ SamplingResult poisson_disc_sample(const RobotParams<double>& robot,
                      std::to_string(robot.num_limbs));
   }
   require_valid(options, "poisson_disc_sample");
-  const Box box = sampling_box(robot, options);
-  const int n = box.dim();
-  Sampler sampler(robot, options, box);
+  const JointBox box = sampling_box(robot, options);
   SamplingResult result;
   result.box_min = box.lo;
   result.box_max = box.hi;
-
-  std::vector<JointVector> points;
-  if (options.min_distance > 0) {
-    result.min_distance = options.min_distance;
-    points = sampler.run(options.min_distance, options.seed, &result);
-  } else {
-    // Radius from the count: a maximal Poisson-disc set of radius r holds about 0.7 V / r^n points
-    // in 3-D (random sequential packing); the unreachable part of the box makes it fewer, so each
-    // run corrects r with the measured count (N ~ r^-n). Each run costs thousands of FK solves:
-    // accept the first set holding `count` to 1.6 `count` points.
-    const double target = options.count * 1.2 + 1.0;
-    double r = std::pow(0.5 * box.volume() / target, 1.0 / n);
-    double best_r = 0.0;
-    std::vector<JointVector> best;
-    SamplingResult best_stats;
-    for (int iteration = 0; iteration < 8; ++iteration) {
-      SamplingResult stats;
-      std::vector<JointVector> set = sampler.run(r, options.seed, &stats);
-      const double count = static_cast<double>(set.size());
-      if (static_cast<int>(set.size()) >= options.count && r > best_r) {
-        best_r = r;
-        best = std::move(set);
-        best_stats = stats;
-        if (count <= 1.6 * options.count) break;
-      }
-      const double ratio = std::max(count, 1.0) / target;
-      r *= std::clamp(std::pow(ratio, 1.0 / n), 0.5, 2.0);
-    }
-    if (best.empty()) {
-      throw InputError("poisson_disc_sample: could not find " + std::to_string(options.count) +
-                       " admissible configurations (FK converged, strain <= " +
-                       std::to_string(options.strain_limit) + ") in the box");
-    }
-    result.min_distance = best_r;
-    result.candidates = best_stats.candidates;
-    result.rejected_fk = best_stats.rejected_fk;
-    result.rejected_strain = best_stats.rejected_strain;
-    points = std::move(best);
+  PlanarAdmission admission(robot, options);
+  const PoissonDiscDraw draw =
+      poisson_disc_draw(box, options.count, options.min_distance, options.seed, options.attempts,
+                        std::ref(admission));
+  if (options.min_distance <= 0 && draw.points.empty()) {
+    throw InputError("poisson_disc_sample: could not find " + std::to_string(options.count) +
+                     " admissible configurations (FK converged, strain <= " +
+                     std::to_string(options.strain_limit) + ") in the box");
   }
+  result.min_distance = draw.radius;
+  result.candidates = draw.counts.candidates;
+  result.rejected_fk = draw.counts.rejected_fk;
+  result.rejected_strain = draw.counts.rejected_strain;
+  std::vector<JointVector> points(draw.points.begin(), draw.points.end());
   result.complete = static_cast<int>(points.size()) >= options.count;
   if (result.complete) points.resize(static_cast<std::size_t>(options.count));
   result.configurations = std::move(points);
@@ -287,60 +185,11 @@ DesignResult d_optimal_design(const RobotDescription& robot,
                      std::to_string(result.failed) + " without an FK solution)");
   }
 
-  // Identifiable subspace, in coordinates where the candidates' information is the identity:
-  // T = V_r S_r^-1, rows U_j = J_j T.
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(stacked, Eigen::ComputeThinV);
-  const Eigen::VectorXd& sv = svd.singularValues();
-  const double smax = sv.size() > 0 ? sv(0) : 0.0;
-  Eigen::Index r = 0;
-  while (r < sv.size() && smax > 0 && sv(r) > kRankThreshold * smax) ++r;
-  result.dimension = static_cast<int>(r);
-  const Eigen::MatrixXd basis = svd.matrixV().leftCols(r);
-  const Eigen::MatrixXd U = stacked * basis * sv.head(r).cwiseInverse().asDiagonal();
-
-  // Greedy choice: A = eps I + sum of the chosen U_j^T U_j, A^-1 kept up to date.
-  Eigen::MatrixXd A_inv = Eigen::MatrixXd::Identity(r, r) / kDesignRegularisation;
-  std::vector<bool> chosen(usable.size(), false);
-  for (int step = 0; step < count; ++step) {
-    double best_gain = -INFINITY;
-    std::size_t best = usable.size();
-    for (std::size_t j = 0; j < usable.size(); ++j) {
-      if (chosen[j]) continue;
-      const auto Uj = U.middleRows(3 * static_cast<Eigen::Index>(j), 3);
-      const Eigen::Matrix3d G = Eigen::Matrix3d::Identity() + Uj * A_inv * Uj.transpose();
-      const Eigen::LLT<Eigen::Matrix3d> llt(G);
-      if (llt.info() != Eigen::Success) continue;
-      const double gain = 2.0 * llt.matrixLLT().diagonal().array().log().sum();
-      if (gain > best_gain) {
-        best_gain = gain;
-        best = j;
-      }
-    }
-    if (best == usable.size()) break;  // no candidate left with a finite gain
-    chosen[best] = true;
-    result.selected.push_back(usable[best]);
-    const auto Ub = U.middleRows(3 * static_cast<Eigen::Index>(best), 3);
-    const Eigen::MatrixXd W = Ub * A_inv;  // 3 x r
-    const Eigen::Matrix3d G = Eigen::Matrix3d::Identity() + W * Ub.transpose();
-    A_inv -= W.transpose() * G.ldlt().solve(W);
-    A_inv = 0.5 * (A_inv + A_inv.transpose()).eval();
-  }
-
-  // The chosen set's criterion afresh, in an orthonormal basis of the subspace.
-  Eigen::MatrixXd rows(3 * static_cast<Eigen::Index>(result.selected.size()), r);
-  for (std::size_t j = 0, k = 0; j < usable.size(); ++j) {
-    if (!chosen[j]) continue;
-    rows.middleRows(3 * static_cast<Eigen::Index>(k++), 3) =
-        stacked.middleRows(3 * static_cast<Eigen::Index>(j), 3) * basis;
-  }
-  const Eigen::VectorXd chosen_sv = Eigen::BDCSVD<Eigen::MatrixXd>(rows).singularValues();
-  result.rank = 0;
-  result.log_det = 0;
-  for (Eigen::Index k = 0; k < r; ++k) {
-    const double s = k < chosen_sv.size() ? chosen_sv(k) : 0.0;
-    if (chosen_sv.size() > 0 && s > kRankThreshold * chosen_sv(0)) ++result.rank;
-    result.log_det += 2.0 * std::log(s);
-  }
+  const GreedyDesign greedy = greedy_d_optimal(stacked, 3, count);
+  for (int j : greedy.selected) result.selected.push_back(usable[static_cast<std::size_t>(j)]);
+  result.dimension = greedy.dimension;
+  result.rank = greedy.rank;
+  result.log_det = greedy.log_det;
   return result;
 }
 
@@ -396,25 +245,6 @@ ConfigurationSets sample_configurations(const RobotDescription& robot,
     sets.calibration.push_back(sets.candidates.configurations[static_cast<std::size_t>(j)]);
   }
   return sets;
-}
-
-std::vector<std::size_t> visiting_order(const std::vector<JointVector>& configurations) {
-  std::vector<std::size_t> left(configurations.size()), order;
-  for (std::size_t k = 0; k < left.size(); ++k) left[k] = k;
-  const auto take_nearest = [&](const JointVector& from) {
-    std::size_t best = 0;
-    for (std::size_t k = 1; k < left.size(); ++k) {
-      if ((configurations[left[k]] - from).squaredNorm() <
-          (configurations[left[best]] - from).squaredNorm()) {
-        best = k;
-      }
-    }
-    order.push_back(left[best]);
-    left.erase(left.begin() + static_cast<std::ptrdiff_t>(best));
-  };
-  if (!left.empty()) take_nearest(JointVector::Zero(configurations[left[0]].size()));
-  while (!left.empty()) take_nearest(configurations[order.back()]);
-  return order;
 }
 
 void split_configurations(const std::vector<JointVector>& all, int first_count,

@@ -21,18 +21,11 @@
 // configuration j at the nominal robot: the calibrator's whitened residual (measurement_jacobian:
 // rows divided by the position noise, the angle row by the angle noise), columns scaled by the
 // parameter's uncertainty half-width (the sensitivity analysis' units), restricted to the
-// parameters with a nonzero half-width (those the default last stage frees). The identifiable
-// subspace is the span of the right singular vectors of the stacked candidate Jacobian above
-// kRankThreshold of the largest: the seven gauge directions (gauge_generators) and any other
-// combination no candidate sees drop out. F_C is the whole candidate set's information and
-// eps = kDesignRegularisation: it makes the criterion finite while fewer than dim / 3
-// configurations are chosen (three rows each), so the first picks open as many directions as they
-// can; with 30 of 300 candidates chosen it weighs ~1e-5 of F_S. In coordinates of the subspace
-// where F_C = I (so eps F_C = eps I), with U_j the rows of candidate j and A = eps I + F_S, each
-// step adds the candidate with the largest gain log det(I_3 + U_j A^-1 U_j^T) (matrix determinant
-// lemma) and updates A^-1 by the Woodbury identity (three Sherman-Morrison rank-one updates at
-// once). The log det reported is the chosen set's, computed afresh. Ties go to the lower
-// candidate index, so the choice is deterministic for a seed. With a validation set, that set is
+// parameters with a nonzero half-width (those the default last stage frees); the greedy choice,
+// its identifiable subspace (the seven gauge directions drop out) and its regularisation are
+// greedy_d_optimal's (pcr/calib/experiment_design.hpp, shared with the spatial sampler). The log
+// det reported is the chosen set's, computed afresh. Ties go to the lower candidate index, so the
+// choice is deterministic for a seed. With a validation set, that set is
 // the Poisson-disc one (the same as for kPoissonDisc with the same seed: it measures accuracy
 // over the workspace) and candidates closer to it than the candidates' own radius are left out.
 
@@ -40,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "pcr/calib/experiment_design.hpp"
 #include "pcr/calib/virtual_robot.hpp"
 #include "pcr/input_error.hpp"
 #include "pcr/kinematics.hpp"
@@ -81,8 +75,6 @@ SamplingDesign parse_sampling_design(const std::string& name);
 
 /// D-optimal: candidates per chosen configuration.
 inline constexpr int kDesignCandidateFactor = 10;
-/// D-optimal: eps of the criterion, relative to the whole candidate set's information.
-inline constexpr double kDesignRegularisation = 1e-6;
 
 struct SamplingOptions {
   int count = kDefaultCalibrationCount;
@@ -188,11 +180,6 @@ struct ConfigurationSets {
 /// admissible configurations.
 ConfigurationSets sample_configurations(const RobotDescription& robot,
                                         const SamplingOptions& options, int validation_count = 0);
-
-/// The order an experiment visits `configurations` in: a greedy nearest-neighbour tour (joint
-/// space, Euclidean) from the one nearest home. Every FK then starts next to the last solution:
-/// in the sampler's shuffled order, warm starts across the stroke box do about 5 times the work.
-std::vector<std::size_t> visiting_order(const std::vector<JointVector>& configurations);
 
 /// First `first_count` configurations and the rest (the sampler's order is already shuffled).
 void split_configurations(const std::vector<JointVector>& all, int first_count,
