@@ -530,3 +530,70 @@ TEST(SpatialCommandPath, FailuresNameThePose) {
 
 }  // namespace
 }  // namespace pcr
+
+namespace {
+
+using namespace pcr;
+
+/// A circle of the paper's diameter 0.4 m above the base, 8 poses.
+std::vector<SpatialPose<double>> reference_circle() {
+  SpatialCirclePath circle;
+  circle.centre = Vector3<double>(0.0, 0.0, 0.4);
+  circle.num_poses = 8;
+  return spatial_circle_path(circle);
+}
+
+}  // namespace
+
+/// The truth commanding itself attains its commands but for the measuring noise: AP_p is the
+/// noise's mean over the cycles (sigma / sqrt(cycles) per axis) and RP_l that of |noise| (about
+/// 3.6 sigma for a 3-D Gaussian). The nominal model's AP_p is what the truth's own FK at the
+/// nominal's commanded joints, seen through the nominal's extrinsics, says, to the same noise.
+TEST(SpatialAccuracyOnAVirtualRobot, AttainedPosesAreTheTruthsSeenThroughTheModel) {
+  const SpatialRobotDescription nominal = continuum_stewart_gough_description();
+  SpatialVirtualRobotOptions virtual_options;
+  virtual_options.seed = 3;
+  SpatialVirtualRobot robot(nominal, virtual_options);
+  const double sigma = robot.noise_position();
+  const std::vector<SpatialPose<double>> path = reference_circle();
+  SpatialAccuracyOptions options;
+  options.repeat = 10;
+
+  const SpatialAccuracyEvaluation own =
+      evaluate_on_spatial_virtual_robot(robot.truth().params, robot, path, options);
+  ASSERT_EQ(own.attained.size(), path.size());
+  ASSERT_EQ(own.attained[0].size(), 10u);
+  EXPECT_LT(own.iso.ap_p.max, 2.0 * sigma);
+  EXPECT_GT(own.iso.rp_l.min, 1.5 * sigma);
+  EXPECT_LT(own.iso.rp_l.max, 7.0 * sigma);
+
+  const SpatialAccuracyEvaluation guess =
+      evaluate_on_spatial_virtual_robot(nominal.params, robot, path, options);
+  // The truth's equilibria at the nominal's joints, along the path from home as the robot went.
+  const SpatialExtrinsics<double>& truth = robot.truth().params.extrinsics;
+  SpatialForwardSequence moves(robot.truth().params, SolverOptions(), SequenceMode::kPath);
+  double worst = 0;
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    const SpatialForwardSolution& s = moves.solve(guess.command.q[k]);
+    ASSERT_TRUE(s.summary.converged()) << "pose " << k;
+    const SpatialPose<double> seen = nominal.params.extrinsics.platform_from_measurement(
+        truth.measurement_from_platform(s.pose));
+    const double expected = (seen.position - guess.commanded[k].position).norm();
+    EXPECT_GT(expected, 100 * sigma) << "pose " << k;  // the nominal's error, far above noise
+    worst = std::max(worst, std::abs(guess.iso.poses[k].ap_p - expected));
+  }
+  std::printf(
+      "truth as its own model: AP_p max %.3g m, RP_l %.3g to %.3g m (sigma %.3g m); "
+      "nominal model: AP_p %.3g to %.3g m, within %.3g m of the truth's FK\n",
+      own.iso.ap_p.max, own.iso.rp_l.min, own.iso.rp_l.max, sigma, guess.iso.ap_p.min,
+      guess.iso.ap_p.max, worst);
+  EXPECT_LT(worst, 2.0 * sigma);
+}
+
+TEST(SpatialAccuracyOnAVirtualRobot, RefusesAnotherRodCount) {
+  const SpatialRobotDescription nominal = continuum_stewart_gough_description();
+  SpatialVirtualRobot robot(nominal);
+  SpatialRobotParams<double> three = nominal.params;
+  three.num_rods = 3;
+  EXPECT_THROW(evaluate_on_spatial_virtual_robot(three, robot, reference_circle()), InputError);
+}

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "accuracy_internal.hpp"
 #include "pcr/csv_io.hpp"
 #include "pcr/input_error.hpp"
 
@@ -178,21 +179,15 @@ AccuracyEvaluation evaluate_on_virtual_robot(const RobotParams<double>& model, V
   const Extrinsics<double>& map = options.frame == AttainedFrame::kTrueExtrinsics
                                       ? robot.truth().params.extrinsics
                                       : model.extrinsics;
-  out.attained.assign(path.size(), {});
-  for (auto& a : out.attained) a.reserve(static_cast<std::size_t>(options.repeat));
-  for (int cycle = 0; cycle < options.repeat; ++cycle) {
-    for (std::size_t k = 0; k < path.size(); ++k) {
-      const VirtualMeasurement m = robot.measure(out.command.q[k]);
-      if (!m.ok) {
-        throw std::runtime_error("virtual robot: cycle " + std::to_string(cycle) + ", pose " +
-                                 std::to_string(k) + " " + format_pose(path[k]) +
-                                 ": the true robot has no equilibrium at the commanded joints "
-                                 "(solver status " +
-                                 to_string(m.summary.status) + ")");
-      }
-      out.attained[k].push_back(map.platform_from_measurement(m.measured));
-    }
-  }
+  out.attained = calib_internal::attained_in_cycles<Pose2<double>>(
+      options.repeat, path.size(),
+      [&](std::size_t k, Pose2<double>* attained) -> std::string {
+        const VirtualMeasurement m = robot.measure(out.command.q[k]);
+        if (!m.ok) return to_string(m.summary.status);
+        *attained = map.platform_from_measurement(m.measured);
+        return "";
+      },
+      [&](std::size_t k) { return format_pose(path[k]); });
   out.iso = iso9283(out.commanded, out.attained);
   return out;
 }

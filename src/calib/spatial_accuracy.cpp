@@ -4,7 +4,9 @@
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <stdexcept>
 
+#include "accuracy_internal.hpp"
 #include "pcr/csv_io.hpp"
 #include "pcr/input_error.hpp"
 #include "pcr/spatial/sequence.hpp"
@@ -113,6 +115,34 @@ SpatialPathCommand spatial_command_path(const SpatialRobotParams<double>& model,
     command.residual_evaluations.push_back(s.residual_evaluations);
   }
   return command;
+}
+
+SpatialAccuracyEvaluation evaluate_on_spatial_virtual_robot(
+    const SpatialRobotParams<double>& model, SpatialVirtualRobot& robot,
+    const std::vector<SpatialPose<double>>& path, const SpatialAccuracyOptions& options) {
+  require_valid(options, "evaluate_on_spatial_virtual_robot");
+  if (robot.truth().params.num_rods != model.num_rods) {
+    throw InputError("evaluate_on_spatial_virtual_robot: the model has " +
+                     std::to_string(model.num_rods) + " rods, the virtual robot " +
+                     std::to_string(robot.truth().params.num_rods));
+  }
+  SpatialAccuracyEvaluation out;
+  out.command = spatial_command_path(model, path, options.command);
+  out.commanded = out.command.poses;  // free angles solved (3 or 5 rods)
+  const SpatialExtrinsics<double>& map = options.frame == AttainedFrame::kTrueExtrinsics
+                                             ? robot.truth().params.extrinsics
+                                             : model.extrinsics;
+  out.attained = calib_internal::attained_in_cycles<SpatialPose<double>>(
+      options.repeat, path.size(),
+      [&](std::size_t k, SpatialPose<double>* attained) -> std::string {
+        const SpatialVirtualMeasurement m = robot.measure(out.command.q[k]);
+        if (!m.ok) return to_string(m.summary.status);
+        *attained = map.platform_from_measurement(m.measured);
+        return "";
+      },
+      [&](std::size_t k) { return format_pose(path[k]); });
+  out.iso = iso9283_spatial(out.commanded, out.attained);
+  return out;
 }
 
 SpatialIso9283Result iso9283_spatial(

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "pcr/calib/accuracy.hpp"
+#include "pcr/calib/spatial_virtual_robot.hpp"
 #include "pcr/spatial/kinematics.hpp"
 #include "pcr/spatial/trajectory.hpp"
 
@@ -104,6 +105,36 @@ struct SpatialIso9283Result {
 /// so far (a deviation of pi / 2 or more from their mean) that their mean is not unique.
 SpatialIso9283Result iso9283_spatial(const std::vector<SpatialPose<double>>& commanded,
                                      const std::vector<std::vector<SpatialPose<double>>>& attained);
+
+struct SpatialAccuracyOptions {
+  int repeat = 30;  ///< ISO 9283 cycles per pose (>= 2; the standard asks for >= 30)
+  SpatialPathCommandOptions command;
+  AttainedFrame frame = AttainedFrame::kModelExtrinsics;
+
+  /// As AccuracyOptions::kRepeat.
+  static constexpr OptionRange kRepeat = AccuracyOptions::kRepeat;
+  bool is_valid(std::string* error = nullptr) const {
+    return kRepeat.check(repeat, error) && command.is_valid(error);
+  }
+};
+
+struct SpatialAccuracyEvaluation {
+  std::vector<SpatialPose<double>> commanded;  ///< the poses solved for
+  SpatialPathCommand command;
+  std::vector<std::vector<SpatialPose<double>>> attained;  ///< [pose][cycle], ^W T_P
+  SpatialIso9283Result iso;
+};
+
+/// Commands the path with `model` (nominal or identified), then runs `repeat` cycles on the
+/// virtual robot, as evaluate_on_virtual_robot does for a planar one: each cycle visits every
+/// pose in path order; the robot moves on its true parameters, the measuring system adds its
+/// noise, and each measured marker pose is taken to ^W T_P through the model's extrinsics (or the
+/// truth's, options.frame). Throws InputError for a path the model cannot command, and
+/// std::runtime_error naming the cycle and pose where the true robot has no stable equilibrium.
+SpatialAccuracyEvaluation evaluate_on_spatial_virtual_robot(
+    const SpatialRobotParams<double>& model, SpatialVirtualRobot& robot,
+    const std::vector<SpatialPose<double>>& path,
+    const SpatialAccuracyOptions& options = SpatialAccuracyOptions());
 
 /// Table 4 in 3-D as Markdown, one row per path and statistic (max, mean, min; AP_p and RP_l in
 /// um, the angles in mrad); the per-pose statistics as CSV and everything as JSON (SI units).
