@@ -173,7 +173,7 @@ int calibrate_spatial_robot(const Arguments& a) {
   const pcr::SpatialCalibrationResult result =
       pcr::calibrate_spatial(nominal, calibration, options);
   const pcr::SpatialCalibrationTable table =
-      pcr::spatial_calibration_table(nominal.params, result, calibration, validation, options.fk);
+      pcr::spatial_calibration_table(result, calibration, validation, options.fk);
 
   pcr::OutputTransaction outputs;                     // the robot and the report: all or none
   pcr::SpatialRobotDescription identified = nominal;  // uncertainty section kept

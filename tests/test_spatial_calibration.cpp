@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "pcr/calib/spatial_calibrator.hpp"
@@ -72,12 +73,12 @@ TEST(SpatialCalibration, DerivativesMatchCentralDifferences) {
 
 TEST(SpatialCalibration, HiddenRobotsAreIdentifiedToTheNoiseFloor) {
   const pcr::SpatialRobotDescription nominal = pcr::continuum_stewart_gough_description();
-  // Truths drawn uniformly inside the intervals. Truths at their corners (+-0.9 half-widths) are
-  // not identified yet: the stages stall above the floor (docs/calibration.md, "Spatial robots").
-  for (const std::uint64_t seed : {7}) {
-    const double fraction = 0.0;
+  // A truth drawn uniformly inside the intervals, and one in their corners (+-0.9 half-widths).
+  const std::pair<std::uint64_t, double> truths[] = {{7, 0.0}, {23, 0.9}};
+  for (const auto& [seed, fraction] : truths) {
     pcr::SpatialVirtualRobotOptions options;
     options.seed = seed;
+    options.truth_at_fraction = fraction;
     pcr::SpatialVirtualRobot robot(nominal, options);
     std::mt19937_64 rng(options.seed);
     const SpatialDataset calibration = measured(robot, random_joints(rng, 60, 0.0, 0.01));
@@ -123,6 +124,21 @@ TEST(SpatialCalibration, HiddenRobotsAreIdentifiedToTheNoiseFloor) {
     EXPECT_LT(truth_score.rms_position, std::sqrt(3.0) * sigma_p);
     EXPECT_LT(truth_score.rms_angle, std::sqrt(3.0) * sigma_a);
     EXPECT_LT(result.residual_variance, 1.5);
+
+    // The nominal model of Tables 3 and 4: the nominal geometry, the extrinsics fitted to it.
+    std::vector<double> moved(static_cast<std::size_t>(pcr::num_spatial_parameters(6)));
+    pcr::spatial_deviations(nominal.params, result.extrinsics_only, moved.data());
+    for (int k = 0; k < pcr::num_spatial_parameters(6); ++k) {
+      const bool extrinsic = k >= pcr::kSpatialRodParameters * 6;
+      if (!extrinsic) EXPECT_EQ(moved[static_cast<std::size_t>(k)], 0.0) << k;
+    }
+    const double fitted =
+        pcr::spatial_prediction_errors(result.extrinsics_only, calibration).rms_position;
+    const double as_described =
+        pcr::spatial_prediction_errors(nominal.params, calibration).rms_position;
+    std::printf("  nominal model on the calibration set: %.3g m (as described %.3g m)\n", fitted,
+                as_described);
+    EXPECT_LT(fitted, as_described);
   }
 }
 

@@ -161,8 +161,7 @@ void wrap_spatial_calibration(py::module_& m) {
         {
           py::gil_scoped_release release;
           result = calibrate_spatial(nominal, calibration, options);
-          table = spatial_calibration_table(nominal.params, result, calibration, validation,
-                                            options.fk);
+          table = spatial_calibration_table(result, calibration, validation, options.fk);
         }
         if (*error) throw std::move(**error);
         SpatialRobotDescription identified = nominal;  // uncertainty section kept

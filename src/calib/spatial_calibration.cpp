@@ -77,6 +77,11 @@ Eigen::Matrix<T, 6, 1> row_residual(const SpatialPose<T>& platform,
   return r;
 }
 
+/// The fewest RK4 steps of a stage's derivatives (Problem::derivative_step_divisor).
+constexpr int kMinDerivativeSteps = 16;
+/// The stages' divisor of the solution's RK4 steps for their derivatives.
+constexpr int kStageDerivativeStepDivisor = 4;
+
 /// What every row's cost shares.
 struct Problem {
   const SpatialRobotDescription* nominal = nullptr;
@@ -84,6 +89,11 @@ struct Problem {
   double weight = 0, scale = 0;
   SolverOptions fk;
   int count = 0;  ///< flat parameters
+  /// The derivatives' RK4 steps are the solution's over this (at least kMinDerivativeSteps): the
+  /// stages' steps need a derivative good to a few digits, which a quarter of the steps gives
+  /// (RK4's error grows as the step's fourth power: ~1e-7 relative) at a quarter of the cost of
+  /// the Jets; the result's rank and standard deviations take the exact one (1).
+  int derivative_step_divisor = 1;
 
   std::vector<double> deviations(const double* u) const {
     std::vector<double> d(static_cast<std::size_t>(count));
@@ -104,6 +114,7 @@ struct RowState {
   /// right), when `derivative_valid`.
   Eigen::MatrixXd pose_derivative;
   bool derivative_valid = false;
+  int derivative_step_divisor = 0;  ///< of pose_derivative
   /// The solution at the last accepted parameters: every trial starts from it, so that a
   /// rejected step's equilibrium (perhaps on another branch) never starts the next one.
   SpatialForwardSolution anchor;
@@ -145,7 +156,8 @@ Eigen::MatrixXd pose_derivative(const Problem& problem, const RowState& row,
   for (int i = 0; i < n; ++i) x.q[static_cast<std::size_t>(i)] = row.q(i);
   x.pose = s.pose;
   x.wrenches = s.wrenches;
-  const int steps = s.summary.rod_steps;
+  const int steps = std::max(std::min(kMinDerivativeSteps, s.summary.rod_steps),
+                             s.summary.rod_steps / problem.derivative_step_divisor);
   const ShootingScale scale = spatial_shooting_scale(robot);
   SpatialResidualVector<double> r;
   SpatialJacobian J;
@@ -207,9 +219,10 @@ void row_jacobian(const Problem& problem, RowState& row, const SpatialRobotParam
   using Jet18 = ceres::Jet<double, 18>;
   const int n = robot.num_rods;
   const SpatialForwardSolution& s = row.solution;
-  if (!row.derivative_valid) {
+  if (!row.derivative_valid || row.derivative_step_divisor != problem.derivative_step_divisor) {
     row.pose_derivative = pose_derivative(problem, row, robot, d);
     row.derivative_valid = true;
+    row.derivative_step_divisor = problem.derivative_step_divisor;
   }
 
   // The measurement: the pose's change (position in m, turn on the right) and the extrinsics'.
@@ -507,6 +520,19 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     rows[j].at.assign(static_cast<std::size_t>(kSpatialRodParameters * n), 0.0);
   }
 
+  // The extrinsics alone, fitted on the nominal geometry (SpatialCalibrationResult::
+  // extrinsics_only): the first stage's result when that is what it frees, else a fit of its own.
+  std::vector<int> extrinsics;
+  for (int k = kSpatialRodParameters * n; k < problem.count; ++k) {
+    if (problem.half_widths[k] > 0) extrinsics.push_back(k);
+  }
+  const auto extrinsics_fit = [&](const std::vector<double>& at) {
+    const std::vector<double> d = problem.deviations(at.data());
+    return spatial_with_deviations(nominal.params, d.data());
+  };
+  bool extrinsics_recorded = false;
+
+  problem.derivative_step_divisor = kStageDerivativeStepDivisor;
   std::vector<double> u(static_cast<std::size_t>(problem.count), 0.0);
   std::vector<int> free;
   for (const CalibrationStage& stage : options.stages) {
@@ -564,6 +590,10 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     }
     report.time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_started).count();
+    if (result.stages.empty() && free == extrinsics && report.usable) {
+      result.extrinsics_only = extrinsics_fit(u);
+      extrinsics_recorded = true;
+    }
     result.stages.push_back(report);
     if (!report.usable) {
       result.warnings.push_back("stage '" + stage.name +
@@ -571,7 +601,19 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     }
   }
 
-  // The result: its parameters, rank, unidentifiable combinations and standard deviations.
+  if (!extrinsics_recorded) {
+    result.extrinsics_only = nominal.params;
+    std::vector<RowState> on_nominal = rows;  // the nominal geometry's solutions still start them
+    std::vector<double> at(static_cast<std::size_t>(problem.count), 0.0);
+    if (!extrinsics.empty() &&
+        solve_stage(problem, on_nominal, options, "extrinsics alone", extrinsics, &at).usable) {
+      result.extrinsics_only = extrinsics_fit(at);
+    }
+  }
+
+  // The result: its parameters, rank, unidentifiable combinations and standard deviations, from
+  // the exact derivatives.
+  problem.derivative_step_divisor = 1;
   const std::vector<double> d = problem.deviations(u.data());
   result.identified = spatial_with_deviations(nominal.params, d.data());
   result.free_count = static_cast<int>(free.size());

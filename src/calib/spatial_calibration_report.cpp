@@ -26,12 +26,12 @@ PoseErrorStats statistics(const SpatialPredictionErrors& errors) {
 
 }  // namespace
 
-SpatialCalibrationTable spatial_calibration_table(const SpatialRobotParams<double>& nominal,
-                                                  const SpatialCalibrationResult& result,
+SpatialCalibrationTable spatial_calibration_table(const SpatialCalibrationResult& result,
                                                   const SpatialDataset& calibration,
                                                   const SpatialDataset& validation,
                                                   const SolverOptions& fk) {
   SpatialCalibrationTable table;
+  const SpatialRobotParams<double>& nominal = result.extrinsics_only;
   table.nominal_calibration = spatial_prediction_errors(nominal, calibration, fk);
   table.identified_calibration = spatial_prediction_errors(result.identified, calibration, fk);
   table.has_validation = validation.size() > 0;
@@ -80,7 +80,7 @@ std::string spatial_calibration_report_text(const SpatialCalibrationResult& resu
   if (table.has_validation) {
     out << stats_line("identified model, validation set", statistics(table.identified_validation));
   }
-  out << "(nominal model: the nominal robot as described, its extrinsics included)\n\nstages:\n";
+  out << "(nominal model: the nominal geometry with the identified extrinsics)\n\nstages:\n";
   for (const SpatialStageReport& s : result.stages) {
     out << report_internal::stage_line(s, " (whitened)") << "  " << s.unseen_directions
         << " unseen directions\n    " << s.termination << "\n";

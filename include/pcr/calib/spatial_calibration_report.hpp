@@ -12,8 +12,9 @@
 
 namespace pcr {
 
-/// The pose errors (position e_p in m, angle e_angle in rad) of the nominal robot (as described,
-/// its extrinsics included) and of the identified robot on both sets, row by row
+/// The pose errors (position e_p in m, angle e_angle in rad) of the nominal model (the nominal
+/// geometry with the identified extrinsics, SpatialCalibrationResult::extrinsics_only, as the
+/// planar table's) and of the identified robot on both sets, row by row
 /// (spatial_prediction_errors: NaN where FK fails).
 struct SpatialCalibrationTable {
   SpatialPredictionErrors nominal_calibration, identified_calibration;
@@ -25,8 +26,7 @@ struct SpatialCalibrationTable {
 };
 
 /// Evaluates both robots on both sets (`validation` may be empty).
-SpatialCalibrationTable spatial_calibration_table(const SpatialRobotParams<double>& nominal,
-                                                  const SpatialCalibrationResult& result,
+SpatialCalibrationTable spatial_calibration_table(const SpatialCalibrationResult& result,
                                                   const SpatialDataset& calibration,
                                                   const SpatialDataset& validation,
                                                   const SolverOptions& fk = SolverOptions());

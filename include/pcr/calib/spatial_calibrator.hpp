@@ -17,7 +17,10 @@
 //   configuration's last solution), then the implicit function theorem, d pose / d p =
 //   -(dF/dz)^-1 dF/dp, where dF/dz is the shooting Jacobian at the solution and dF/dp comes rod by
 //   rod from one pass of the rod's RK4 steps in ceres::Jet (its 16 parameters at once), the other
-//   rods' tips held; the extrinsics and the pose enter the measurement through a Jet of 18.
+//   rods' tips held; the extrinsics and the pose enter the measurement through a Jet of 18. The
+//   stages' iterations take the rods' Jets over a quarter of the RK4 steps (the derivative to
+//   ~1e-7, relative: Levenberg-Marquardt's steps need no more, and the residuals stay exact);
+//   the result's rank and uncertainty take the exact derivative.
 // - Gauge: the directions no data can see (with gravity: a translation of the base with the
 //   tracker, and a turn of both about the gravity axis; each rod's base and tip twisted
 //   together; more without a load on the rods), and those the data see too little to place
@@ -108,6 +111,10 @@ struct SpatialParameterEstimate {
 
 struct SpatialCalibrationResult {
   SpatialRobotParams<double> identified;  ///< the nominal robot moved by the deviations
+  /// The nominal geometry with its extrinsics alone identified (the first stage's result when it
+  /// frees the extrinsics alone, else a fit of its own): the nominal model of Tables 3 and 4, as
+  /// the planar CalibrationResult::extrinsics_only.
+  SpatialRobotParams<double> extrinsics_only;
   std::vector<SpatialStageReport> stages;
   std::vector<SpatialParameterEstimate> parameters;  ///< every flat parameter, in flat order
   double orientation_weight = 0;                     ///< resolved (m/rad)
