@@ -1,10 +1,10 @@
 // The paper's method as one call on a virtual robot (see pcr/calib/method.hpp).
 #include "pcr/calib/method.hpp"
 
-#include <chrono>
 #include <stdexcept>
 #include <utility>
 
+#include "method_internal.hpp"
 #include "pcr/calib/predicted_accuracy.hpp"
 
 namespace pcr {
@@ -13,48 +13,13 @@ namespace {
 constexpr const char* kStageNames[kMethodStages] = {
     "sensitivity", "sampling", "measurement", "calibration", "validation", "accuracy", "maps"};
 
-/// Runs one stage: its callbacks and its wall time.
-class StageRunner {
- public:
-  StageRunner(const MethodOptions& options, MethodResult& result)
-      : options_(options), result_(result) {}
-
-  template <typename F>
-  void run(MethodStage stage, F&& body) {
-    if (options_.on_stage_begin) options_.on_stage_begin(stage);
-    const auto start = std::chrono::steady_clock::now();
-    body();
-    result_.seconds[static_cast<int>(stage)] =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (options_.on_stage_end) options_.on_stage_end(stage, result_);
-  }
-
- private:
-  const MethodOptions& options_;
-  MethodResult& result_;
-};
+using StageRunner = calib_internal::StageRunner<MethodOptions, MethodResult>;
 
 /// The rows the virtual robot measured, visited in the order an experiment would take them.
 Dataset measured_rows(VirtualRobot& robot, const std::vector<JointVector>& configurations,
                       const char* set, int* unmeasured) {
-  std::vector<JointVector> visits;
-  for (std::size_t k : visiting_order(configurations)) visits.push_back(configurations[k]);
-  const std::vector<VirtualMeasurement> measured = robot.measure_dataset(visits);
-  Dataset data;
-  data.num_joints = robot.nominal().params.num_limbs;
-  for (std::size_t k = 0; k < visits.size(); ++k) {
-    if (measured[k].ok) {
-      data.add(visits[k], measured[k].measured);
-    } else {
-      ++*unmeasured;
-    }
-  }
-  if (data.size() == 0) {
-    throw std::runtime_error("none of the " + std::to_string(visits.size()) + " " + set +
-                             " configurations is measured: the true robot holds no stable "
-                             "equilibrium at any");
-  }
-  return data;
+  return calib_internal::measured_rows<Dataset>(robot, configurations,
+                                                robot.nominal().params.num_limbs, set, unmeasured);
 }
 
 }  // namespace
