@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -116,6 +117,37 @@ TEST(Demo, NoVisionRunIntoAFreshDirectoryWritesItsReport) {
   EXPECT_EQ(stage, count) << text;
   for (int k = 1; k <= std::stoi(count); ++k) {
     EXPECT_NE(text.find("[" + std::to_string(k) + "/" + count + "] "), std::string::npos) << k;
+  }
+}
+
+/// `pcr demo --robot` with a spatial robot file: the whole method on a virtual robot drawn from
+/// it (pcr::run_spatial_method), its report at the noise floor sqrt(3) sigma (211 nm for the
+/// reference robot) and its six paths.
+TEST(Demo, SpatialRobotFileRunsTheSpatialMethod) {
+  const pcr::test::ScratchDirectory scratch("demo");
+  const fs::path out = scratch.path() / "out";
+  ASSERT_EQ(run_demo(scratch, "--robot " + std::string(PCR_SOURCE_DIR) +
+                                  "/robots/continuum-stewart-gough.json --output " + out.string() +
+                                  " --calibration 40 --validation 12 --repeat 3 --poses 8"),
+            0);
+  const nlohmann::json report = read_json(out / "report.json");
+  const double floor = std::sqrt(3.0) * report["noise"]["position_m"].get<double>();
+  const auto& errors = report["calibration"]["pose_errors"];
+  EXPECT_LT(errors["identified_model_validation_set"]["rms_position_m"].get<double>(), 2 * floor);
+  EXPECT_GT(errors["nominal_model_validation_set"]["rms_position_m"].get<double>(), 30 * floor);
+  int rows = 0;
+  for (const auto& row : report["accuracy"]["iso9283_spatial"]) {
+    const std::string name = row["path"].get<std::string>();
+    const double ap_max = row["ap_p"]["max"].get<double>();  // m
+    EXPECT_LT(ap_max, name.find("identified") != std::string::npos ? 3 * floor : 1.0) << name;
+    EXPECT_GT(ap_max, name.find("nominal") != std::string::npos ? 10 * floor : 0.0) << name;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 6);
+  for (const char* file : {"report.md", "identified.json", "nominal.json", "truth.json",
+                           "calibration.csv", "validation.csv", "sensitivity.csv",
+                           "calibration-report.txt", "accuracy-helix-identified.csv"}) {
+    EXPECT_TRUE(fs::exists(out / file)) << file;
   }
 }
 

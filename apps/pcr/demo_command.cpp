@@ -20,6 +20,8 @@
 
 #include "commands.hpp"
 #include "pcr/calib/method.hpp"
+#include "pcr/calib/spatial_method.hpp"
+#include "pcr/spatial/robot_io.hpp"
 #ifdef PCR_HAS_VISION
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
@@ -33,6 +35,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
 
 struct DemoArgs {
+  std::string robot;  ///< empty: the built-in planar robot
   std::string output = "pcr-demo";
   std::uint64_t seed = 1;
   int calibration_count = pcr::kDefaultCalibrationCount;
@@ -435,8 +438,10 @@ void run_demo(const DemoArgs& args) {
   json report;
   report["seed"] = args.seed;
   report["unmodelled_effects"] = args.effects;
-  std::string md =
-      "# pcr demo: the method of Mauze et al. (2021) on the built-in virtual robot\n\n";
+  std::string md = "# pcr demo: the method of Mauze et al. (2021) on " +
+                   (args.robot.empty() ? std::string("the built-in virtual robot")
+                                       : "a virtual robot drawn from " + args.robot) +
+                   "\n\n";
   md += "Seed " + std::to_string(args.seed) + ", unmodelled effects: " +
         (args.effects.empty() ? std::string("none") : CLI::detail::join(args.effects, ", ")) +
         ". Units: um and urad in the tables, SI in every file. Files: see report.json. Figures: "
@@ -445,7 +450,8 @@ void run_demo(const DemoArgs& args) {
 
   // The virtual robot: a truth drawn from the design inside the paper's uncertainty intervals,
   // true extrinsics, the paper's repeatability as measurement noise.
-  const pcr::RobotDescription design = pcr::default_robot();
+  const pcr::RobotDescription design =
+      args.robot.empty() ? pcr::default_robot() : pcr::load_robot(args.robot);
   pcr::VirtualRobotOptions vr_options;
   vr_options.seed = args.seed;
   vr_options.effects = parse_effects(args.effects);
@@ -458,20 +464,22 @@ void run_demo(const DemoArgs& args) {
   pcr::RobotDescription nominal = design;
   bool measured = false;
 #ifdef PCR_HAS_VISION
-  if (args.vision) {
+  if (args.vision && args.robot.empty()) {  // the built-in robot's mounts are the ones rendered
     nominal = measure_nominal(design, robot.truth(), args.seed, out, report, md, progress);
     measured = true;
   }
 #endif
   if (!measured) {
     const std::string why =
-        "measurement skipped (vision not built or --no-vision): starting from the design with the "
-        "paper's uncertainties";
+        args.robot.empty()
+            ? "measurement skipped (vision not built or --no-vision): starting from the design "
+              "with the paper's uncertainties"
+            : "measurement skipped: starting from " + args.robot + " as the nominal description";
     progress.say("      " + why);
     md += "## 1. Measurement\n\n" + why + ".\n\n";
     report["measurement"] = why;
   }
-  nominal.name = "femto-3pf (measured)";
+  if (args.robot.empty()) nominal.name = "femto-3pf (measured)";
   pcr::save_robot(nominal, (out / "nominal.json").string());
   progress.end();
 
@@ -508,7 +516,7 @@ void run_demo(const DemoArgs& args) {
                               {"files", {"calibration.csv", "validation.csv"}}};
 
   pcr::RobotDescription identified = result.identified;
-  identified.name = "femto-3pf (identified)";
+  identified.name = nominal.name + " (identified)";
   pcr::save_robot(identified, (out / "identified.json").string());
   pcr::write_file_atomically((out / "calibration-report.txt").string(),
                              pcr::calibration_report_text(result.calibration, result.table));
@@ -547,14 +555,123 @@ void run_demo(const DemoArgs& args) {
   progress.say("wrote " + (out / "report.md").string());
 }
 
+/// The method on a virtual spatial robot drawn from the --robot file (pcr::run_spatial_method):
+/// the same report directory, its tables for a spatial robot (no figures yet).
+void run_spatial_demo(const DemoArgs& args) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!args.effects.empty())
+    throw pcr::InputError("--effects: the built-in planar robot's; not for a spatial robot");
+  const pcr::SpatialRobotDescription nominal = pcr::load_spatial_robot(args.robot);
+  if (!nominal.uncertainty) {
+    throw pcr::InputError(args.robot +
+                          ": no uncertainty section: the virtual robot draws its truth inside it "
+                          "and the calibration identifies within it");
+  }
+  const fs::path out = prepare_output(args.output);
+  pcr::OutputTransaction outputs;
+  Progress progress(
+      {"sensitivity analysis (Table 2)", "Poisson-disc sampling",
+       "simulated measurements of both sets", "two-stage calibration", "validation (Table 3)",
+       "square, circle and helix trajectories, ISO 9283 accuracy (Table 4)"},
+      args.quiet);
+  pcr::SpatialVirtualRobotOptions vr_options;
+  vr_options.seed = args.seed;
+  pcr::SpatialVirtualRobot robot(nominal, vr_options);
+  pcr::save_spatial_robot(nominal, (out / "nominal.json").string());
+  pcr::save_spatial_robot(robot.truth(), (out / "truth.json").string());
+
+  pcr::SpatialMethodOptions method;
+  method.sampling.count = args.calibration_count;
+  method.sampling.seed = args.seed;
+  method.validation_count = args.validation_count;
+  method.accuracy.repeat = args.repeat;
+  method.square.num_poses = method.circle.num_poses = method.helix.num_poses = args.path_poses;
+  if (!args.quiet)
+    method.calibration.progress = [](const std::string& l) { std::cerr << "      " << l << "\n"; };
+  method.on_stage_begin = [&](pcr::MethodStage) { progress.begin(); };
+  method.on_stage_end = [&](pcr::MethodStage, const pcr::SpatialMethodResult&) { progress.end(); };
+  const pcr::SpatialMethodResult result = pcr::run_spatial_method(nominal, robot, method);
+
+  json report;
+  report["robot"] = args.robot;
+  report["seed"] = args.seed;
+  report["noise"] = {{"position_m", robot.noise_position()}, {"angle_rad", vr_options.noise_angle}};
+  std::string md =
+      "# pcr demo: the method of Mauze et al. (2021) on a virtual spatial robot "
+      "drawn from " +
+      args.robot + "\n\nSeed " + std::to_string(args.seed) +
+      fmt(". Measurement noise %.3g nm and %.3g urad per axis (the noise floor of "
+          "an rms error: %.3g nm, %.3g urad). Units: um and mrad in Table 4, SI in "
+          "every file. Figures: not drawn for spatial robots yet.\n\n",
+          robot.noise_position() * 1e9, vr_options.noise_angle * 1e6,
+          std::sqrt(3.0) * robot.noise_position() * 1e9,
+          std::sqrt(3.0) * vr_options.noise_angle * 1e6);
+
+  pcr::write_file_atomically((out / "sensitivity.csv").string(),
+                             pcr::spatial_sensitivity_csv(*result.sensitivity));
+  report["sensitivity"] = json::parse(pcr::spatial_sensitivity_json(*result.sensitivity));
+  md += "## 1. Sensitivity analysis (Table 2), most influential first\n\n```\n" +
+        pcr::spatial_sensitivity_table_text(*result.sensitivity) + "```\n\n";
+
+  pcr::write_spatial_dataset(result.calibration_data, (out / "calibration.csv").string());
+  pcr::write_spatial_dataset(result.validation_data, (out / "validation.csv").string());
+  report["configurations"] = {{"calibration", result.calibration_data.size()},
+                              {"validation", result.validation_data.size()},
+                              {"unmeasured", result.unmeasured},
+                              {"files", {"calibration.csv", "validation.csv"}}};
+
+  pcr::SpatialRobotDescription identified = result.identified;
+  identified.name = nominal.name + " (identified)";
+  pcr::save_spatial_robot(identified, (out / "identified.json").string());
+  const std::string text = pcr::spatial_calibration_report_text(result.calibration, result.table);
+  pcr::write_file_atomically((out / "calibration-report.txt").string(), text);
+  report["calibration"] =
+      json::parse(pcr::spatial_calibration_report_json(result.calibration, result.table));
+  md += "## 2. Calibration and validation (Table 3)\n\n```\n" + text + "```\n\n";
+
+  std::vector<std::pair<std::string, const pcr::SpatialIso9283Result*>> rows;
+  for (const pcr::SpatialPathAccuracy& a : result.accuracy) {
+    const std::string name = a.path + "-" + a.model;
+    pcr::write_file_atomically((out / ("accuracy-" + name + ".csv")).string(),
+                               pcr::iso9283_spatial_poses_csv(a.evaluation.iso));
+    rows.emplace_back(a.path + ", " + a.model, &a.evaluation.iso);
+  }
+  report["accuracy"] = json::parse(pcr::iso9283_spatial_json(rows));
+  md += fmt("## 3. Trajectory accuracy, ISO 9283 in 3-D (Table 4), %.0f cycles\n\n", args.repeat) +
+        "The paths about the nominal robot's platform at the middle of the joint box; the "
+        "nominal model is the nominal geometry with its extrinsics fitted.\n\n" +
+        pcr::iso9283_spatial_table_markdown(rows) + "\n";
+
+  report["files"] = {"report.md",
+                     "report.json",
+                     "nominal.json",
+                     "truth.json",
+                     "identified.json",
+                     "sensitivity.csv",
+                     "calibration.csv",
+                     "validation.csv",
+                     "calibration-report.txt",
+                     "accuracy-{square,circle,helix}-{nominal,identified}.csv"};
+  report["time_s"] = Progress::seconds_since(start);
+  md += fmt("\nTotal time %.1f s.\n", Progress::seconds_since(start));
+  pcr::write_file_atomically((out / "report.json").string(), report.dump(2) + "\n");
+  pcr::write_file_atomically((out / "report.md").string(), md);
+  outputs.commit();
+  std::cout << md;
+  progress.say("wrote " + (out / "report.md").string());
+}
 }  // namespace
 
 void register_demo_command(CLI::App& app) {
   auto args = std::make_shared<DemoArgs>();
   CLI::App* cmd = app.add_subcommand(
       "demo",
-      "the whole method on the built-in virtual robot: measure, sensitivity, sampling, "
+      "the whole method on a virtual robot (the built-in one, or drawn from --robot): measure, "
+      "sensitivity, sampling, "
       "calibration, trajectory accuracy; writes a report directory");
+  cmd->add_option("--robot", args->robot,
+                  "a robot file (planar, or spatial: \"kind\": \"spatial\") with an uncertainty "
+                  "section, instead of the built-in robot: the virtual robot is drawn from it");
   cmd->add_option("--output", args->output, "output directory")->capture_default_str();
   cmd->add_option("--seed", args->seed, "seed of the virtual robot, images, sampling, noise")
       ->capture_default_str();
@@ -577,6 +694,12 @@ void register_demo_command(CLI::App& app) {
       ->check(CLI::IsMember({"misalignments", "diameters", "load", "all"}));
   cmd->add_flag("!--no-vision", args->vision, "start from the design instead of measuring");
   cmd->add_flag("--quiet", args->quiet, "no progress on stderr");
-  cmd->callback([args]() { run_demo(*args); });
+  cmd->callback([args]() {
+    if (pcr::cli::is_spatial_robot(args->robot)) {
+      run_spatial_demo(*args);
+    } else {
+      run_demo(*args);
+    }
+  });
 }
 #endif

@@ -86,6 +86,14 @@ SpatialPathCommand spatial_command_path(const SpatialRobotParams<double>& model,
                      " rods; spatial inverse kinematics needs 3, 5 or 6");
   }
   SpatialInverseSequence sequence(model, options.solver, SequenceMode::kPath);
+  if (options.start) {
+    SpatialInverseSolution from;  // its factorisation is the forward problem's: none carried
+    from.pose = options.start->pose;
+    from.q = options.start->q;
+    from.wrenches = options.start->wrenches;
+    from.summary = options.start->summary;
+    sequence.set_warm_start(from);
+  }
   SpatialPathCommand command;
   command.poses.reserve(path.size());
   for (std::size_t k = 0; k < path.size(); ++k) {

@@ -24,6 +24,7 @@
 // AP_p and each of |AP_a|, |AP_b|, |AP_c|, with RP_l and RP_a, RP_b, RP_c.
 
 #include <array>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -52,6 +53,11 @@ struct SpatialPathCommandOptions {
   /// The solves' options; with check_stability and stable_inverse (the defaults) a pose whose
   /// only equilibrium found would not hold is refused.
   SolverOptions solver;
+  /// An equilibrium of the model that the first pose's IK starts from (continued along the pose
+  /// path from it); none: the model's home solution, cold. For a model whose cold FK fails (an
+  /// identified robot: the spatial cold start does not solve every robot), its FK continued from
+  /// the nominal robot's at the same joints.
+  std::optional<SpatialForwardSolution> start;
 
   /// As SolverOptions::is_valid, for the strain limit and the solver's options.
   bool is_valid(std::string* error = nullptr) const {

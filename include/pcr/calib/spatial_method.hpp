@@ -63,7 +63,8 @@ struct SpatialMethodResult {
   SpatialCalibrationTable table;       ///< Table 3 on both sets
   SpatialRobotDescription identified;  ///< the nominal description with the identified parameters
   SpatialPose<double> centre;          ///< the paths' centre pose (see SpatialMethodOptions)
-  std::vector<SpatialPathAccuracy> accuracy;    ///< square, circle, helix; each nominal, identified
+  /// The nominal model's square, circle and helix, then the identified model's.
+  std::vector<SpatialPathAccuracy> accuracy;
   std::array<double, kMethodStages> seconds{};  ///< wall time of each stage (0: not run)
 
   /// The evaluation of `path` with `model`; std::out_of_range when it was not run.
