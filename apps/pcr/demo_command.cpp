@@ -422,6 +422,19 @@ void say_what_was_found(pcr::MethodStage stage, const pcr::MethodResult& r,
   }
 }
 
+/// The report's last lines: the total time, report.json and report.md written, every file put
+/// in place at once, the Markdown on stdout.
+void finish_report(const fs::path& out, std::chrono::steady_clock::time_point start, json& report,
+                   std::string& md, pcr::OutputTransaction& outputs, const Progress& progress) {
+  report["time_s"] = Progress::seconds_since(start);
+  md += fmt("\nTotal time %.1f s.\n", Progress::seconds_since(start));
+  pcr::write_file_atomically((out / "report.json").string(), report.dump(2) + "\n");
+  pcr::write_file_atomically((out / "report.md").string(), md);
+  outputs.commit();
+  std::cout << md;
+  progress.say("wrote " + (out / "report.md").string());
+}
+
 void run_demo(const DemoArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out = prepare_output(args.output);
@@ -546,13 +559,7 @@ void run_demo(const DemoArgs& args) {
                      "attained-{square,circle}-{nominal,identified}.csv",
                      "map-identified.csv",
                      "images/"};
-  report["time_s"] = Progress::seconds_since(start);
-  md += fmt("\nTotal time %.1f s.\n", Progress::seconds_since(start));
-  pcr::write_file_atomically((out / "report.json").string(), report.dump(2) + "\n");
-  pcr::write_file_atomically((out / "report.md").string(), md);
-  outputs.commit();
-  std::cout << md;
-  progress.say("wrote " + (out / "report.md").string());
+  finish_report(out, start, report, md, outputs, progress);
 }
 
 /// The method on a virtual spatial robot drawn from the --robot file (pcr::run_spatial_method):
@@ -652,13 +659,7 @@ void run_spatial_demo(const DemoArgs& args) {
                      "validation.csv",
                      "calibration-report.txt",
                      "accuracy-{square,circle,helix}-{nominal,identified}.csv"};
-  report["time_s"] = Progress::seconds_since(start);
-  md += fmt("\nTotal time %.1f s.\n", Progress::seconds_since(start));
-  pcr::write_file_atomically((out / "report.json").string(), report.dump(2) + "\n");
-  pcr::write_file_atomically((out / "report.md").string(), md);
-  outputs.commit();
-  std::cout << md;
-  progress.say("wrote " + (out / "report.md").string());
+  finish_report(out, start, report, md, outputs, progress);
 }
 }  // namespace
 
