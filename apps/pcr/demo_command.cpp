@@ -529,7 +529,8 @@ void run_demo(const DemoArgs& args) {
                               {"files", {"calibration.csv", "validation.csv"}}};
 
   pcr::RobotDescription identified = result.identified;
-  identified.name = nominal.name + " (identified)";
+  identified.name =
+      (args.robot.empty() ? std::string("femto-3pf") : nominal.name) + " (identified)";
   pcr::save_robot(identified, (out / "identified.json").string());
   pcr::write_file_atomically((out / "calibration-report.txt").string(),
                              pcr::calibration_report_text(result.calibration, result.table));
@@ -628,7 +629,8 @@ void run_spatial_demo(const DemoArgs& args) {
                               {"files", {"calibration.csv", "validation.csv"}}};
 
   pcr::SpatialRobotDescription identified = result.identified;
-  identified.name = nominal.name + " (identified)";
+  identified.name =
+      (args.robot.empty() ? std::string("femto-3pf") : nominal.name) + " (identified)";
   pcr::save_spatial_robot(identified, (out / "identified.json").string());
   const std::string text = pcr::spatial_calibration_report_text(result.calibration, result.table);
   pcr::write_file_atomically((out / "calibration-report.txt").string(), text);
