@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "configuration_sets.hpp"
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/csv_io.hpp"
 #include "pcr/robot_io.hpp"
@@ -195,56 +196,13 @@ DesignResult d_optimal_design(const RobotDescription& robot,
 
 ConfigurationSets sample_configurations(const RobotDescription& robot,
                                         const SamplingOptions& options, int validation_count) {
-  if (validation_count < 0) {
-    throw InputError("sample_configurations: validation count must be >= 0, got " +
-                     std::to_string(validation_count));
-  }
   require_valid(options, "sample_configurations");
-  const bool designed = options.design == SamplingDesign::kDOptimal;
-  ConfigurationSets sets;
-  if (!designed || validation_count > 0) {
-    // D-optimal too draws count + validation_count, so that its validation set is the one the
-    // Poisson-disc design gets with the same seed (a paired comparison of the designs).
-    SamplingOptions spread = options;
-    spread.count = options.count + validation_count;
-    sets.spread = poisson_disc_sample(robot.params, spread);
-    if (!sets.spread.complete) {
-      throw std::runtime_error("only " + std::to_string(sets.spread.configurations.size()) +
-                               " admissible configurations are " +
-                               format_double(sets.spread.min_distance) + " m apart; asked for " +
-                               std::to_string(spread.count) +
-                               " (lower min_distance: pcr sample --min-distance)");
-    }
-    split_configurations(sets.spread.configurations, spread.count - validation_count,
-                         &sets.calibration, &sets.validation);
-  }
-  if (!designed) return sets;
-
-  SamplingOptions pool = options;
-  pool.count = options.candidates > 0 ? options.candidates : kDesignCandidateFactor * options.count;
-  pool.min_distance = 0.0;  // from the candidate count
-  sets.candidates = poisson_disc_sample(robot.params, pool);
-  // Disjoint from the validation set, and the union still a Poisson-disc set of the candidates'
-  // radius.
-  std::vector<JointVector> candidates;
-  const double r2 = sets.candidates.min_distance * sets.candidates.min_distance;
-  for (const JointVector& q : sets.candidates.configurations) {
-    bool far = true;
-    for (const JointVector& v : sets.validation) far = far && (q - v).squaredNorm() >= r2;
-    if (far) candidates.push_back(q);
-  }
-  if (static_cast<int>(candidates.size()) < options.count) {
-    throw std::runtime_error("d-optimal design: only " + std::to_string(candidates.size()) +
-                             " candidates away from the validation set; asked for " +
-                             std::to_string(options.count));
-  }
-  sets.candidates.configurations = std::move(candidates);
-  sets.design = d_optimal_design(robot, sets.candidates.configurations, options.count, options);
-  sets.calibration.clear();
-  for (int j : sets.design.selected) {
-    sets.calibration.push_back(sets.candidates.configurations[static_cast<std::size_t>(j)]);
-  }
-  return sets;
+  return internal::sample_configuration_sets<ConfigurationSets>(
+      "sample_configurations", options, validation_count,
+      [&](const SamplingOptions& draw) { return poisson_disc_sample(robot.params, draw); },
+      [&](const std::vector<JointVector>& candidates, int count) {
+        return d_optimal_design(robot, candidates, count, options);
+      });
 }
 
 void split_configurations(const std::vector<JointVector>& all, int first_count,

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "configuration_sets.hpp"
 #include "pcr/calib/spatial_virtual_robot.hpp"  // spatial_default_noise_position
 #include "pcr/csv_io.hpp"
 #include "pcr/spatial/kinematics.hpp"
@@ -87,12 +88,6 @@ class SpatialAdmission {
   SolverOptions solver_;
   std::vector<SpatialForwardSolution> solutions_;  // warm starts, in the run's order of acceptance
 };
-
-void split(const std::vector<SpatialJointVector>& all, int first_count,
-           std::vector<SpatialJointVector>* first, std::vector<SpatialJointVector>* rest) {
-  first->assign(all.begin(), all.begin() + first_count);
-  rest->assign(all.begin() + first_count, all.end());
-}
 
 }  // namespace
 
@@ -201,54 +196,15 @@ DesignResult spatial_d_optimal_design(const SpatialRobotDescription& robot,
 SpatialConfigurationSets spatial_sample_configurations(const SpatialRobotDescription& robot,
                                                        const SpatialSamplingOptions& options,
                                                        int validation_count) {
-  if (validation_count < 0) {
-    throw InputError("spatial_sample_configurations: validation count must be >= 0, got " +
-                     std::to_string(validation_count));
-  }
   require_valid(options, "spatial_sample_configurations");
-  const bool designed = options.design == SamplingDesign::kDOptimal;
-  SpatialConfigurationSets sets;
-  if (!designed || validation_count > 0) {
-    // As the planar sampler: D-optimal too draws count + validation_count, so that its
-    // validation set is the Poisson-disc design's with the same seed.
-    SpatialSamplingOptions spread = options;
-    spread.count = options.count + validation_count;
-    sets.spread = spatial_poisson_disc_sample(robot.params, spread);
-    if (!sets.spread.complete) {
-      throw std::runtime_error("only " + std::to_string(sets.spread.configurations.size()) +
-                               " admissible configurations are " +
-                               format_double(sets.spread.min_distance) + " m apart; asked for " +
-                               std::to_string(spread.count) +
-                               " (lower min_distance: pcr sample --min-distance)");
-    }
-    split(sets.spread.configurations, options.count, &sets.calibration, &sets.validation);
-  }
-  if (!designed) return sets;
-
-  SpatialSamplingOptions pool = options;
-  pool.count = options.candidates > 0 ? options.candidates : kDesignCandidateFactor * options.count;
-  pool.min_distance = 0.0;  // from the candidate count
-  sets.candidates = spatial_poisson_disc_sample(robot.params, pool);
-  std::vector<SpatialJointVector> candidates;
-  const double r2 = sets.candidates.min_distance * sets.candidates.min_distance;
-  for (const SpatialJointVector& q : sets.candidates.configurations) {
-    bool far = true;
-    for (const SpatialJointVector& v : sets.validation) far = far && (q - v).squaredNorm() >= r2;
-    if (far) candidates.push_back(q);
-  }
-  if (static_cast<int>(candidates.size()) < options.count) {
-    throw std::runtime_error("spatial d-optimal design: only " + std::to_string(candidates.size()) +
-                             " candidates away from the validation set; asked for " +
-                             std::to_string(options.count));
-  }
-  sets.candidates.configurations = std::move(candidates);
-  sets.design =
-      spatial_d_optimal_design(robot, sets.candidates.configurations, options.count, options);
-  sets.calibration.clear();
-  for (int j : sets.design.selected) {
-    sets.calibration.push_back(sets.candidates.configurations[static_cast<std::size_t>(j)]);
-  }
-  return sets;
+  return internal::sample_configuration_sets<SpatialConfigurationSets>(
+      "spatial_sample_configurations", options, validation_count,
+      [&](const SpatialSamplingOptions& draw) {
+        return spatial_poisson_disc_sample(robot.params, draw);
+      },
+      [&](const std::vector<SpatialJointVector>& candidates, int count) {
+        return spatial_d_optimal_design(robot, candidates, count, options);
+      });
 }
 
 }  // namespace pcr
