@@ -292,6 +292,35 @@ TEST(ReferenceFk, ColdSolveFindsStronglyBentSolutionsNearAFold) {
   EXPECT_LE(e.angle, kAnglePromise);
 }
 
+TEST(ReferenceFk, AStepBudgetShortOfTheTargetsIsReportedInaccurate) {
+  // Too few RK4 steps allowed (max_rod_steps) for the targets: the solve converges on its model
+  // and says the answer is kInaccurate; CVODE confirms it is off by more than the targets, by
+  // about what the estimate says.
+  const pcr::RobotParams<double> robot = pcr::femto_3pf();
+  pcr::JointVector q(3);
+  q << 0.004, -0.002, 0.001;
+  for (const int budget : {4, 8}) {
+    pcr::SolverOptions options;
+    options.min_rod_steps = options.max_rod_steps = budget;
+    const pcr::ForwardSolution rk4 = pcr::forward_kinematics(robot, q, options);
+    ASSERT_EQ(rk4.summary.status, pcr::SolveStatus::kInaccurate) << budget << " steps";
+    const pcr::ForwardSolution ref = pcr::forward_kinematics_reference(robot, q, rk4);
+    ASSERT_TRUE(ref.summary.converged());
+    const PoseError e = pose_error(rk4.pose, ref.pose);
+    EXPECT_GT(std::max(e.position / options.position_accuracy, e.angle / options.angle_accuracy),
+              1.0)
+        << budget << " steps";
+    EXPECT_LT(e.position, 2 * rk4.summary.position_error_estimate) << budget << " steps";
+    EXPECT_GT(e.position, 0.5 * rk4.summary.position_error_estimate) << budget << " steps";
+    std::printf(
+        "[ reference ] %d RK4 steps: %s, %.2e m, %.2e rad from CVODE; estimated %.2e m, "
+        "%.2e rad\n",
+        budget, pcr::to_string(rk4.summary.status), e.position, e.angle,
+        rk4.summary.position_error_estimate, rk4.summary.angle_error_estimate);
+  }
+  EXPECT_TRUE(pcr::forward_kinematics(robot, q).summary.converged());
+}
+
 TEST(ReferenceFk, RejectsWrongSizes) {
   const pcr::RobotParams<double> robot = pcr::femto_3pf();
   const pcr::ForwardSolution home = pcr::home_solution(robot);

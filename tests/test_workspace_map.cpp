@@ -285,7 +285,10 @@ TEST(WorkspaceMap, RotationRangeAtTheCentreIsThatOfEqualJoints) {
   for (int k = 1; k <= 5000; ++k) {
     const double theta = std::copysign(k * 1e-4, other);
     const InverseSolution s = inverse_kinematics(robot, {0, 0, theta}, walked, on_branch);
-    if (!s.summary.converged() || s.summary.stability != Stability::kStable) break;
+    // Close to the singularity IK's error estimate outgrows the targets (kInaccurate): still an
+    // equilibrium within the stroke, as the range counts it.
+    const bool equilibrium = s.summary.converged() || s.summary.status == SolveStatus::kInaccurate;
+    if (!equilibrium || s.summary.stability != Stability::kStable) break;
     walked = s;
     walk_end = theta;
   }

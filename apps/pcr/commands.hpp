@@ -245,7 +245,7 @@ struct RowsArguments {
 };
 
 /// The row loop of `pcr fk` and `pcr ik`: `solve_row(row, out)` solves each input row (as its
-/// RowsArguments say), adds its output fields to `out` and returns its status;
+/// RowsArguments say), adds its output fields to `out` and returns its summary;
 /// the output is written atomically, each failed row is named on stderr by its input line, and the
 /// exit status is 1 if any failed.
 template <class SolveRow>
@@ -258,13 +258,18 @@ void solve_rows(const char* command, const CsvTable& table, const std::string& o
   out.end_row();
   int failures = 0;
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    const SolveStatus status = solve_row(table.rows[r], out);
+    const SolverSummary summary = solve_row(table.rows[r], out);
+    const SolveStatus status = summary.status;
     out.end_row();
     if (status == SolveStatus::kUnstable && !allow_unstable) {
       ++failures;
       std::cerr << command << ": " << table.source << ":" << table.line_numbers[r]
                 << ": unstable: the equilibrium at this pose would not hold, and no stable one "
                    "was found (--allow-unstable accepts it)\n";
+    } else if (status == SolveStatus::kInaccurate) {
+      ++failures;
+      std::cerr << command << ": " << table.source << ":" << table.line_numbers[r] << ": "
+                << inaccuracy_message(summary) << "\n";
     } else if (status != SolveStatus::kConverged && status != SolveStatus::kUnstable) {
       ++failures;
       std::cerr << command << ": " << table.source << ":" << table.line_numbers[r]

@@ -41,7 +41,7 @@ void run_spatial_fk(const FkArguments& args) {
     for (int k = 0; k < 3; ++k) out.add(valid ? solution.pose.position(k) : nan);
     for (int k = 0; k < 3; ++k) out.add(valid ? r(k) : nan);
     cli::add_summary_fields(s, valid, out);
-    return s.status;
+    return s;
   };
   cli::solve_rows("pcr fk", table, args.output, header, solve_row);
 }
@@ -76,7 +76,7 @@ void run_fk(const FkArguments& args) {
     out.add(valid ? solution.pose.y : nan);
     out.add(valid ? solution.pose.theta : nan);
     cli::add_summary_fields(s, valid, out);
-    return s.status;
+    return s;
   };
   cli::solve_rows("pcr fk", table, args.output, header, solve_row);
 }
@@ -90,7 +90,9 @@ void register_fk_command(CLI::App& app) {
       "Forward kinematics: rows q1,...,qn (m) -> q1,...,qn,x,y,theta,converged,"
       "iterations,residual,status,max_strain,stable,stability_margin,singularity. Joints "
       "outside q_range give converged=0, status out_of_range (the pose of that equilibrium is "
-      "still given). stable=0: the equilibrium would not hold. A spatial robot file (\"kind\": "
+      "still given); status inaccurate: its estimated error exceeds the accuracy targets (near a "
+      "singularity; the pose is still given). stable=0: the equilibrium would not hold. A spatial "
+      "robot file (\"kind\": "
       "\"spatial\") gives q1,...,qn,x,y,z,rx,ry,rz (m, rad: the platform's orientation as a "
       "rotation vector) and the same summary columns. Exit status 1 if a row did not "
       "converge.");

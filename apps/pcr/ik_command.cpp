@@ -58,7 +58,7 @@ void run_spatial_ik(const IkArguments& args) {
     for (int c = 0; c < 3; ++c) out.add(rotation(c));
     for (int i = 0; i < n; ++i) out.add(valid ? solution.q(i) : nan);
     cli::add_summary_fields(s, valid, out);
-    return s.status;
+    return s;
   };
   cli::solve_rows("pcr ik", table, args.output, header, solve_row, args.allow_unstable);
 }
@@ -98,7 +98,7 @@ void run_ik(const IkArguments& args) {
     out.add(n == 2 ? (valid ? solution.pose.theta : nan) : pose.theta);
     for (int i = 0; i < n; ++i) out.add(valid ? solution.q(i) : nan);
     cli::add_summary_fields(s, valid, out);
-    return s.status;
+    return s;
   };
   cli::solve_rows("pcr ik", table, args.output, header, solve_row, args.allow_unstable);
 }
@@ -111,7 +111,8 @@ void register_ik_command(CLI::App& app) {
       "ik",
       "Inverse kinematics: rows x,y,theta (m, m, rad) -> x,y,theta,q1,...,qn,converged,"
       "iterations,residual,status,max_strain,stable,stability_margin,singularity. Joints "
-      "outside q_range give converged=0, status out_of_range. An equilibrium that would not "
+      "outside q_range give converged=0, status out_of_range; an estimated error above the "
+      "accuracy targets, status inaccurate (near a singularity). An equilibrium that would not "
       "hold (stable=0) is replaced by a stable one at the same pose when one is found, else "
       "status unstable. With 2 limbs theta is solved for (the input theta is ignored). Exit "
       "status 1 if a row did not converge or is unstable (unless --allow-unstable). A spatial "

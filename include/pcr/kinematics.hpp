@@ -166,7 +166,8 @@ Solution buckled_seed(const RobotParams<double>& robot, const Solution& at, int 
                       int first_rod = 0);
 
 /// Whether a solution can warm-start the next solve: a converged one, or a valid equilibrium
-/// whose joints lie outside their stroke.
+/// whose joints lie outside their stroke (kOutOfRange) or whose error estimate exceeds the
+/// accuracy targets (kInaccurate).
 inline bool usable_as_warm_start(const SolverSummary& summary);
 
 /// Whether a solution is an equilibrium of the robot, within the stroke or not: usable as a warm

@@ -1,6 +1,7 @@
 #pragma once
 // What a kinematics solve reports and the settings it takes (pcr/kinematics.hpp).
 
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -20,6 +21,12 @@ enum class SolveStatus {
                    ///< (is_equilibrium) for what needs it (a warm start, a fit of its data)
   kUnstable,       ///< IK converged on an unstable equilibrium, and found no stable one at the
                    ///< pose (SolverOptions::stable_inverse)
+  kInaccurate,     ///< converged, but the estimated discretisation error
+                   ///< (SolverSummary::position_error_estimate, angle_error_estimate) exceeds
+                   ///< position_accuracy or angle_accuracy even at max_rod_steps: near a
+                   ///< singularity, where the inputs barely fix the outputs (singularity near 0),
+                   ///< or max_rod_steps too low. Still an equilibrium (is_equilibrium), as
+                   ///< accurate as its estimate says
   kUnsupported,    ///< the request is not a square problem (IK with n > 3 limbs)
   kInvalidInput,   ///< wrong sizes, NaN inputs, options outside their ranges
                    ///< (SolverOptions::is_valid), or a robot with fewer than 2 / more than
@@ -42,6 +49,8 @@ inline const char* to_string(SolveStatus status) {
       return "out_of_range";
     case SolveStatus::kUnstable:
       return "unstable";
+    case SolveStatus::kInaccurate:
+      return "inaccurate";
     case SolveStatus::kUnsupported:
       return "unsupported";
     case SolveStatus::kInvalidInput:
@@ -186,5 +195,27 @@ struct SolverSummary {
   double first_fold = std::numeric_limits<double>::quiet_NaN();
   bool converged() const { return status == SolveStatus::kConverged; }
 };
+
+/// A converged solution whose estimated discretisation error exceeds the accuracy targets (the
+/// step-count refinement stopped at max_rod_steps short of them) is kInaccurate: the one rule
+/// the planar and spatial solvers apply to what they return. An estimate of NaN (a fixed
+/// rod_steps) says nothing and changes nothing.
+inline void mark_inaccurate(const SolverOptions& options, SolverSummary& summary) {
+  if (summary.converged() && (summary.position_error_estimate > options.position_accuracy ||
+                              summary.angle_error_estimate > options.angle_accuracy)) {
+    summary.status = SolveStatus::kInaccurate;
+  }
+}
+
+/// Why a kInaccurate solution is not accurate, in words for an error message.
+inline std::string inaccuracy_message(const SolverSummary& summary) {
+  char text[240];
+  std::snprintf(text, sizeof text,
+                "inaccurate: estimated error %.3g m, %.3g rad at %d RK4 steps per rod exceeds the "
+                "accuracy targets (singularity measure %.3g: the inputs barely fix the pose here)",
+                summary.position_error_estimate, summary.angle_error_estimate, summary.rod_steps,
+                summary.singularity);
+  return text;
+}
 
 }  // namespace pcr

@@ -113,6 +113,7 @@ enum class PathPoseStatus {
   kNoSolution,      ///< IK did not converge (outside the workspace, or a singularity on the way)
   kOutOfRange,      ///< a joint lies outside [q_min, q_max]
   kStrainExceeded,  ///< the largest bending strain exceeds the limit
+  kInaccurate,      ///< IK converged short of the accuracy targets (SolveStatus::kInaccurate)
 };
 
 inline const char* to_string(PathPoseStatus status) noexcept {
@@ -125,6 +126,8 @@ inline const char* to_string(PathPoseStatus status) noexcept {
       return "out_of_range";
     case PathPoseStatus::kStrainExceeded:
       return "strain_exceeded";
+    case PathPoseStatus::kInaccurate:
+      return "inaccurate";
   }
   return "unknown";
 }
@@ -154,6 +157,7 @@ struct PathStep {
 inline PathPoseStatus classify_pose(const InverseSolution& solution, double strain_limit) noexcept {
   const SolveStatus s = solution.summary.status;
   if (s == SolveStatus::kOutOfRange) return PathPoseStatus::kOutOfRange;
+  if (s == SolveStatus::kInaccurate) return PathPoseStatus::kInaccurate;
   if (s != SolveStatus::kConverged) return PathPoseStatus::kNoSolution;
   if (!(solution.summary.max_strain <= strain_limit)) return PathPoseStatus::kStrainExceeded;
   return PathPoseStatus::kOk;

@@ -108,6 +108,7 @@ class SolveStatus:
     non_finite: SolveStatus
     out_of_range: SolveStatus
     unstable: SolveStatus
+    inaccurate: SolveStatus
     unsupported: SolveStatus
     invalid_input: SolveStatus
     @property

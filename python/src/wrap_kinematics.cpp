@@ -189,6 +189,7 @@ void bind_solve_status(py::module_& m) {
       .value("non_finite", SolveStatus::kNonFinite)
       .value("out_of_range", SolveStatus::kOutOfRange)
       .value("unstable", SolveStatus::kUnstable)
+      .value("inaccurate", SolveStatus::kInaccurate)
       .value("unsupported", SolveStatus::kUnsupported)
       .value("invalid_input", SolveStatus::kInvalidInput);
 }

@@ -81,6 +81,9 @@ PathCommand command_path(const RobotParams<double>& model, const std::vector<Pos
           msg << ") m";
           break;
         }
+        case PathPoseStatus::kInaccurate:
+          msg << inaccuracy_message(s);
+          break;
         case PathPoseStatus::kStrainExceeded:
           msg << "bending strain " << s.max_strain << " exceeds the limit "
               << options.step.strain_limit;

@@ -107,6 +107,7 @@ SpatialPathCommand spatial_command_path(const SpatialRobotParams<double>& model,
     if (s.status == SolveStatus::kUnstable) {
       fail("the only equilibrium inverse kinematics found would not hold (unstable)");
     }
+    if (s.status == SolveStatus::kInaccurate) fail(inaccuracy_message(s));
     if (!s.converged()) {
       fail("no inverse-kinematics solution (solver status " + std::string(to_string(s.status)) +
            "): outside the workspace");

@@ -89,12 +89,15 @@ inline InverseSolution refused(const Pose2<double>& pose, SolveStatus status) {
   return solution;
 }
 
-/// Converged joints outside the stroke: kOutOfRange.
+/// What a converged solution's status says beyond convergence: kOutOfRange for joints outside
+/// the stroke, else kInaccurate for an error estimate above the targets (mark_inaccurate).
 template <class Solution>
-void mark_out_of_range(const RobotParams<double>& robot, Solution& solution) {
+void mark_caveats(const RobotParams<double>& robot, const SolverOptions& options,
+                  Solution& solution) {
   if (solution.summary.converged() && !within_stroke(robot, solution.q)) {
     solution.summary.status = SolveStatus::kOutOfRange;
   }
+  mark_inaccurate(options, solution.summary);
 }
 
 /// The shooting point (joints, pose, wrenches) of a solution.
@@ -258,7 +261,7 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
   if (input != SolveStatus::kConverged) return internal::refused(q, input);
   ForwardSolution solution = internal::solve_from_warm_start(
       internal::ShootingProblem::Kind::kForward, robot, u0, u1, warm_start, options, load);
-  internal::mark_out_of_range(robot, solution);
+  internal::mark_caveats(robot, options, solution);
   internal::check_stability(robot, options, solution);
   return solution;
 }
@@ -272,7 +275,7 @@ ForwardSolution forward_kinematics_through_folds(
   if (input != SolveStatus::kConverged) return internal::refused(q, input);
   ForwardSolution solution = internal::solve_through_folds(
       internal::ShootingProblem::Kind::kForward, robot, u0, u1, warm_start, options, load, visit);
-  internal::mark_out_of_range(robot, solution);
+  internal::mark_caveats(robot, options, solution);
   return solution;
 }
 
@@ -285,7 +288,7 @@ InverseSolution inverse_kinematics_through_folds(
   if (input != SolveStatus::kConverged) return internal::refused(pose, input);
   InverseSolution solution = internal::solve_through_folds(
       internal::ShootingProblem::Kind::kInverse, robot, u0, u1, warm_start, options, load, visit);
-  internal::mark_out_of_range(robot, solution);
+  internal::mark_caveats(robot, options, solution);
   return solution;
 }
 
@@ -387,7 +390,7 @@ inline ForwardSolution forward_kinematics_from_home(const RobotParams<double>& r
     }
     // Not found from the variant either: the path's own verdict stands.
     solution.summary.status = status == SolveStatus::kConverged ? status : path_status;
-    internal::mark_out_of_range(robot, solution);
+    internal::mark_caveats(robot, options, solution);
     internal::check_stability(robot, options, solution);
   }
   return solution;
@@ -403,7 +406,7 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
   if (input != SolveStatus::kConverged) return internal::refused(pose, input);
   InverseSolution solution = internal::solve_from_warm_start(
       internal::ShootingProblem::Kind::kInverse, robot, u0, u1, warm_start, options, load);
-  internal::mark_out_of_range(robot, solution);
+  internal::mark_caveats(robot, options, solution);
   const EquilibriumStability stability = internal::check_stability(robot, options, solution);
   if (solution.summary.stability == Stability::kUnstable && options.stable_inverse) {
     internal::look_for_stable_inverse(robot, u1, options, load, stability.conjugate_limb, solution);
@@ -459,7 +462,8 @@ inline bool within_stroke(const RobotParams<double>& robot, const JointVector& q
 }
 
 inline bool usable_as_warm_start(const SolverSummary& summary) {
-  return summary.converged() || summary.status == SolveStatus::kOutOfRange;
+  return summary.converged() || summary.status == SolveStatus::kOutOfRange ||
+         summary.status == SolveStatus::kInaccurate;
 }
 
 inline bool is_equilibrium(const SolverSummary& summary) {

@@ -475,7 +475,8 @@ inline double spatial_max_strain(const SpatialRobotParams<double>& robot,
   return strain;
 }
 
-/// What the summary reports of a converged solution beyond the solve: its largest bending strain
+/// What the summary reports of a converged solution beyond the solve: kInaccurate when its error
+/// estimate exceeds the targets (mark_inaccurate), its largest bending strain
 /// and, with SolverOptions::check_stability, its elastic stability at half its RK4 steps
 /// (stability_rod_steps) as the planar solvers do. Returns the first rod with a conjugate point
 /// (SpatialEquilibriumStability::conjugate_limb), -1 when none or unchecked.
@@ -486,7 +487,8 @@ int report_spatial_solution(const SpatialRobotParams<double>& robot, const Solve
   summary.max_strain = summary.stability_margin = summary.singularity =
       std::numeric_limits<double>::quiet_NaN();
   summary.stability = Stability::kUnchecked;
-  if (!summary.converged()) return -1;
+  mark_inaccurate(options, summary);
+  if (!summary.converged() && summary.status != SolveStatus::kInaccurate) return -1;
   const SpatialShootingPoint<double> point = spatial_shooting_point(robot, solution);
   summary.max_strain = spatial_max_strain(robot, point, summary.rod_steps);
   if (!options.check_stability) return -1;
