@@ -317,3 +317,15 @@ std::vector<RenderTag> mount_tags(const MountLayout& layout, const RobotParams<d
 }
 
 }  // namespace pcr::vision
+
+namespace pcr::vision {
+
+std::vector<RenderTag3d> board_tags(const TagBoard& board,
+                                    const SpatialPose<double>& plane_T_board) {
+  std::vector<RenderTag3d> out;
+  for (const BoardTag& t : board.tags)
+    out.push_back(RenderTag3d{t.family, t.id, t.size_m, plane_T_board * t.pose});
+  return out;
+}
+
+}  // namespace pcr::vision

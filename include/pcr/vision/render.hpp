@@ -138,3 +138,14 @@ std::vector<RenderTag> mount_tags(const MountLayout& layout, const RobotParams<d
                                   std::vector<RenderSegment>* segments = nullptr);
 
 }  // namespace pcr::vision
+
+#include "pcr/vision/tag_board.hpp"
+
+namespace pcr::vision {
+
+/// The tags of `board` placed in the plane frame, the board frame M at `plane_T_board` (for a
+/// spatial robot whose board is given in P: ^W T_P).
+std::vector<RenderTag3d> board_tags(const TagBoard& board,
+                                    const SpatialPose<double>& plane_T_board);
+
+}  // namespace pcr::vision
