@@ -180,10 +180,16 @@ BoardPose fit_board_pose(const std::vector<TagDetection>& detections,
   // least squares): r_w = L^-1 r, J_w = L^-1 J.
   const double f = camera.focal_px();
   std::vector<Eigen::Matrix<double, 8, 8>> whiten;
+  double floor_sq = 0;
   for (const TagDetection& d : detections) {
     std::array<Eigen::Vector2d, 4> px;
     for (int c = 0; c < 4; ++c) px[c] = f * d.corners_normalized[c];
-    const Eigen::Matrix<double, 8, 8> L = corner_covariance(px).llt().matrixL();
+    const Eigen::Matrix<double, 8, 8> C = corner_covariance(px);
+    // The least sigma for this tag: the detector's own edge scatter, plus what makes its corners'
+    // variance reach corner_sigma_floor_px^2 more (the systematic corner error).
+    floor_sq += d.edge_rms_px * d.edge_rms_px +
+                options.corner_sigma_floor_px * options.corner_sigma_floor_px / (C.trace() / 8);
+    const Eigen::Matrix<double, 8, 8> L = C.llt().matrixL();
     whiten.push_back(L.inverse());
   }
   const auto evaluate = [&](const Eigen::Matrix3d& Rc, const Eigen::Vector3d& tc,
@@ -227,7 +233,10 @@ BoardPose fit_board_pose(const std::vector<TagDetection>& detections,
   residuals(points, observed, R, t, f, &raw, nullptr);
   out.corner_rms_px = std::sqrt(raw.squaredNorm() / m);
   const double sigma_hat = 2 * m > 6 ? std::sqrt(r.squaredNorm() / (2 * m - 6)) : 0.0;
-  out.edge_sigma_px = std::max(sigma_hat, options.corner_sigma_floor_px);
+  double edge_rms_sq = 0;  // the detector's own edge-point scatter, mean over the tags
+  for (const TagDetection& d : detections) edge_rms_sq += d.edge_rms_px * d.edge_rms_px;
+  edge_rms_sq /= static_cast<double>(detections.size());
+  out.edge_sigma_px = std::max({sigma_hat, std::sqrt(edge_rms_sq), options.corner_sigma_floor_px});
   out.covariance = out.edge_sigma_px * out.edge_sigma_px *
                    (J.transpose() * J).ldlt().solve(Matrix6d::Identity());
   out.detections = detections;
@@ -236,15 +245,13 @@ BoardPose fit_board_pose(const std::vector<TagDetection>& detections,
   return out;
 }
 
-BoardPose measure_board_pose(const GrayImage& image, const std::string& source,
-                             const TagBoard& board, const CameraModel& camera,
-                             const MeasureOptions& options) {
-  check_board(board, source + ": tag board");
-  std::set<std::string> families;
-  for (const BoardTag& t : board.tags) families.insert(t.family);
-  const std::vector<TagDetection> all = detect_families(image, families, camera, options.detector);
-  std::vector<TagDetection> matched;
-  std::vector<int> index;
+namespace {
+
+// The board's tags among `all`, with their indices into board.tags; InputError for a board tag
+// seen twice or that check_detection refuses.
+void match_board(const std::vector<TagDetection>& all, const TagBoard& board,
+                 const GrayImage& image, const std::string& source,
+                 std::vector<TagDetection>* matched, std::vector<int>* index) {
   for (std::size_t i = 0; i < board.tags.size(); ++i) {
     const BoardTag& t = board.tags[i];
     const std::string who = "board tag " + std::to_string(i) + " (" + tag_name(t) + ")";
@@ -256,9 +263,28 @@ BoardPose measure_board_pose(const GrayImage& image, const std::string& source,
       throw InputError(source + ": " + who + " appears " + std::to_string(hits.size()) +
                        " times in the image");
     check_detection(*hits.front(), image, source, who);
-    matched.push_back(*hits.front());
-    index.push_back(static_cast<int>(i));
+    matched->push_back(*hits.front());
+    index->push_back(static_cast<int>(i));
   }
+}
+
+std::vector<TagDetection> detect_board(const GrayImage& image, const TagBoard& board,
+                                       const CameraModel& camera, const DetectorOptions& options) {
+  std::set<std::string> families;
+  for (const BoardTag& t : board.tags) families.insert(t.family);
+  return detect_families(image, families, camera, options);
+}
+
+}  // namespace
+
+BoardPose measure_board_pose(const GrayImage& image, const std::string& source,
+                             const TagBoard& board, const CameraModel& camera,
+                             const MeasureOptions& options) {
+  check_board(board, source + ": tag board");
+  const std::vector<TagDetection> all = detect_board(image, board, camera, options.detector);
+  std::vector<TagDetection> matched;
+  std::vector<int> index;
+  match_board(all, board, image, source, &matched, &index);
   if (matched.empty()) {
     std::string ids, seen;
     for (const BoardTag& t : board.tags) ids += (ids.empty() ? "" : ", ") + tag_name(t);
@@ -269,6 +295,42 @@ BoardPose measure_board_pose(const GrayImage& image, const std::string& source,
                      "); is the board hidden, out of view, or of another family?");
   }
   return fit_board_pose(matched, index, board, camera, source, options.pose);
+}
+
+std::vector<TagPointMeasurement> measure_tag_points(const GrayImage& image,
+                                                    const std::string& source,
+                                                    const std::vector<TagPoint>& points,
+                                                    const CameraModel& camera,
+                                                    const MeasureOptions& options) {
+  TagBoard tags;  // each point's tag at the identity: its own frame
+  for (const TagPoint& p : points) tags.tags.push_back(p.tag);
+  for (BoardTag& t : tags.tags) t.pose = SpatialPose<double>{};
+  check_board(tags, source + ": tag points");
+  const std::vector<TagDetection> all = detect_board(image, tags, camera, options.detector);
+  std::vector<TagDetection> matched;
+  std::vector<int> index;
+  match_board(all, tags, image, source, &matched, &index);
+  std::vector<TagPointMeasurement> out;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const TagPoint& p = points[i];
+    const auto found = std::find(index.begin(), index.end(), static_cast<int>(i));
+    if (found == index.end())
+      throw InputError(source + ": point " + p.name + ": its tag (" + tag_name(p.tag) +
+                       ") is not found in the image; is it hidden, out of view, or of another "
+                       "family?");
+    const std::size_t k = static_cast<std::size_t>(found - index.begin());
+    TagPointMeasurement m;
+    m.tag = fit_board_pose({matched[k]}, {static_cast<int>(i)}, tags, camera,
+                           source + ": point " + p.name, options.pose);
+    // p = t + R o; d p / d (dp, dtheta) = [I, -R [o]x].
+    const Eigen::Matrix3d R = m.tag.camera_T_board.rotation();
+    m.position = m.tag.camera_T_board.position + R * p.offset;
+    Eigen::Matrix<double, 3, 6> D;
+    D << Eigen::Matrix3d::Identity(), -R * skew(p.offset);
+    m.covariance = D * m.tag.covariance * D.transpose();
+    out.push_back(m);
+  }
+  return out;
 }
 
 }  // namespace pcr::vision

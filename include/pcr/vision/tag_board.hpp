@@ -14,7 +14,11 @@
 // Jacobian of the reprojection residuals with respect to the pose, W the corners' inverse
 // covariance per unit sigma^2, sigma the scatter of the edge points about their lines estimated
 // from the weighted residuals (so it holds the detector's systematic corner errors as well as the
-// image noise), never below PoseOptions::corner_sigma_floor_px. With independent corners (the
+// image noise), never below a floor: the scatter the detector measured along the tags' edges
+// (TagDetection::edge_rms_px, from many more points: one tag leaves its residuals 2 degrees of
+// freedom) plus what raises each corner's variance by PoseOptions::corner_sigma_floor_px^2 (the
+// detector's systematic corner error: 0.016 px per coordinate on renders without noise), averaged
+// over the tags. With independent corners (the
 // planar fit's model) the predicted sigma came out 3 times the spread measured over noise seeds
 // (tests/test_spatial_vision.cpp).
 //
@@ -84,5 +88,28 @@ BoardPose fit_board_pose(const std::vector<TagDetection>& detections,
 BoardPose measure_board_pose(const GrayImage& image, const std::string& image_source,
                              const TagBoard& board, const CameraModel& camera,
                              const MeasureOptions& options = {});
+
+/// A point fixed next to a tag (a base hole, a platform attachment point), known in the tag's
+/// frame: measured from that tag's pose alone.
+struct TagPoint {
+  std::string name;                 ///< for messages ("A1", "B3")
+  BoardTag tag;                     ///< its pose is not used (the tag's own frame)
+  Eigen::Vector3d offset{0, 0, 0};  ///< the point in the tag frame (m)
+};
+
+struct TagPointMeasurement {
+  Eigen::Vector3d position{0, 0, 0};                    ///< in the camera frame S (m)
+  Eigen::Matrix3d covariance{Eigen::Matrix3d::Zero()};  ///< from the image (m^2)
+  BoardPose tag;                                        ///< the tag's pose ^S T_tag
+};
+
+/// Each point from its own tag's pose (fit_board_pose on that tag alone): p = t + R offset, its
+/// covariance propagated linearly from the tag pose's. Throws InputError naming `image_source` and
+/// the point when its tag is not seen, as measure_board_pose otherwise.
+std::vector<TagPointMeasurement> measure_tag_points(const GrayImage& image,
+                                                    const std::string& image_source,
+                                                    const std::vector<TagPoint>& points,
+                                                    const CameraModel& camera,
+                                                    const MeasureOptions& options = {});
 
 }  // namespace pcr::vision
