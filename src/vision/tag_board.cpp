@@ -238,7 +238,7 @@ BoardPose fit_board_pose(const std::vector<TagDetection>& detections,
   edge_rms_sq /= static_cast<double>(detections.size());
   out.edge_sigma_px = std::max({sigma_hat, std::sqrt(edge_rms_sq), options.corner_sigma_floor_px});
   out.covariance = out.edge_sigma_px * out.edge_sigma_px *
-                   (J.transpose() * J).ldlt().solve(Matrix6d::Identity());
+                   (J.transpose() * J).ldlt().solve(Eigen::Matrix<double, 6, 6>::Identity());
   out.detections = detections;
   out.board_index = board_index;
   out.iterations = it;

@@ -18,9 +18,8 @@
 // (TagDetection::edge_rms_px, from many more points: one tag leaves its residuals 2 degrees of
 // freedom) plus what raises each corner's variance by PoseOptions::corner_sigma_floor_px^2 (the
 // detector's systematic corner error: 0.016 px per coordinate on renders without noise), averaged
-// over the tags. With independent corners (the
-// planar fit's model) the predicted sigma came out 3 times the spread measured over noise seeds
-// (tests/test_spatial_vision.cpp).
+// over the tags. With independent corners (the planar fit's model) the predicted sigma came out 3
+// times the spread measured over noise seeds (tests/test_spatial_vision.cpp).
 //
 // The pose's perturbation, for its covariance: position + dp (in S), rotation R exp([dtheta]x)
 // (dtheta in M, composed on the right), as pcr::SpatialVirtualRobot's measurement noise.
@@ -59,12 +58,11 @@ struct TagBoard {
 /// id the family does not have, a size that is not positive, or a family and id given twice.
 void check_board(const TagBoard& board, const std::string& source);
 
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
-
 struct BoardPose {
-  SpatialPose<double> camera_T_board;     ///< ^S T_M
-  Matrix6d covariance{Matrix6d::Zero()};  ///< of (dp in S, dtheta in M), m and rad
-  double corner_rms_px{0};                ///< reprojection residual rms
+  SpatialPose<double> camera_T_board;  ///< ^S T_M
+  Eigen::Matrix<double, 6, 6> covariance{
+      Eigen::Matrix<double, 6, 6>::Zero()};  ///< of (dp in S, dtheta in M), m and rad
+  double corner_rms_px{0};                   ///< reprojection residual rms
   double edge_sigma_px{0};  ///< sigma: the edge points' scatter used for the covariance
   std::vector<TagDetection> detections;  ///< the board's tags seen, in board order
   std::vector<int> board_index;          ///< of each detection, into board.tags
