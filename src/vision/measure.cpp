@@ -191,6 +191,35 @@ PlaneFit fit_planar_markers(const std::vector<TagDetection>& dets, const std::ve
   return fit;
 }
 
+void check_detection(const TagDetection& d, const GrayImage& image, const std::string& source,
+                     const std::string& who) {
+  // The tag's white quiet zone (one cell) must lie inside the image too.
+  const double side =
+      0.25 * ((d.corners[1] - d.corners[0]).norm() + (d.corners[2] - d.corners[1]).norm() +
+              (d.corners[3] - d.corners[2]).norm() + (d.corners[0] - d.corners[3]).norm());
+  const double margin = side / 8.0 + 1.0;
+  for (const Eigen::Vector2d& c : d.corners) {
+    if (c.x() < margin || c.y() < margin || c.x() > image.width - 1 - margin ||
+        c.y() > image.height - 1 - margin) {
+      throw InputError(source + ": " + who + " is cut by the image border (corner at " +
+                       std::to_string(c.x()) + ", " + std::to_string(c.y()) + " px)");
+    }
+  }
+  // Clipped highlights along the border bias every edge towards the dark side (0.09 px at 5 %
+  // over-exposure): the tag looks smaller, and its size is the image's only scale. No interval
+  // accounts for that, so the tag is refused. A few noise peaks at full scale move each edge
+  // line by far less than the noise itself.
+  constexpr double kMaxClippedFraction = 0.01;
+  if (d.clipped_fraction > kMaxClippedFraction) {
+    char percent[32];
+    std::snprintf(percent, sizeof percent, "%.1f", 100.0 * d.clipped_fraction);
+    throw InputError(source + ": " + who + ": " + percent +
+                     " % of the points along its edges see clipped highlights (pixels at full "
+                     "scale), which shrink the tag and bias the scale; reduce the exposure or "
+                     "the lighting");
+  }
+}
+
 std::vector<TagDetection> match_mounts(const std::vector<TagDetection>& detections,
                                        const MountLayout& layout, const GrayImage& image,
                                        const std::string& source) {
@@ -213,35 +242,23 @@ std::vector<TagDetection> match_mounts(const std::vector<TagDetection>& detectio
                        ") appears " + std::to_string(hits.size()) + " times in the image; " + who +
                        " is ambiguous");
     }
-    // The tag's white quiet zone (one cell) must lie inside the image too.
-    const TagDetection& d = *hits.front();
-    const double side =
-        0.25 * ((d.corners[1] - d.corners[0]).norm() + (d.corners[2] - d.corners[1]).norm() +
-                (d.corners[3] - d.corners[2]).norm() + (d.corners[0] - d.corners[3]).norm());
-    const double margin = side / 8.0 + 1.0;
-    for (const Eigen::Vector2d& c : d.corners) {
-      if (c.x() < margin || c.y() < margin || c.x() > image.width - 1 - margin ||
-          c.y() > image.height - 1 - margin) {
-        throw InputError(source + ": " + who + " is cut by the image border (corner at " +
-                         std::to_string(c.x()) + ", " + std::to_string(c.y()) + " px)");
-      }
-    }
-    // Clipped highlights along the border bias every edge towards the dark side (0.09 px at 5 %
-    // over-exposure): the tag looks smaller, and its size is the image's only scale. No interval
-    // accounts for that, so the tag is refused. A few noise peaks at full scale move each edge
-    // line by far less than the noise itself.
-    constexpr double kMaxClippedFraction = 0.01;
-    if (d.clipped_fraction > kMaxClippedFraction) {
-      char percent[32];
-      std::snprintf(percent, sizeof percent, "%.1f", 100.0 * d.clipped_fraction);
-      throw InputError(source + ": " + who + ": " + percent +
-                       " % of the points along its edges see clipped highlights (pixels at full "
-                       "scale), which shrink the tag and bias the scale; reduce the exposure or "
-                       "the lighting");
-    }
-    out.push_back(d);
+    check_detection(*hits.front(), image, source, who);
+    out.push_back(*hits.front());
   }
   return out;
+}
+
+std::vector<TagDetection> detect_families(const GrayImage& image,
+                                          const std::set<std::string>& families,
+                                          const CameraModel& camera, const DetectorOptions& base) {
+  std::vector<TagDetection> all;
+  for (const std::string& family : families) {
+    DetectorOptions opt = base;
+    opt.family = family;
+    const auto d = detect_tags(image, opt, &camera);
+    all.insert(all.end(), d.begin(), d.end());
+  }
+  return all;
 }
 
 namespace {
@@ -251,14 +268,7 @@ std::vector<TagDetection> detect_layout_families(const GrayImage& image, const M
                                                  const DetectorOptions& base) {
   std::set<std::string> families;
   for (const Mount& m : layout.mounts) families.insert(m.family);
-  std::vector<TagDetection> all;
-  for (const std::string& family : families) {
-    DetectorOptions opt = base;
-    opt.family = family;
-    const auto d = detect_tags(image, opt, &camera);
-    all.insert(all.end(), d.begin(), d.end());
-  }
-  return all;
+  return detect_families(image, families, camera, base);
 }
 
 // Outputs per limb (Ax, Ay, alpha, Bx, By, beta) in the design frames, from marker states m

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -15,21 +16,61 @@ namespace pcr::vision {
 
 namespace {
 
+// A plane seen by the camera: its frame's pose in the camera (R, t). The ray of normalised
+// coordinates (x, y) meets it at the plane point (q_x, q_y) / q_z, q = to_plane (x, y, 1), at the
+// depth 1 / q_z (the inverse of the homography [r1 r2 t]); q_z <= 0: behind the camera. Every ray
+// of the renderer, to the work plane and to each tag, is traced here.
+struct RayToPlane {
+  Eigen::Matrix3d to_plane;
+  bool facing{true};  ///< the camera is on the side of the plane's +z (its printed face)
+
+  RayToPlane(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+    Eigen::Matrix3d H;
+    H << R.col(0), R.col(1), t;
+    to_plane = H.inverse();
+    facing = R.col(2).dot(t) < 0;
+  }
+  /// The plane point hit by `ray` (normalised coordinates, 1) and its depth; false when behind.
+  bool hit(const Eigen::Vector3d& ray, Eigen::Vector2d* point, double* depth) const {
+    const Eigen::Vector3d q = to_plane * ray;
+    if (q.z() <= 0) return false;
+    *point = q.head<2>() / q.z();
+    *depth = 1.0 / q.z();
+    return true;
+  }
+};
+
+// A tag's pose in the camera frame: the plane frame's pose composed with the tag's.
+RayToPlane tag_in_camera(const PlanePose& plane, const SpatialPose<double>& pose) {
+  return RayToPlane(plane.rotation * pose.rotation(),
+                    plane.rotation * pose.position + plane.translation);
+}
+
+SpatialPose<double> lifted(const Pose2<double>& p) {
+  return SpatialPose<double>{
+      Eigen::Vector3d(p.x, p.y, 0),
+      Eigen::Vector4d(std::cos(0.5 * p.theta), 0, 0, std::sin(0.5 * p.theta))};
+}
+
+RenderTag3d lifted(const RenderTag& t) {
+  return RenderTag3d{t.family, t.id, t.size_m, lifted(t.pose)};
+}
+
 struct TagPaint {
-  Pose2<double> pose;
+  RayToPlane ray;
   double cell{0};
   int total{0};
   std::vector<bool> bits;
   double half{0};  // half extent of the bitmap, m
-  double c{1}, s{0};
 };
 
 struct Painter {
   const Scene& scene;
   const RenderOptions& opt;
+  RayToPlane plane;
   std::vector<TagPaint> tags;
 
-  float shade(const Eigen::Vector2d& p) const {
+  float plane_shade(const Eigen::Vector2d& p) const {
     float value = opt.background;
     if (scene.chessboard) {
       const RenderChessboard& b = *scene.chessboard;
@@ -50,32 +91,41 @@ struct Painter {
       const double t = std::clamp((p - s.a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
       if ((p - s.a - t * ab).norm() <= 0.5 * s.width_m) value = s.intensity;
     }
+    return value;
+  }
+
+  /// The intensity seen along `ray` (normalised coordinates, 1).
+  float shade(const Eigen::Vector3d& ray) const {
+    double nearest = std::numeric_limits<double>::infinity();
+    float value = 0;
+    Eigen::Vector2d p;
+    double depth;
     for (const TagPaint& t : tags) {
-      const Eigen::Vector2d d = p - t.pose.translation();
-      if (std::abs(d.x()) > 1.5 * t.half || std::abs(d.y()) > 1.5 * t.half) continue;
-      const double c = t.c, s = t.s;
-      const double lx = c * d.x() + s * d.y(), ly = -s * d.x() + c * d.y();
-      const double gx = lx / t.cell + 0.5 * t.total, gy = 0.5 * t.total - ly / t.cell;
+      // At equal depths (tags in one plane) the later tag is drawn over the earlier.
+      if (!t.ray.hit(ray, &p, &depth) || depth > nearest * (1 + 1e-9)) continue;
+      const double gx = p.x() / t.cell + 0.5 * t.total, gy = 0.5 * t.total - p.y() / t.cell;
       if (gx >= 0 && gx < t.total && gy >= 0 && gy < t.total) {
+        nearest = depth;
         value =
             t.bits[static_cast<std::size_t>(static_cast<int>(gy) * t.total + static_cast<int>(gx))]
                 ? opt.white
                 : opt.black;
       }
     }
-    return value;
+    if (nearest < std::numeric_limits<double>::infinity()) return value;
+    return plane.hit(ray, &p, &depth) ? plane_shade(p) : opt.background;
   }
 };
 
-// Pixel bounding box of a plane polygon (sampled along its edges), with a margin.
-cv::Rect pixel_box(const Scene& scene, const std::vector<Eigen::Vector2d>& polygon) {
+// Pixel bounding box of a polygon in the camera frame (sampled along its edges), with a margin.
+cv::Rect pixel_box(const CameraModel& camera, const std::vector<Eigen::Vector3d>& polygon) {
   double u0 = 1e300, v0 = 1e300, u1 = -1e300, v1 = -1e300;
   for (std::size_t k = 0; k < polygon.size(); ++k) {
-    const Eigen::Vector2d a = polygon[k], b = polygon[(k + 1) % polygon.size()];
+    const Eigen::Vector3d a = polygon[k], b = polygon[(k + 1) % polygon.size()];
     for (int j = 0; j <= 32; ++j) {
-      const Eigen::Vector3d pc = scene.plane.to_camera(a + (b - a) * (j / 32.0));
+      const Eigen::Vector3d pc = a + (b - a) * (j / 32.0);
       if (pc.z() <= 0) continue;
-      const Eigen::Vector2d px = scene.camera.project(pc);
+      const Eigen::Vector2d px = camera.project(pc);
       u0 = std::min(u0, px.x());
       v0 = std::min(v0, px.y());
       u1 = std::max(u1, px.x());
@@ -85,24 +135,43 @@ cv::Rect pixel_box(const Scene& scene, const std::vector<Eigen::Vector2d>& polyg
   if (u0 > u1) return {};
   const int x0 = std::max(0, static_cast<int>(std::floor(u0)) - 3);
   const int y0 = std::max(0, static_cast<int>(std::floor(v0)) - 3);
-  const int x1 = std::min(scene.camera.width, static_cast<int>(std::ceil(u1)) + 4);
-  const int y1 = std::min(scene.camera.height, static_cast<int>(std::ceil(v1)) + 4);
+  const int x1 = std::min(camera.width, static_cast<int>(std::ceil(u1)) + 4);
+  const int y1 = std::min(camera.height, static_cast<int>(std::ceil(v1)) + 4);
   if (x1 <= x0 || y1 <= y0) return {};
   return {x0, y0, x1 - x0, y1 - y0};
 }
 
-std::vector<Eigen::Vector2d> square(const Pose2<double>& pose, double half) {
-  return {pose.transform({-half, -half}), pose.transform({half, -half}),
-          pose.transform({half, half}), pose.transform({-half, half})};
+// The same for a polygon in the work plane.
+cv::Rect pixel_box(const Scene& scene, const std::vector<Eigen::Vector2d>& polygon) {
+  std::vector<Eigen::Vector3d> camera;
+  for (const Eigen::Vector2d& p : polygon) camera.push_back(scene.plane.to_camera(p));
+  return pixel_box(scene.camera, camera);
+}
+
+// A square of half edge `half` centred on a tag, in the camera frame (corners in
+// TagDetection::corners' order).
+std::vector<Eigen::Vector3d> square(const Scene& scene, const RenderTag3d& tag, double half) {
+  std::vector<Eigen::Vector3d> out;
+  for (const Eigen::Vector2d& c : {Eigen::Vector2d(-half, -half), Eigen::Vector2d(half, -half),
+                                   Eigen::Vector2d(half, half), Eigen::Vector2d(-half, half)}) {
+    const Eigen::Vector3d w =
+        tag.pose.position + tag.pose.rotation() * Eigen::Vector3d(c.x(), c.y(), 0);
+    out.push_back(scene.plane.rotation * w + scene.plane.translation);
+  }
+  return out;
 }
 
 }  // namespace
 
-std::vector<Eigen::Vector2d> tag_corner_pixels(const Scene& scene, const RenderTag& tag) {
+std::vector<Eigen::Vector2d> tag_corner_pixels(const Scene& scene, const RenderTag3d& tag) {
   std::vector<Eigen::Vector2d> out;
-  for (const Eigen::Vector2d& p : square(tag.pose, 0.5 * tag.size_m))
-    out.push_back(scene.camera.project(scene.plane.to_camera(p)));
+  for (const Eigen::Vector3d& p : square(scene, tag, 0.5 * tag.size_m))
+    out.push_back(scene.camera.project(p));
   return out;
+}
+
+std::vector<Eigen::Vector2d> tag_corner_pixels(const Scene& scene, const RenderTag& tag) {
+  return tag_corner_pixels(scene, lifted(tag));
 }
 
 GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
@@ -110,19 +179,18 @@ GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
   for (const RenderCircle& c : scene.circles) require_valid(c, "render_scene: circle");
   const CameraModel& cam = scene.camera;
   if (cam.width <= 0 || cam.height <= 0) throw std::invalid_argument("render_scene: empty camera");
-  Painter painter{scene, opt, {}};
+  Painter painter{scene, opt, RayToPlane(scene.plane.rotation, scene.plane.translation), {}};
   std::vector<cv::Rect> boxes;
-  for (const RenderTag& t : scene.tags) {
-    TagPaint p;
-    int wab = 0;
-    p.bits = tag_bitmap(t.family, t.id, &p.total, &wab);
-    p.pose = t.pose;
-    p.cell = t.size_m / wab;
-    p.half = 0.5 * p.total * p.cell;
-    p.c = std::cos(t.pose.theta);
-    p.s = std::sin(t.pose.theta);
-    painter.tags.push_back(std::move(p));
-    boxes.push_back(pixel_box(scene, square(t.pose, painter.tags.back().half)));
+  std::vector<RenderTag3d> tags = scene.tags_3d;
+  for (const RenderTag& t : scene.tags) tags.push_back(lifted(t));
+  for (const RenderTag3d& t : tags) {
+    int total = 0, wab = 0;
+    std::vector<bool> bits = tag_bitmap(t.family, t.id, &total, &wab);
+    const double cell = t.size_m / wab, half = 0.5 * total * cell;
+    const RayToPlane ray = tag_in_camera(scene.plane, t.pose);
+    if (!ray.facing) continue;  // seen from behind: the board hides it
+    painter.tags.push_back(TagPaint{ray, cell, total, std::move(bits), half});
+    boxes.push_back(pixel_box(cam, square(scene, t, half)));
   }
   for (const RenderSegment& s : scene.segments) {
     const Eigen::Vector2d t = (s.b - s.a).normalized(), n(-t.y(), t.x());
@@ -152,13 +220,6 @@ GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
                           P.transform({-2 * q, (b.rows + 2) * q})}));
   }
 
-  // Plane point from normalised coordinates: the inverse of [r1 r2 t].
-  Eigen::Matrix3d H;
-  H.col(0) = scene.plane.rotation.col(0);
-  H.col(1) = scene.plane.rotation.col(1);
-  H.col(2) = scene.plane.translation;
-  const Eigen::Matrix3d Hinv = H.inverse();
-
   GrayImage image(cam.width, cam.height, opt.background);
   std::vector<uint8_t> done(image.pixels.size(), 0);
   const int s = std::max(1, opt.supersampling);
@@ -187,8 +248,7 @@ GrayImage render_scene(const Scene& scene, const RenderOptions& opt) {
             const Eigen::Vector2d xn =
                 (1 - fy) * ((1 - fx) * grid[j * gw + i] + fx * grid[j * gw + i + 1]) +
                 fy * ((1 - fx) * grid[(j + 1) * gw + i] + fx * grid[(j + 1) * gw + i + 1]);
-            const Eigen::Vector3d q = Hinv * Eigen::Vector3d(xn.x(), xn.y(), 1.0);
-            sum += painter.shade(Eigen::Vector2d(q.x() / q.z(), q.y() / q.z()));
+            sum += painter.shade(Eigen::Vector3d(xn.x(), xn.y(), 1.0));
           }
         }
         image.pixels[idx] = static_cast<float>(sum / (s * s));
@@ -254,6 +314,18 @@ std::vector<RenderTag> mount_tags(const MountLayout& layout, const RobotParams<d
     for (int i = 0; i < n; ++i) segments->push_back(RenderSegment{A[i], B[i], 125e-6, 0.2f});
   }
   return tags;
+}
+
+}  // namespace pcr::vision
+
+namespace pcr::vision {
+
+std::vector<RenderTag3d> board_tags(const TagBoard& board,
+                                    const SpatialPose<double>& plane_T_board) {
+  std::vector<RenderTag3d> out;
+  for (const BoardTag& t : board.tags)
+    out.push_back(RenderTag3d{t.family, t.id, t.size_m, plane_T_board * t.pose});
+  return out;
 }
 
 }  // namespace pcr::vision

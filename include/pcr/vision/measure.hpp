@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -92,6 +93,17 @@ struct RobotMeasurement {
   Pose2<double> platform_in_plane;                      ///< P in the plane frame
   double registration_rms_A{0}, registration_rms_B{0};  ///< m
 };
+
+/// The tags of every family in `families` (each detected as `base` says, with the camera).
+std::vector<TagDetection> detect_families(const GrayImage& image,
+                                          const std::set<std::string>& families,
+                                          const CameraModel& camera, const DetectorOptions& base);
+
+/// Throws InputError naming `image_source` and `who` (the mount or tag) when a detection cannot be
+/// measured: its white quiet zone cut by the image border, or clipped highlights along its edges
+/// (more than 1 % of its edge points, see TagDetection::clipped_fraction).
+void check_detection(const TagDetection& detection, const GrayImage& image,
+                     const std::string& image_source, const std::string& who);
 
 /// Matches detections to the layout's mounts. Throws InputError naming `image_source` and the
 /// mount or id for a missing marker, a duplicated id, a marker cut by the image border.

@@ -1,8 +1,9 @@
 #pragma once
 // Synthetic camera images of AprilTags (and rods, outlines, chessboards) lying in the work plane,
-// seen through a pinhole camera with OpenCV distortion. For tests and the end-to-end demo.
-// Anti-aliased by supersampling (each pixel averages s x s samples, every sample is traced exactly
-// through the distortion and the plane), then an illumination gradient, a Gaussian blur and
+// or of tags with any 3-D pose (on a spatial robot's platform), seen through a pinhole camera
+// with OpenCV distortion. For tests and the end-to-end demo. Anti-aliased by supersampling (each
+// pixel averages s x s samples, every sample's ray is traced exactly through the distortion to
+// the plane of each tag and of the work plane), then an illumination gradient, a Gaussian blur and
 // Gaussian noise. The tag bitmaps are the AprilTag library's own (apriltag_to_image).
 
 #include <Eigen/Core>
@@ -12,6 +13,7 @@
 
 #include "pcr/option_range.hpp"
 #include "pcr/se2.hpp"
+#include "pcr/spatial/robot.hpp"
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
 #include "pcr/vision/tags.hpp"
@@ -23,6 +25,17 @@ struct RenderTag {
   int id{0};
   double size_m{0.01};  ///< black border edge
   Pose2<double> pose;   ///< tag frame in the plane frame
+};
+
+/// A tag with a 3-D pose, e.g. on a spatial robot's platform. Its frame: x to the right of its
+/// bitmap, y to its top, z out of its printed face; only that face is seen (a tag is printed on
+/// an opaque board). A planar RenderTag is the special case position (x, y, 0), a turn theta
+/// about z.
+struct RenderTag3d {
+  std::string family{kDefaultTagFamily};
+  int id{0};
+  double size_m{0.01};       ///< black border edge
+  SpatialPose<double> pose;  ///< tag frame in the plane frame (a spatial robot's W)
 };
 
 /// A dark straight band (a rod, an outline edge) of `width_m`, drawn under the tags.
@@ -65,10 +78,13 @@ struct RenderChessboard {
   }
 };
 
+/// What the camera sees. Where tags overlap along a ray the nearest is drawn; tags are drawn over
+/// the work plane's content (segments, circles, chessboard), which is the background.
 struct Scene {
   CameraModel camera;
-  PlanePose plane;
+  PlanePose plane;  ///< the plane frame in the camera (a spatial robot's ^C T_W)
   std::vector<RenderTag> tags;
+  std::vector<RenderTag3d> tags_3d;
   std::vector<RenderSegment> segments;
   std::optional<RenderChessboard> chessboard;
   std::vector<RenderCircle> circles;
@@ -103,6 +119,7 @@ GrayImage render_scene(const Scene& scene, const RenderOptions& options);
 
 /// Ground-truth pixel coordinates of a tag's corners (same order as TagDetection::corners).
 std::vector<Eigen::Vector2d> tag_corner_pixels(const Scene& scene, const RenderTag& tag);
+std::vector<Eigen::Vector2d> tag_corner_pixels(const Scene& scene, const RenderTag3d& tag);
 
 }  // namespace pcr::vision
 
@@ -119,5 +136,16 @@ namespace pcr::vision {
 std::vector<RenderTag> mount_tags(const MountLayout& layout, const RobotParams<double>& robot,
                                   const Pose2<double>& platform, const std::vector<double>& q = {},
                                   std::vector<RenderSegment>* segments = nullptr);
+
+}  // namespace pcr::vision
+
+#include "pcr/vision/tag_board.hpp"
+
+namespace pcr::vision {
+
+/// The tags of `board` placed in the plane frame, the board frame M at `plane_T_board` (for a
+/// spatial robot whose board is given in P: ^W T_P).
+std::vector<RenderTag3d> board_tags(const TagBoard& board,
+                                    const SpatialPose<double>& plane_T_board);
 
 }  // namespace pcr::vision
