@@ -164,16 +164,20 @@ TEST(PcrCalibrateSpatial, RefusesPlanarFlagsWrongColumnsAndOverwritingAnInput) {
   const std::string common =
       "--robot " + robot + " --data " + dir.file("planar.csv") + " --quiet --output ";
   std::string err;
-  for (const char* flag : {"--identify-load", "--drop-unreachable"}) {
+  for (const char* flag : {"--select-load", "--drop-unreachable"}) {
     EXPECT_EQ(run(common + dir.file("out.json") + " " + flag, dir, &err), 1) << flag;
     EXPECT_NE(err.find(flag), std::string::npos) << err;
     EXPECT_NE(err.find("planar robots only"), std::string::npos) << err;
   }
   EXPECT_EQ(run(common + dir.file("out.json"), dir, &err), 1);
   EXPECT_NE(err.find(dir.file("planar.csv")), std::string::npos) << err;
-  // Stages files: the spatial kinds are taken (the data is refused next), a planar one is not.
+  // Stages files: the spatial kinds (the load's too) are taken (the data is refused next), a
+  // planar one is not; so is --identify-load.
+  EXPECT_EQ(run(common + dir.file("out.json") + " --identify-load", dir, &err), 1);
+  EXPECT_NE(err.find(dir.file("planar.csv")), std::string::npos) << err;
   {
-    std::ofstream(dir.file("spatial_stages.json")) << R"([{"name": "s", "free": ["tracker"]}])";
+    std::ofstream(dir.file("spatial_stages.json"))
+        << R"([{"name": "s", "free": ["tracker", "load"]}])";
     std::ofstream(dir.file("planar_stages.json")) << R"([{"name": "s", "free": ["camera"]}])";
   }
   EXPECT_EQ(run(common + dir.file("out.json") + " --stages " + dir.file("spatial_stages.json"), dir,
