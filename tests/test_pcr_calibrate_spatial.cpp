@@ -164,8 +164,13 @@ TEST(PcrCalibrateSpatial, RefusesPlanarFlagsWrongColumnsAndOverwritingAnInput) {
   const std::string common =
       "--robot " + robot + " --data " + dir.file("planar.csv") + " --quiet --output ";
   std::string err;
+  // (--select-load needs --validation, which CLI11 checks first.)
   for (const char* flag : {"--select-load", "--drop-unreachable"}) {
-    EXPECT_EQ(run(common + dir.file("out.json") + " " + flag, dir, &err), 1) << flag;
+    EXPECT_EQ(
+        run(common + dir.file("out.json") + " " + flag + " --validation " + dir.file("planar.csv"),
+            dir, &err),
+        1)
+        << flag;
     EXPECT_NE(err.find(flag), std::string::npos) << err;
     EXPECT_NE(err.find("planar robots only"), std::string::npos) << err;
   }
