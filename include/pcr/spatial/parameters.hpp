@@ -3,7 +3,8 @@
 // and its calibration: the spatial counterpart of pcr/parameters.hpp. Per rod (16): E, G, d, l,
 // A (3), the base frame's turn (3), B (3), the tip frame's turn (3); then the measuring system's
 // extrinsics (12): the tracker frame ^W T_S and the marker frame ^M T_P, each a position (3) and a
-// turn (3).
+// turn (3). The calibration may append a constant platform wrench (kSpatialLoadParameters: force,
+// then moment, in W): kinds of their own, outside the flat view, as the planar load's.
 //
 // The flat values are deviations from a nominal description, not the values themselves: a turn
 // has no flat value of its own, only a rotation vector relative to the nominal orientation. Each
