@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <vector>
 
@@ -149,10 +150,27 @@ TEST(SpatialCalibrationUncertainty, LoadStageIdentifiesAnUnmodelledPayload) {
   // The report names it (in the planar report's keys).
   const pcr::SpatialCalibrationTable table =
       pcr::spatial_calibration_table(with_load, calibration, validation);
-  const std::string json = pcr::spatial_calibration_report_json(with_load, table);
-  EXPECT_NE(json.find("\"platform_load\""), std::string::npos);
-  EXPECT_NE(json.find("\"covariance\""), std::string::npos);
-  EXPECT_NE(json.find("\"load_f_z\""), std::string::npos);
+  const nlohmann::json report =
+      nlohmann::json::parse(pcr::spatial_calibration_report_json(with_load, table));
+  EXPECT_TRUE(report["platform_load"]["identified"].get<bool>());
+  EXPECT_EQ(report["platform_load"]["f_z_N"].get<double>(), with_load.load_force.z());
+  const nlohmann::json& covariance = report["covariance"];
+  ASSERT_EQ(covariance["parameters"].size(), with_load.parameters.size());
+  ASSERT_EQ(covariance["matrix"].size(), with_load.parameters.size());
+  for (std::size_t k = 0; k < with_load.parameters.size(); ++k) {
+    const pcr::SpatialParameterEstimate& e = with_load.parameters[k];
+    EXPECT_EQ(covariance["parameters"][k].get<std::string>(), e.name);
+    const nlohmann::json& diagonal = covariance["matrix"][k][k];
+    if (!e.free) {
+      EXPECT_EQ(diagonal.get<double>(), 0.0) << e.name;
+    } else if (!e.identifiable) {
+      EXPECT_TRUE(diagonal.is_null()) << e.name;  // NaN
+    } else {
+      EXPECT_NEAR(std::sqrt(diagonal.get<double>()), e.std_dev, 1e-9 * e.std_dev) << e.name;
+    }
+  }
+  EXPECT_NE(pcr::spatial_calibration_report_text(with_load, table).find("platform load"),
+            std::string::npos);
 
   // Without the load, the geometry absorbs what its bounds allow and no more.
   const pcr::SpatialCalibrationResult without =
