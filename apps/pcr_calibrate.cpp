@@ -152,7 +152,6 @@ pcr::SpatialDataset spatial_rows(const std::string& path, int rods, const char* 
 int calibrate_spatial_robot(const Arguments& a) {
   for (const auto& [flag, given] :
        {std::pair<const char*, bool>{"--drop-unreachable", a.drop_unreachable},
-        {"--identify-load", a.identify_load},
         {"--select-load", a.select_load}}) {
     if (given) {
       throw pcr::InputError(std::string(flag) + " is for planar robots only; " + a.robot_path +
@@ -163,6 +162,7 @@ int calibrate_spatial_robot(const Arguments& a) {
   const int n = nominal.params.num_rods;
   pcr::SpatialCalibrationOptions options;
   if (!a.stages_path.empty()) options.stages = pcr::load_spatial_calibration_stages(a.stages_path);
+  if (a.identify_load) options.stages = pcr::with_load_stage(options.stages);
   const pcr::SpatialDataset calibration = spatial_rows(a.data_path, n, "calibration");
   pcr::SpatialDataset validation;
   if (!a.validation_path.empty()) validation = spatial_rows(a.validation_path, n, "validation");
@@ -242,9 +242,10 @@ int main(int argc, char** argv) {
                "instead of refusing the dataset (planar robots)");
   app.add_flag("--strict", a.strict, "exit 3 when the report has a warning");
   app.add_flag("--identify-load", a.identify_load,
-               "identify a constant platform load (f_x, f_y, m_z: air-bearing drag, a cable) with "
-               "the last stage; the report gives it, and pcr fk --force --moment predicts under "
-               "it (planar robots)");
+               "identify a constant platform load (f_x, f_y, m_z: air-bearing drag, a cable; a "
+               "spatial robot's force and moment, 6 values) with the last stage; the report gives "
+               "it, and pcr fk --force --moment predicts under it (a spatial robot's output file "
+               "carries it as its external wrench)");
   app.add_flag("--select-load", a.select_load,
                "when the residuals exceed the declared noise, also fit the load model (as "
                "--identify-load) and keep it when the validation set supports it (a paired "

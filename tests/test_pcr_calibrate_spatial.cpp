@@ -152,6 +152,50 @@ TEST(PcrCalibrateSpatial, IdentifiesAHiddenRobotToTheNoiseFloor) {
   EXPECT_EQ(rows, calibration.size());
 }
 
+// A 100 g payload the nominal robot does not know: a stages file freeing "load" (and
+// --identify-load, which adds it to the default stages' last) identifies its weight, which the
+// report gives and the identified file carries as its external force.
+TEST(PcrCalibrateSpatial, LoadStageIdentifiesAPayload) {
+  const test::ScratchDirectory dir("pcr_calibrate_spatial");
+  const SpatialRobotDescription nominal = continuum_stewart_gough_description();
+  save_spatial_robot(nominal, dir.file("nominal.json"));
+  SpatialVirtualRobotOptions options;
+  options.seed = 11;
+  options.effects.payload = 0.1;
+  SpatialVirtualRobot robot(nominal, options);
+  std::mt19937_64 rng(options.seed);
+  const SpatialDataset calibration =
+      testing::measured(robot, testing::random_joints(rng, 60, 0.0, 0.01));
+  ASSERT_GE(calibration.size(), 50u);
+  write_spatial_dataset(calibration, dir.file("calibration.csv"));
+  std::ofstream(dir.file("stages.json"))
+      << R"([{"name": "extrinsics", "free": ["extrinsics"]}, {"free": ["all", "load"]}])";
+  const double weight = options.effects.payload * nominal.params.gravity.z();
+  for (const std::string how :
+       {" --stages " + dir.file("stages.json"), std::string(" --identify-load")}) {
+    std::string err;
+    ASSERT_EQ(run("--robot " + dir.file("nominal.json") + " --data " + dir.file("calibration.csv") +
+                      how + " --output " + dir.file("identified.json") + " --report " +
+                      dir.file("report.json") + " --quiet",
+                  dir, &err),
+              0)
+        << err;
+    const nlohmann::json report = nlohmann::json::parse(slurp(dir.file("report.json")));
+    ASSERT_TRUE(report.at("platform_load").at("identified").get<bool>()) << how;
+    const double f_z = report.at("platform_load").at("f_z_N").get<double>();
+    const nlohmann::json& parameters = report.at("parameters");
+    ASSERT_EQ(parameters.size(), static_cast<std::size_t>(num_spatial_parameters(6) + 6));
+    const nlohmann::json& entry = parameters.at(num_spatial_parameters(6) + 2);
+    EXPECT_EQ(entry.at("name"), "load_f_z");
+    const double sigma = entry.at("std").get<double>();
+    std::printf("%s: f_z %.4f N +- %.4f (m g %.4f N)\n", how.c_str(), f_z, sigma, weight);
+    EXPECT_NEAR(f_z, weight, 4 * sigma);
+    const SpatialRobotDescription identified = load_spatial_robot(dir.file("identified.json"));
+    EXPECT_NEAR(identified.params.external_force.z(), f_z, 1e-12 + 1e-9 * std::abs(f_z));
+    EXPECT_TRUE(report.contains("covariance"));
+  }
+}
+
 TEST(PcrCalibrateSpatial, RefusesPlanarFlagsWrongColumnsAndOverwritingAnInput) {
   const test::ScratchDirectory dir("pcr_calibrate_spatial");
   const std::string robot = dir.file("nominal.json");
@@ -164,16 +208,25 @@ TEST(PcrCalibrateSpatial, RefusesPlanarFlagsWrongColumnsAndOverwritingAnInput) {
   const std::string common =
       "--robot " + robot + " --data " + dir.file("planar.csv") + " --quiet --output ";
   std::string err;
-  for (const char* flag : {"--identify-load", "--drop-unreachable"}) {
-    EXPECT_EQ(run(common + dir.file("out.json") + " " + flag, dir, &err), 1) << flag;
+  // (--select-load needs --validation, which CLI11 checks first.)
+  for (const char* flag : {"--select-load", "--drop-unreachable"}) {
+    EXPECT_EQ(
+        run(common + dir.file("out.json") + " " + flag + " --validation " + dir.file("planar.csv"),
+            dir, &err),
+        1)
+        << flag;
     EXPECT_NE(err.find(flag), std::string::npos) << err;
     EXPECT_NE(err.find("planar robots only"), std::string::npos) << err;
   }
   EXPECT_EQ(run(common + dir.file("out.json"), dir, &err), 1);
   EXPECT_NE(err.find(dir.file("planar.csv")), std::string::npos) << err;
-  // Stages files: the spatial kinds are taken (the data is refused next), a planar one is not.
+  // Stages files: the spatial kinds (the load's too) are taken (the data is refused next), a
+  // planar one is not; so is --identify-load.
+  EXPECT_EQ(run(common + dir.file("out.json") + " --identify-load", dir, &err), 1);
+  EXPECT_NE(err.find(dir.file("planar.csv")), std::string::npos) << err;
   {
-    std::ofstream(dir.file("spatial_stages.json")) << R"([{"name": "s", "free": ["tracker"]}])";
+    std::ofstream(dir.file("spatial_stages.json"))
+        << R"([{"name": "s", "free": ["tracker", "load"]}])";
     std::ofstream(dir.file("planar_stages.json")) << R"([{"name": "s", "free": ["camera"]}])";
   }
   EXPECT_EQ(run(common + dir.file("out.json") + " --stages " + dir.file("spatial_stages.json"), dir,

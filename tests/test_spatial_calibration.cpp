@@ -1,6 +1,7 @@
-// The spatial calibration (pcr/calib/spatial_calibrator.hpp): its exact derivatives against
-// central differences of FK solved again, and identification of hidden virtual spatial robots to
-// the noise floor, scored on validation rows against the noise and against the virtual truth.
+// The spatial calibration (pcr/calib/spatial_calibrator.hpp): its exact derivatives (the platform
+// load's included) against central differences of FK solved again, and identification of hidden
+// virtual spatial robots to the noise floor, scored on validation rows against the noise and
+// against the virtual truth.
 
 #include <gtest/gtest.h>
 
@@ -24,16 +25,18 @@ using pcr::testing::measured;
 using pcr::testing::random_joints;
 
 TEST(SpatialCalibration, DerivativesMatchCentralDifferences) {
+  // The flat deviations, then the platform load's six (force in N, moment in N m).
   const pcr::SpatialRobotDescription nominal = pcr::continuum_stewart_gough_description();
-  const int count = pcr::num_spatial_parameters(6);
+  const int flat = pcr::num_spatial_parameters(6);
+  const int count = flat + pcr::kSpatialLoadParameters;
+  const auto size_of = [&](int k) {
+    if (k >= flat) return k < flat + 3 ? 0.5 : 0.02;  // a payload of ~50 g, its moment at 4 cm
+    return pcr::spatial_half_width(*nominal.uncertainty, pcr::spatial_parameter_id(k, 6));
+  };
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> unit(-1, 1);
   std::vector<double> d(static_cast<std::size_t>(count));
-  for (int k = 0; k < count; ++k) {
-    d[static_cast<std::size_t>(k)] =
-        0.5 * unit(rng) *
-        pcr::spatial_half_width(*nominal.uncertainty, pcr::spatial_parameter_id(k, 6));
-  }
+  for (int k = 0; k < count; ++k) d[static_cast<std::size_t>(k)] = 0.5 * unit(rng) * size_of(k);
   pcr::SolverOptions fk;
   fk.rod_steps = 64;  // one discrete model for every solve: its derivative is what is exact
   fk.tolerance = 1e-13;
@@ -48,9 +51,7 @@ TEST(SpatialCalibration, DerivativesMatchCentralDifferences) {
       pcr::spatial_measurement_jacobian(nominal, d, q, measured, weight, scale, &r, &J, fk));
   double worst = 0;
   for (int k = 0; k < count; ++k) {
-    const double h =
-        1e-3 * std::max(1e-9, pcr::spatial_half_width(*nominal.uncertainty,
-                                                      pcr::spatial_parameter_id(k, 6)));
+    const double h = 1e-3 * std::max(1e-9, size_of(k));
     Eigen::Matrix<double, 6, 1> sides[2];
     for (int s = 0; s < 2; ++s) {
       std::vector<double> moved = d;

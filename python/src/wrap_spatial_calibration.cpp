@@ -94,6 +94,11 @@ py::dict result_dict(const SpatialCalibrationResult& result, const SpatialCalibr
   out["jacobian_rank"] = result.jacobian_rank;
   out["unidentifiable"] = result.unidentifiable;
   out["residual_variance"] = result.residual_variance;
+  out["covariance_ok"] = result.covariance_ok;
+  out["covariance"] = result.covariance;  // parameters' order; NaN where not identifiable
+  out["load_identified"] = result.load_identified;
+  out["load_force"] = result.load_force;
+  out["load_moment"] = result.load_moment;
   out["rms_position"] = result.rms_position;
   out["rms_angle"] = result.rms_angle;
   out["warnings"] = spatial_calibration_warnings(result, table);

@@ -23,6 +23,16 @@ ordered_json stats_json(const PoseErrorStats& s, const char* angle_key) {
       {"branch_mismatches", s.branch_mismatches}};
 }
 
+ordered_json covariance_json(const std::vector<std::string>& names, const Eigen::MatrixXd& matrix) {
+  ordered_json rows = ordered_json::array();
+  for (Eigen::Index r = 0; r < matrix.rows(); ++r) {
+    ordered_json row = ordered_json::array();
+    for (Eigen::Index c = 0; c < matrix.cols(); ++c) row.push_back(matrix(r, c));
+    rows.push_back(row);
+  }
+  return {{"parameters", names}, {"units", "SI, flat order"}, {"matrix", rows}};
+}
+
 std::string stats_line(const char* label, const PoseErrorStats& s) {
   std::string left_out;
   if (s.failed) left_out += ", " + std::to_string(s.failed) + " FK failures";
@@ -305,17 +315,10 @@ std::string calibration_report_json(const CalibrationResult& result,
       {"warnings", calibration_warnings(result, table)}};
   if (result.covariance.size() > 0) {
     // Row by row in `parameters` order; null (NaN) for the parameters that are not identifiable,
-    // zero for the held ones (read_parameter_covariance, pcr/calib/predicted_accuracy.hpp).
-    ordered_json names = ordered_json::array();
+    // zero for the held ones.
+    std::vector<std::string> names;
     for (const ParameterEstimate& p : result.parameters) names.push_back(p.name);
-    ordered_json matrix = ordered_json::array();
-    for (Eigen::Index r = 0; r < result.covariance.rows(); ++r) {
-      ordered_json row = ordered_json::array();
-      for (Eigen::Index c = 0; c < result.covariance.cols(); ++c)
-        row.push_back(result.covariance(r, c));
-      matrix.push_back(row);
-    }
-    report["covariance"] = {{"parameters", names}, {"units", "SI, flat order"}, {"matrix", matrix}};
+    report["covariance"] = report_internal::covariance_json(names, result.covariance);
   }
   // NaN (a failed covariance, an empty set) is not JSON: nlohmann writes null.
   return report.dump(2) + "\n";

@@ -2,6 +2,7 @@
 // The pieces the planar and the spatial calibration reports share (calibration_report.cpp,
 // spatial_calibration_report.cpp), not part of the API: one wording and one layout for both.
 
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -17,6 +18,11 @@ using nlohmann::ordered_json;
 
 /// Table 3's statistics as JSON; `angle_key`: "e_theta_rad" (planar) or "e_angle_rad" (spatial).
 ordered_json stats_json(const PoseErrorStats& s, const char* angle_key = "e_theta_rad");
+
+/// The identified parameters' covariance as JSON: {"parameters": names, "units": "SI, flat
+/// order", "matrix": rows} (NaN entries are written null; read_parameter_covariance,
+/// pcr/calib/predicted_accuracy.hpp, reads it).
+ordered_json covariance_json(const std::vector<std::string>& names, const Eigen::MatrixXd& matrix);
 
 /// One line of Table 3 as text (um and mrad).
 std::string stats_line(const char* label, const PoseErrorStats& s);

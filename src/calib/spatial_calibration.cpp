@@ -38,6 +38,7 @@ bool kind_in(const std::string& name, SpatialParameterKind kind) {
   const auto within = [&](SpatialParameterKind first, int count) {
     return k >= static_cast<int>(first) && k < static_cast<int>(first) + count;
   };
+  if (k >= static_cast<int>(SpatialParameterKind::kLoadForceX)) return name == "load";
   if (name == "all") return true;
   if (name == "A") return within(SpatialParameterKind::kAx, 3);
   if (name == "B") return within(SpatialParameterKind::kBx, 3);
@@ -57,7 +58,14 @@ bool known_kind(const std::string& name) {
 }
 
 bool is_extrinsic(SpatialParameterKind kind) {
-  return static_cast<int>(kind) >= static_cast<int>(SpatialParameterKind::kTrackerX);
+  const int k = static_cast<int>(kind);
+  return k >= static_cast<int>(SpatialParameterKind::kTrackerX) &&
+         k < static_cast<int>(SpatialParameterKind::kLoadForceX);
+}
+
+/// Geometric and material parameters carry bounds (Eq. 7); the extrinsics and the load do not.
+bool is_bounded(SpatialParameterKind kind) {
+  return static_cast<int>(kind) < static_cast<int>(SpatialParameterKind::kTrackerX);
 }
 
 /// One row's whitened residual (6) from the platform pose and the extrinsics, in T.
@@ -88,7 +96,9 @@ struct Problem {
   std::vector<double> half_widths;  ///< per flat parameter
   double weight = 0, scale = 0;
   SolverOptions fk;
-  int count = 0;  ///< flat parameters
+  int flat = 0;       ///< flat parameters
+  bool load = false;  ///< the load's kSpatialLoadParameters values follow them
+  int count = 0;      ///< flat + load
   /// The derivatives' RK4 steps are the solution's over this (at least kMinDerivativeSteps): the
   /// stages' steps need a derivative good to a few digits, which a quarter of the steps gives
   /// (RK4's error grows as the step's fourth power: ~1e-7 relative) at a quarter of the cost of
@@ -100,18 +110,36 @@ struct Problem {
     for (int k = 0; k < count; ++k) d[k] = half_widths[k] * u[k];
     return d;
   }
+
+  /// The nominal robot moved by deviations d (SI), the load added to its external wrench.
+  template <class T>
+  SpatialRobotParams<T> robot(const T* d) const {
+    SpatialRobotParams<T> r = spatial_with_deviations(nominal->params, d);
+    if (load) {
+      r.external_force += Vector3<T>(d[flat], d[flat + 1], d[flat + 2]);
+      r.external_moment += Vector3<T>(d[flat + 3], d[flat + 4], d[flat + 5]);
+    }
+    return r;
+  }
+
+  /// The values FK depends on (the rods' and the load's), of u.
+  std::vector<double> fk_values(const double* u) const {
+    std::vector<double> out(u, u + kSpatialRodParameters * nominal->params.num_rods);
+    out.insert(out.end(), u + flat, u + count);
+    return out;
+  }
 };
 
-/// A row's equilibrium, continued as the parameters move. FK depends on the rods' parameters
-/// only: the extrinsics move the measurement, not the robot, so a step of theirs reuses the
-/// solution and its derivative.
+/// A row's equilibrium, continued as the parameters move. FK depends on the rods' parameters and
+/// the load only: the extrinsics move the measurement, not the robot, so a step of theirs reuses
+/// the solution and its derivative.
 struct RowState {
   SpatialJointVector q;
   SpatialPose<double> measured;
-  SpatialForwardSolution solution;  ///< at the rods' parameters `at`
-  std::vector<double> at;           ///< the rods' parameters (half-width units) of `solution`
-  /// d pose / d (rods' deviations, SI) at `solution` (6 x 16 n: position in m, turn on the
-  /// right), when `derivative_valid`.
+  SpatialForwardSolution solution;  ///< at the FK values `at`
+  std::vector<double> at;           ///< Problem::fk_values (half-width units) of `solution`
+  /// d pose / d (rods' deviations, then the load's, SI) at `solution` (6 x (16 n + 6 with the
+  /// load): position in m, turn on the right), when `derivative_valid`.
   Eigen::MatrixXd pose_derivative;
   bool derivative_valid = false;
   int derivative_step_divisor = 0;  ///< of pose_derivative
@@ -123,8 +151,7 @@ struct RowState {
 
 /// Whether a row's solution is at the rods' parameters of u.
 bool solved_at(const Problem& problem, const RowState& row, const double* u) {
-  const int rods = kSpatialRodParameters * problem.nominal->params.num_rods;
-  return static_cast<int>(row.at.size()) == rods && std::equal(row.at.begin(), row.at.end(), u);
+  return row.at == problem.fk_values(u);
 }
 
 /// FK of a row at deviations d, continued from its anchor (then from its nominal solution).
@@ -135,7 +162,7 @@ bool solve_row(const Problem& problem, RowState& row, const double* u,
     SpatialForwardSolution s = spatial_forward_kinematics(robot, row.q, *warm, problem.fk);
     if (is_equilibrium(s.summary)) {
       row.solution = s;
-      row.at.assign(u, u + kSpatialRodParameters * robot.num_rods);
+      row.at = problem.fk_values(u);
       row.derivative_valid = false;
       return true;
     }
@@ -165,9 +192,16 @@ Eigen::MatrixXd pose_derivative(const Problem& problem, const RowState& row,
   spatial_residual(robot, x, scale, steps, r, &J, tips);
   const Eigen::PartialPivLU<SpatialJacobian> lu(J);
 
-  // dF/dp, rod by rod: rod i's 16 deviations in the Jet, the other rods' tips held.
+  // dF/dp, rod by rod: rod i's 16 deviations in the Jet, the other rods' tips held. The load
+  // enters the platform's balance alone, with the opposite sign of the rods' tip forces.
   const int rows = 6 * n + 6;
-  Eigen::MatrixXd Fp(rows, kSpatialRodParameters * n);
+  const int rod_columns = kSpatialRodParameters * n;
+  const int load_columns = problem.load ? kSpatialLoadParameters : 0;
+  Eigen::MatrixXd Fp = Eigen::MatrixXd::Zero(rows, rod_columns + load_columns);
+  if (problem.load) {
+    Fp.block<3, 3>(6 * n, rod_columns).diagonal().setConstant(-1.0 / scale.force);
+    Fp.block<3, 3>(6 * n + 3, rod_columns + 3).diagonal().setConstant(-1.0 / scale.moment());
+  }
   std::vector<Jet16> dj(d.size());
   SpatialShootingPoint<Jet16> xj;
   xj.pose = x.pose.cast<Jet16>();
@@ -184,8 +218,7 @@ Eigen::MatrixXd pose_derivative(const Problem& problem, const RowState& row,
       dj[static_cast<std::size_t>(kSpatialRodParameters * i + k)] =
           Jet16(d[static_cast<std::size_t>(kSpatialRodParameters * i + k)], k);
     }
-    const SpatialRobotParams<Jet16> robot_j =
-        spatial_with_deviations(problem.nominal->params, dj.data());
+    const SpatialRobotParams<Jet16> robot_j = problem.robot(dj.data());
     for (int k = 0; k < n; ++k) {
       if (k == i) continue;
       tips_j[k].position = tips[k].position.cast<Jet16>();
@@ -206,7 +239,7 @@ Eigen::MatrixXd pose_derivative(const Problem& problem, const RowState& row,
     }
   }
   const Eigen::MatrixXd dz = -lu.solve(Fp);
-  Eigen::MatrixXd out(6, kSpatialRodParameters * n);
+  Eigen::MatrixXd out(6, rod_columns + load_columns);
   out.topRows(3) = scale.length * dz.middleRows(6 * n, 3);
   out.bottomRows(3) = dz.middleRows(6 * n + 3, 3);
   return out;
@@ -243,9 +276,14 @@ void row_jacobian(const Problem& problem, RowState& row, const SpatialRobotParam
       row_residual(platform, extrinsics, row.measured, problem.weight, problem.scale);
   Eigen::Matrix<double, 6, 18> D;
   for (int k = 0; k < 6; ++k) D.row(k) = m(k).v.transpose();
+  const int rods = kSpatialRodParameters * n;
   out.resize(6, problem.count);
-  out.leftCols(kSpatialRodParameters * n) = D.leftCols(6) * row.pose_derivative;
-  out.rightCols(12) = D.rightCols(12);
+  out.leftCols(rods) = D.leftCols(6) * row.pose_derivative.leftCols(rods);
+  out.middleCols(rods, kSpatialExtrinsicParameters) = D.rightCols(12);
+  if (problem.load) {
+    out.rightCols(kSpatialLoadParameters) =
+        D.leftCols(6) * row.pose_derivative.rightCols(kSpatialLoadParameters);
+  }
   for (int k = 0; k < problem.count; ++k) out.col(k) *= problem.half_widths[k];
 }
 
@@ -259,8 +297,7 @@ class RowCost final : public ceres::CostFunction {
                 double** jacobians) const override {
     const double* u = parameters[0];
     const std::vector<double> d = problem_.deviations(u);
-    const SpatialRobotParams<double> robot =
-        spatial_with_deviations(problem_.nominal->params, d.data());
+    const SpatialRobotParams<double> robot = problem_.robot(d.data());
     if (!solve_row(problem_, row_, u, robot)) return false;
     const Eigen::Matrix<double, 6, 1> r = row_residual<double>(
         row_.solution.pose, robot.extrinsics, row_.measured, problem_.weight, problem_.scale);
@@ -284,8 +321,7 @@ class RowCost final : public ceres::CostFunction {
 bool stacked_jacobian(const Problem& problem, std::vector<RowState>& rows, const double* u,
                       Eigen::MatrixXd* jacobian, Eigen::VectorXd* residual) {
   const std::vector<double> d = problem.deviations(u);
-  const SpatialRobotParams<double> robot =
-      spatial_with_deviations(problem.nominal->params, d.data());
+  const SpatialRobotParams<double> robot = problem.robot(d.data());
   jacobian->resize(6 * static_cast<Eigen::Index>(rows.size()), problem.count);
   residual->resize(6 * static_cast<Eigen::Index>(rows.size()));
   for (std::size_t j = 0; j < rows.size(); ++j) {
@@ -430,6 +466,52 @@ StageSolve solve_stage(const Problem& problem, std::vector<RowState>& rows,
   return out;
 }
 
+/// The load's scales (its "half-widths"; it carries no bound), as the planar calibration's: per
+/// component, the load that moves the nominal platform over the rows (root mean square, Eq. 6's
+/// metric) as far as a clamp's position tolerance (the mean half-width of A and B) does, so that
+/// its columns weigh like the geometry's. Where the rows cannot be evaluated: the load that bends
+/// a rod by the tolerance. The rows are on the nominal robot (u = 0).
+void set_load_scales(Problem& problem, std::vector<RowState>& rows) {
+  const int n = problem.nominal->params.num_rods;
+  double tolerance = 0;
+  int terms = 0;
+  for (int k = 0; k < problem.flat; ++k) {
+    const int kind = static_cast<int>(spatial_parameter_id(k, n).kind);
+    const bool position = (kind >= static_cast<int>(SpatialParameterKind::kAx) &&
+                           kind <= static_cast<int>(SpatialParameterKind::kAz)) ||
+                          (kind >= static_cast<int>(SpatialParameterKind::kBx) &&
+                           kind <= static_cast<int>(SpatialParameterKind::kBz));
+    if (position && problem.half_widths[k] > 0) {
+      tolerance += problem.half_widths[k];
+      ++terms;
+    }
+  }
+  const ShootingScale scale = spatial_shooting_scale(problem.nominal->params);
+  tolerance = terms > 0 ? tolerance / terms : 1e-3 * scale.length;
+  const double bend = tolerance / scale.length;
+  for (int j = 0; j < kSpatialLoadParameters; ++j) {
+    problem.half_widths[static_cast<std::size_t>(problem.flat + j)] =
+        j < 3 ? bend * scale.force : bend * scale.moment();
+  }
+  std::vector<double> saved(problem.half_widths);
+  for (int j = 0; j < kSpatialLoadParameters; ++j) {
+    problem.half_widths[static_cast<std::size_t>(problem.flat + j)] = 1.0;  // per N or N m
+  }
+  const std::vector<double> u(static_cast<std::size_t>(problem.count), 0.0);
+  Eigen::MatrixXd jacobian;
+  Eigen::VectorXd residual;
+  const bool evaluated = stacked_jacobian(problem, rows, u.data(), &jacobian, &residual);
+  problem.half_widths = saved;
+  if (!evaluated || rows.empty()) return;
+  for (int j = 0; j < kSpatialLoadParameters; ++j) {
+    const double moved = problem.scale * jacobian.col(problem.flat + j).norm() /
+                         std::sqrt(static_cast<double>(rows.size()));
+    if (moved > 0 && std::isfinite(moved)) {
+      problem.half_widths[static_cast<std::size_t>(problem.flat + j)] = tolerance / moved;
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<CalibrationStage> default_spatial_stages() {
@@ -448,7 +530,7 @@ void validate_spatial_stages(const std::vector<CalibrationStage>& stages,
   calib_internal::validate_stage_list(
       stages, source, known_kind,
       " for a spatial robot (a kind of pcr/spatial/parameters.hpp, A, B, base_rotation, "
-      "tip_rotation, tracker, marker, extrinsics or all)");
+      "tip_rotation, tracker, marker, extrinsics, all or load)");
 }
 
 bool SpatialCalibrationOptions::is_valid(std::string* error) const {
@@ -485,8 +567,10 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
 
   Problem problem;
   problem.nominal = &nominal;
-  problem.count = num_spatial_parameters(n);
-  for (int k = 0; k < problem.count; ++k) {
+  problem.flat = num_spatial_parameters(n);
+  problem.load = frees_load(options.stages);
+  problem.count = problem.flat + (problem.load ? kSpatialLoadParameters : 0);
+  for (int k = 0; k < problem.count; ++k) {  // the load's: set_load_scales
     problem.half_widths.push_back(
         spatial_half_width(*nominal.uncertainty, spatial_parameter_id(k, n)));
   }
@@ -517,22 +601,24 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     rows[j].q = data.q[j];
     rows[j].measured = data.poses[j];
     rows[j].solution = rows[j].anchor = rows[j].start = s;
-    rows[j].at.assign(static_cast<std::size_t>(kSpatialRodParameters * n), 0.0);
+    rows[j].at.assign(
+        static_cast<std::size_t>(kSpatialRodParameters * n + (problem.count - problem.flat)), 0.0);
   }
+  problem.derivative_step_divisor = kStageDerivativeStepDivisor;
+  if (problem.load) set_load_scales(problem, rows);
 
   // The extrinsics alone, fitted on the nominal geometry (SpatialCalibrationResult::
   // extrinsics_only): the first stage's result when that is what it frees, else a fit of its own.
   std::vector<int> extrinsics;
-  for (int k = kSpatialRodParameters * n; k < problem.count; ++k) {
+  for (int k = kSpatialRodParameters * n; k < problem.flat; ++k) {
     if (problem.half_widths[k] > 0) extrinsics.push_back(k);
   }
   const auto extrinsics_fit = [&](const std::vector<double>& at) {
     const std::vector<double> d = problem.deviations(at.data());
-    return spatial_with_deviations(nominal.params, d.data());
+    return problem.robot(d.data());
   };
   bool extrinsics_recorded = false;
 
-  problem.derivative_step_divisor = kStageDerivativeStepDivisor;
   std::vector<double> u(static_cast<std::size_t>(problem.count), 0.0);
   std::vector<int> free;
   for (const CalibrationStage& stage : options.stages) {
@@ -575,7 +661,7 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
       std::vector<int> past;
       for (const int k : moving) {
         double& value = u[static_cast<std::size_t>(k)];
-        if (is_extrinsic(spatial_parameter_id(k, n).kind) || std::abs(value) <= stage.bounds_scale)
+        if (!is_bounded(spatial_parameter_id(k, n).kind) || std::abs(value) <= stage.bounds_scale)
           continue;
         value = std::copysign(stage.bounds_scale, value);
         past.push_back(k);
@@ -615,8 +701,14 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
   // the exact derivatives.
   problem.derivative_step_divisor = 1;
   const std::vector<double> d = problem.deviations(u.data());
-  result.identified = spatial_with_deviations(nominal.params, d.data());
+  result.identified = problem.robot(d.data());
   result.free_count = static_cast<int>(free.size());
+  result.load_identified = problem.load;
+  if (problem.load) {
+    result.load_force = Eigen::Vector3d(d[problem.flat], d[problem.flat + 1], d[problem.flat + 2]);
+    result.load_moment =
+        Eigen::Vector3d(d[problem.flat + 3], d[problem.flat + 4], d[problem.flat + 5]);
+  }
   for (int k = 0; k < problem.count; ++k) {
     SpatialParameterEstimate e;
     e.id = spatial_parameter_id(k, n);
@@ -624,11 +716,19 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     e.deviation = d[static_cast<std::size_t>(k)];
     e.half_width = problem.half_widths[k];
     e.free = std::find(free.begin(), free.end(), k) != free.end();
-    e.at_bound = e.free && !is_extrinsic(e.id.kind) &&
+    e.at_bound = e.free && is_bounded(e.id.kind) &&
                  std::abs(std::abs(u[static_cast<std::size_t>(k)]) -
                           options.stages.back().bounds_scale) < 1e-6;
     e.std_dev = e.free ? calib_internal::kNaN : 0.0;
     result.parameters.push_back(e);
+  }
+  // Zero rows and columns for the parameters that are not free; NaN among the free ones until
+  // computed (as the planar CalibrationResult::covariance).
+  if (options.compute_covariance) {
+    result.covariance = Eigen::MatrixXd::Zero(problem.count, problem.count);
+    for (const int a : free) {
+      for (const int b : free) result.covariance(a, b) = calib_internal::kNaN;
+    }
   }
   Eigen::MatrixXd jacobian;
   Eigen::VectorXd residual;
@@ -651,15 +751,27 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
       }
     }
     if (options.compute_covariance && std::isfinite(result.residual_variance)) {
+      // In half-width units, then in SI: C_ab = h_a h_b (V S^-2 V^T)_ab sigma^2, the directions
+      // below the rank left out (the planar calibration's pseudo-inverse).
       const Eigen::MatrixXd V = svd.matrixV().leftCols(rank);
       const Eigen::VectorXd inverse_sv2 = sv.head(rank).cwiseAbs2().cwiseInverse();
-      for (std::size_t c = 0; c < free.size(); ++c) {
-        SpatialParameterEstimate& e = result.parameters[static_cast<std::size_t>(free[c])];
-        e.identifiable = identifiable[c];
-        const double variance =
-            (V.row(static_cast<Eigen::Index>(c)).transpose().cwiseAbs2()).dot(inverse_sv2) *
-            result.residual_variance;
-        e.std_dev = identifiable[c] ? e.half_width * std::sqrt(variance) : calib_internal::kNaN;
+      const Eigen::MatrixXd scaled =
+          V * inverse_sv2.asDiagonal() * V.transpose() * result.residual_variance;
+      result.covariance_ok = true;
+      for (std::size_t a = 0; a < free.size(); ++a) {
+        SpatialParameterEstimate& e = result.parameters[static_cast<std::size_t>(free[a])];
+        e.identifiable = identifiable[a];
+        const Eigen::Index ia = static_cast<Eigen::Index>(a);
+        e.std_dev =
+            identifiable[a] ? e.half_width * std::sqrt(scaled(ia, ia)) : calib_internal::kNaN;
+        for (std::size_t b = 0; b < free.size(); ++b) {
+          const Eigen::Index ib = static_cast<Eigen::Index>(b);
+          result.covariance(free[a], free[b]) =
+              identifiable[a] && identifiable[b]
+                  ? 0.5 * (scaled(ia, ib) + scaled(ib, ia)) * e.half_width *
+                        problem.half_widths[static_cast<std::size_t>(free[b])]
+                  : calib_internal::kNaN;
+        }
       }
     }
     // The measured errors at the result, in SI units.
@@ -702,14 +814,15 @@ bool spatial_measurement_jacobian(const SpatialRobotDescription& nominal,
                                   const SolverOptions& fk) {
   Problem problem;
   problem.nominal = &nominal;
-  problem.count = num_spatial_parameters(nominal.params.num_rods);
-  problem.half_widths.assign(static_cast<std::size_t>(problem.count), 1.0);  // SI units
+  problem.flat = num_spatial_parameters(nominal.params.num_rods);
+  problem.load = static_cast<int>(deviations.size()) == problem.flat + kSpatialLoadParameters;
+  problem.count = static_cast<int>(deviations.size());
+  problem.half_widths.assign(deviations.size(), 1.0);  // SI units
   problem.weight = orientation_weight;
   problem.scale = residual_scale;
   problem.fk = fk;
-  if (static_cast<int>(deviations.size()) != problem.count) return false;
-  const SpatialRobotParams<double> robot =
-      spatial_with_deviations(nominal.params, deviations.data());
+  if (!problem.load && problem.count != problem.flat) return false;
+  const SpatialRobotParams<double> robot = problem.robot(deviations.data());
   RowState row;
   row.q = q;
   row.measured = measured;

@@ -113,6 +113,14 @@ std::string spatial_calibration_report_text(const SpatialCalibrationResult& resu
     for (const std::string& combination : result.unidentifiable) out << "  " << combination << "\n";
   }
   char buf[320];
+  if (result.load_identified) {
+    std::snprintf(buf, sizeof buf,
+                  "\nplatform load (identified; in W, about the platform origin): f = (%.4g, %.4g, "
+                  "%.4g) N, m = (%.4g, %.4g, %.4g) N m\n",
+                  result.load_force.x(), result.load_force.y(), result.load_force.z(),
+                  result.load_moment.x(), result.load_moment.y(), result.load_moment.z());
+    out << buf;
+  }
   std::snprintf(buf, sizeof buf,
                 "\nresidual variance (whitened): %.6g\nrms on the calibration set: %.4g um, "
                 "%.4g mrad (orientation weight %.4g m/rad, residual scale %.4g m)\n",
@@ -170,21 +178,35 @@ std::string spatial_calibration_report_json(const SpatialCalibrationResult& resu
                           {"at_bound", p.at_bound},
                           {"identifiable", p.identifiable}});
   }
-  const ordered_json report{{"kind", "spatial"},
-                            {"pose_errors", errors},
-                            {"stages", stages},
-                            {"parameters", parameters},
-                            {"parameters_at_bound", at_bound},
-                            {"jacobian_rank", result.jacobian_rank},
-                            {"free_parameters", result.free_count},
-                            {"unidentifiable_combinations", result.unidentifiable},
-                            {"residual_variance", result.residual_variance},
-                            {"rms_position_m", result.rms_position},
-                            {"rms_angle_rad", result.rms_angle},
-                            {"orientation_weight_m_per_rad", result.orientation_weight},
-                            {"residual_scale_m", result.residual_scale},
-                            {"time_s", result.time_s},
-                            {"warnings", spatial_calibration_warnings(result, table)}};
+  ordered_json report{{"kind", "spatial"},
+                      {"pose_errors", errors},
+                      {"stages", stages},
+                      {"parameters", parameters},
+                      {"parameters_at_bound", at_bound},
+                      {"jacobian_rank", result.jacobian_rank},
+                      {"free_parameters", result.free_count},
+                      {"unidentifiable_combinations", result.unidentifiable},
+                      {"platform_load",
+                       {{"identified", result.load_identified},
+                        {"f_x_N", result.load_force.x()},
+                        {"f_y_N", result.load_force.y()},
+                        {"f_z_N", result.load_force.z()},
+                        {"m_x_Nm", result.load_moment.x()},
+                        {"m_y_Nm", result.load_moment.y()},
+                        {"m_z_Nm", result.load_moment.z()}}},
+                      {"residual_variance", result.residual_variance},
+                      {"covariance_ok", result.covariance_ok},
+                      {"rms_position_m", result.rms_position},
+                      {"rms_angle_rad", result.rms_angle},
+                      {"orientation_weight_m_per_rad", result.orientation_weight},
+                      {"residual_scale_m", result.residual_scale},
+                      {"time_s", result.time_s},
+                      {"warnings", spatial_calibration_warnings(result, table)}};
+  if (result.covariance.size() > 0) {  // the planar report's layout; null where NaN
+    std::vector<std::string> names;
+    for (const SpatialParameterEstimate& p : result.parameters) names.push_back(p.name);
+    report["covariance"] = report_internal::covariance_json(names, result.covariance);
+  }
   return report.dump(2) + "\n";  // NaN is not JSON: nlohmann writes null
 }
 

@@ -14,7 +14,8 @@ struct CalibrationStage {
   /// Kinds: a per-limb kind of kParameterKinds ("E", "d", "l", "A_x", "A_y", "alpha", "B_x",
   /// "B_y", "beta", "gamma", "precurvature"), "A", "B", "camera", "pattern", "extrinsics", "all"
   /// (the geometry and extrinsics), "load" (the constant platform load, kLoadParameters values;
-  /// not in "all").
+  /// not in "all"). A spatial robot's stages take the spatial kinds (validate_spatial_stages,
+  /// pcr/calib/spatial_calibrator.hpp), "load" among them (kSpatialLoadParameters values).
   std::vector<std::string> free;
   double bounds_scale = 1.0;
 };
@@ -22,7 +23,8 @@ struct CalibrationStage {
 /// The paper's three stages.
 std::vector<CalibrationStage> default_stages();
 
-/// Whether a stage frees "load" (the calibration then identifies a constant platform load).
+/// Whether a stage frees "load" (the calibration, planar or spatial, then identifies a constant
+/// platform load).
 bool frees_load(const std::vector<CalibrationStage>& stages);
 
 /// The load model: `stages` with their last stage also freeing "load" (unchanged when a stage

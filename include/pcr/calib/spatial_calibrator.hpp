@@ -34,7 +34,18 @@
 //   geometric or material parameter past bounds_scale half-widths at its bound and solves the
 //   others again, for up to four rounds.
 // - Uncertainty: the pseudo-inverse of J^T J on the free parameters, from the SVD of the whitened
-//   Jacobian at the result, scaled by the residual variance (sum of squares / (6 m - rank)).
+//   Jacobian at the result (the exact derivative), scaled by the residual variance (sum of
+//   squares / (6 m - rank)): the standard deviations and the covariance, as the planar
+//   calibration's. Computed only from a Jacobian that evaluated and is finite (Ceres' own
+//   covariance crashes after a failed evaluation).
+// - Platform load: a stage that frees "load" identifies a constant wrench on the platform (force
+//   and moment in W, kSpatialLoadParameters values after the flat ones; a payload, a cable) with
+//   the geometry, which would otherwise absorb it as far as its bounds allow. It is added to the
+//   identified robot's external_force and external_moment, so that every prediction of
+//   `identified` is made under it. Unbounded, as the planar load; its scale (the half-width of
+//   its whitening) is, per component, the load that moves the nominal platform over the rows
+//   (root mean square, Eq. 6's metric) as far as a clamp's position tolerance does (the mean
+//   half-width of A and B). Not part of "all".
 
 #include <functional>
 #include <limits>
@@ -50,7 +61,9 @@ namespace pcr {
 
 /// The spatial stages' kinds: a per-rod kind of kSpatialParameterKinds ("E", "G", "d", "l",
 /// "A_x", ..., "tip_rz"), a group ("A", "B", "base_rotation", "tip_rotation", "tracker",
-/// "marker", "extrinsics"), or "all" (every parameter).
+/// "marker", "extrinsics"), "all" (every flat parameter), or "load" (the constant platform wrench,
+/// kSpatialLoadParameters values; not in "all"). with_load_stage and frees_load
+/// (pcr/calib/calibration_stages.hpp) apply to these stages too.
 std::vector<CalibrationStage> default_spatial_stages();
 
 /// Throws InputError naming `source` on an unknown kind or a non-positive bounds scale.
@@ -116,16 +129,37 @@ struct SpatialCalibrationResult {
   /// the planar CalibrationResult::extrinsics_only.
   SpatialRobotParams<double> extrinsics_only;
   std::vector<SpatialStageReport> stages;
-  std::vector<SpatialParameterEstimate> parameters;  ///< every flat parameter, in flat order
-  double orientation_weight = 0;                     ///< resolved (m/rad)
-  double residual_scale = 0;                         ///< resolved (m)
-  int free_count = 0;                                ///< free parameters of the last stage
-  int jacobian_rank = 0;  ///< numerical rank of the whitened Jacobian on them
+  /// Every flat parameter, in flat order, then the load's six (load_f_x, _y, _z in N, load_m_x,
+  /// _y, _z in N m; deviation: the identified value) when a stage frees "load".
+  std::vector<SpatialParameterEstimate> parameters;
+  /// The identified constant platform load (in W; the moment about the platform origin), zero
+  /// unless a stage frees "load"; `identified` carries it in external_force and external_moment
+  /// (added to the nominal robot's).
+  Eigen::Vector3d load_force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d load_moment = Eigen::Vector3d::Zero();
+  bool load_identified = false;
+  double orientation_weight = 0;  ///< resolved (m/rad)
+  double residual_scale = 0;      ///< resolved (m)
+  int free_count = 0;             ///< free parameters of the last stage
+  int jacobian_rank = 0;          ///< numerical rank of the whitened Jacobian on them
   /// The combinations the data cannot identify (gauge directions included), in half-width
   /// units, in words ("+0.41 A_x[0] +0.41 A_x[1] ... +0.41 tracker_x").
   std::vector<std::string> unidentifiable;
   /// Of the whitened residuals at the result: ~1 at the noise floor.
   double residual_variance = std::numeric_limits<double>::quiet_NaN();
+  /// The standard deviations and the covariance were computed (a Jacobian that evaluated, a
+  /// finite residual variance, compute_covariance). True even when some directions are not
+  /// identifiable: those parameters' entries are NaN.
+  bool covariance_ok = false;
+  /// Covariance of the identified deviations, in `parameters` order (names there), SI units (m,
+  /// rad, Pa, N, N m), as the planar CalibrationResult::covariance: the pseudo-inverse of J^T J
+  /// from the same SVD as the standard deviations (whitened Jacobian on the last stage's free
+  /// parameters), times the residual variance, the half-widths scaled back. Its diagonal is
+  /// std_dev^2; zero rows and columns for the parameters that are not free; NaN rows and columns
+  /// for those that are not identifiable and, when it could not be computed (covariance_ok
+  /// false), for every free parameter. The other entries leave out the unidentifiable directions.
+  /// Empty without compute_covariance.
+  Eigen::MatrixXd covariance;
   double rms_position = 0;  ///< m, of the measured positions at the result
   double rms_angle = 0;     ///< rad, of the measured orientations at the result
   std::vector<std::string> warnings;
@@ -142,9 +176,10 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
                                            const SpatialCalibrationOptions& options = {});
 
 /// One row's whitened residual (6, as the stages see it) at `nominal` moved by the flat deviations
-/// `deviations` (SI units), FK cold at q (from straight rods), and its exact derivative by the
-/// implicit function theorem with respect to the deviations (6 x num_spatial_parameters, SI units).
-/// False when FK does not converge at q.
+/// `deviations` (SI units; num_spatial_parameters of them, or kSpatialLoadParameters more: a
+/// platform load added to the external wrench), FK cold at q (from straight rods), and its exact
+/// derivative by the implicit function theorem with respect to them (6 x deviations.size(), SI
+/// units). False when FK does not converge at q or the size is neither.
 bool spatial_measurement_jacobian(const SpatialRobotDescription& nominal,
                                   const std::vector<double>& deviations,
                                   const SpatialJointVector& q, const SpatialPose<double>& measured,

@@ -3,7 +3,8 @@
 // and its calibration: the spatial counterpart of pcr/parameters.hpp. Per rod (16): E, G, d, l,
 // A (3), the base frame's turn (3), B (3), the tip frame's turn (3); then the measuring system's
 // extrinsics (12): the tracker frame ^W T_S and the marker frame ^M T_P, each a position (3) and a
-// turn (3).
+// turn (3). The calibration may append a constant platform wrench (kSpatialLoadParameters: force,
+// then moment, in W): kinds of their own, outside the flat view, as the planar load's.
 //
 // The flat values are deviations from a nominal description, not the values themselves: a turn
 // has no flat value of its own, only a rotation vector relative to the nominal orientation. Each
@@ -53,10 +54,20 @@ enum class SpatialParameterKind {
   kMarkerRx,
   kMarkerRy,
   kMarkerRz,  // extrinsics
+  kLoadForceX,
+  kLoadForceY,
+  kLoadForceZ,
+  kLoadMomentX,
+  kLoadMomentY,
+  kLoadMomentZ,  // the calibration's optional platform load: not in the flat view
 };
 
 inline constexpr int kSpatialRodParameters = 16;
 inline constexpr int kSpatialExtrinsicParameters = 12;
+/// The calibration's optional constant platform wrench (force, then moment, in W, added to
+/// SpatialRobotParams::external_force and external_moment): appended after the flat parameters,
+/// as the planar kLoadParameters, never part of num_spatial_parameters.
+inline constexpr int kSpatialLoadParameters = 6;
 inline constexpr int kMaxSpatialParameters =
     kSpatialRodParameters * kMaxSpatialRods + kSpatialExtrinsicParameters;
 
@@ -99,6 +110,12 @@ inline constexpr SpatialParameterKindInfo kSpatialParameterKinds[] = {
     {SpatialParameterKind::kMarkerRx, "marker_rx", "rad", 1e3, "mrad"},
     {SpatialParameterKind::kMarkerRy, "marker_ry", "rad", 1e3, "mrad"},
     {SpatialParameterKind::kMarkerRz, "marker_rz", "rad", 1e3, "mrad"},
+    {SpatialParameterKind::kLoadForceX, "load_f_x", "N", 1e3, "mN"},
+    {SpatialParameterKind::kLoadForceY, "load_f_y", "N", 1e3, "mN"},
+    {SpatialParameterKind::kLoadForceZ, "load_f_z", "N", 1e3, "mN"},
+    {SpatialParameterKind::kLoadMomentX, "load_m_x", "N m", 1e3, "mNm"},
+    {SpatialParameterKind::kLoadMomentY, "load_m_y", "N m", 1e3, "mNm"},
+    {SpatialParameterKind::kLoadMomentZ, "load_m_z", "N m", 1e3, "mNm"},
 };
 
 namespace internal {
@@ -107,7 +124,7 @@ constexpr bool spatial_kinds_in_enum_order() {
   for (const SpatialParameterKindInfo& info : kSpatialParameterKinds) {
     if (static_cast<int>(info.kind) != i++) return false;
   }
-  return i == kSpatialRodParameters + kSpatialExtrinsicParameters;
+  return i == kSpatialRodParameters + kSpatialExtrinsicParameters + kSpatialLoadParameters;
 }
 static_assert(spatial_kinds_in_enum_order(),
               "kSpatialParameterKinds lists every kind in SpatialParameterKind's order");
@@ -144,9 +161,10 @@ inline int num_spatial_parameters(int num_rods) {
 
 struct SpatialParameterId {
   SpatialParameterKind kind;
-  int rod;  ///< -1 for the extrinsics
+  int rod;  ///< -1 for the extrinsics (and the load)
 };
 
+/// The index num_spatial_parameters(n) + k is the load's k-th value (kLoadForceX + k).
 inline SpatialParameterId spatial_parameter_id(int index, int num_rods) {
   if (index < kSpatialRodParameters * num_rods) {
     return SpatialParameterId{static_cast<SpatialParameterKind>(index % kSpatialRodParameters),
@@ -171,9 +189,10 @@ inline std::string spatial_parameter_name(const SpatialParameterId& id) {
 }
 
 /// The half-width of a parameter's interval (the rod's own, or the default when the uncertainty
-/// lists no rods).
+/// lists no rods); 0 for the load, which has no interval.
 inline double spatial_half_width(const SpatialUncertainty& u, const SpatialParameterId& id) {
   const int kind = static_cast<int>(id.kind);
+  if (kind >= static_cast<int>(SpatialParameterKind::kLoadForceX)) return 0.0;
   if (id.rod < 0) {
     const int e = kind - kSpatialRodParameters;
     return e < 6 ? u.tracker(e) : u.marker(e - 6);
