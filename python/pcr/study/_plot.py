@@ -201,6 +201,10 @@ def sensitivity_figure(table, study, outcome):
     b.set_xlim(-1, 1)
     b.set_xlabel("Spearman correlation of |error| with the outcome")
     b.set_title("parameters (error against the truth)", fontsize=10)
+    if top.empty:  # a spatial study's rows: no truth in the calibration's gauge to compare with
+        b.set_yticks([])
+        b.text(0.5, 0.5, "no parameter errors in these rows", ha="center", va="center",
+               transform=b.transAxes)
     fig.suptitle(f"study {study.name}, robot {_robots(study)}: what sets the\n"
                  f"{outcome_label(outcome)[0]}", fontsize=11)
     return fig, ranking, parameters
