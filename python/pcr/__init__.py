@@ -97,6 +97,12 @@ if has_calibration:
         MethodResult,
         run_method,
     )
+    # The same on a virtual spatial robot (pcr/calib/spatial_method.hpp).
+    from ._pcr import (  # noqa: F401
+        SpatialMethodResult,
+        SpatialVirtualRobot,
+        run_spatial_method,
+    )
 
 from ._pcr import has_vision  # noqa: E402,F401
 

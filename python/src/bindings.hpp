@@ -41,6 +41,7 @@ void wrap_spatial_calibration(py::module_& m);  // needs pcr::calib
 void wrap_accuracy(py::module_& m);             // needs pcr::calib
 void wrap_predicted_accuracy(py::module_& m);   // needs pcr::calib
 void wrap_method(py::module_& m);               // needs pcr::calib
+void wrap_spatial_method(py::module_& m);       // needs pcr::calib
 void wrap_vision(py::module_& m);               // needs pcr::vision
 
 /// A property's getter and setter that reach one field of an owner's rod (Limb and

@@ -12,6 +12,11 @@
 #include "pcr/calib/sensitivity.hpp"
 #include "pcr/calib/workspace_map.hpp"
 
+namespace pcr {
+struct SpatialCalibrationResult;
+struct SpatialCalibrationTable;
+}  // namespace pcr
+
 namespace pcr::python {
 
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -74,6 +79,11 @@ RobotDescription with_params(const RobotDescription& nominal, const RobotParams<
 /// The report `pcr sensitivity --json` writes, with the configurations as an (N, n) array and the
 /// text table (wrap_sensitivity.cpp).
 py::dict sensitivity_dict(const SensitivityReport& report, int n);
+
+/// A spatial calibration's fields as pcr.calibrate_spatial returns them: stages, parameters,
+/// rms errors, warnings, the text and JSON reports (wrap_spatial_calibration.cpp).
+py::dict spatial_calibration_dict(const SpatialCalibrationResult& result,
+                                  const SpatialCalibrationTable& table);
 
 /// A workspace map as arrays over its grid (wrap_workspace_map.cpp).
 py::dict workspace_map_dict(const WorkspaceMap& map, int n);

@@ -28,7 +28,8 @@ PYBIND11_MODULE(_pcr, m) {
   pcr::python::wrap_spatial_calibration(m);  // after wrap_spatial: returns SpatialRobot
   pcr::python::wrap_accuracy(m);             // after wrap_virtual_robot: uses VirtualRobot
   pcr::python::wrap_predicted_accuracy(m);
-  pcr::python::wrap_method(m);  // last: its result holds the classes above
+  pcr::python::wrap_method(m);          // its result holds the classes above
+  pcr::python::wrap_spatial_method(m);  // after wrap_spatial_calibration: the same dicts
   m.attr("has_calibration") = true;
 #else
   m.attr("has_calibration") = false;

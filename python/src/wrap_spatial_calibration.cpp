@@ -57,7 +57,10 @@ RowMatrix pose_rows(const std::vector<SpatialVirtualMeasurement>& m, bool exact)
   return out;
 }
 
-py::dict result_dict(const SpatialCalibrationResult& result, const SpatialCalibrationTable& table) {
+}  // namespace
+
+py::dict spatial_calibration_dict(const SpatialCalibrationResult& result,
+                                  const SpatialCalibrationTable& table) {
   py::list stages;
   for (const SpatialStageReport& s : result.stages) {
     py::dict d;
@@ -111,8 +114,6 @@ py::dict result_dict(const SpatialCalibrationResult& result, const SpatialCalibr
   out["report_json"] = spatial_calibration_report_json(result, table);
   return out;
 }
-
-}  // namespace
 
 void wrap_spatial_calibration(py::module_& m) {
   m.def(
@@ -171,7 +172,7 @@ void wrap_spatial_calibration(py::module_& m) {
         if (*error) throw std::move(**error);
         SpatialRobotDescription identified = nominal;  // uncertainty section kept
         identified.params = result.identified;
-        return py::make_tuple(identified, result_dict(result, table));
+        return py::make_tuple(identified, spatial_calibration_dict(result, table));
       },
       py::arg("nominal"), py::arg("q"), py::arg("measured"), py::arg("validation_q") = py::none(),
       py::arg("validation_measured") = py::none(), py::kw_only(), py::arg("stages") = py::none(),

@@ -75,3 +75,31 @@ def test_calibrate_spatial_refuses_bad_inputs(measured):
         pcr.calibrate_spatial(nominal, q, poses, stages=[{"name": "x", "free": ["theta"]}])
     with pytest.raises(ValueError, match="validation"):
         pcr.calibrate_spatial(nominal, q, poses, q, stages=EXTRINSICS)
+
+
+def test_run_spatial_method_is_the_steps_one_by_one():
+    """pcr.run_spatial_method against its steps through the other bindings: the truth is the one
+    simulate_spatial_measurements draws from the same seed, and calibrating the measured sets
+    with calibrate_spatial gives the method's Table 3."""
+    nominal = pcr.SpatialRobot.reference()
+    robot = pcr.SpatialVirtualRobot(nominal, seed=4)
+    stages = []
+    method = pcr.run_spatial_method(nominal, robot, count=30, validation_count=10, seed=4,
+                                    stages=EXTRINSICS, repeat=2, square_poses=4, circle_poses=4,
+                                    helix_poses=4, sensitivity=False, on_stage=stages.append)
+    assert stages == ["sampling", "measurement", "calibration", "validation", "accuracy"]
+    drawn = pcr.simulate_spatial_measurements(nominal, np.zeros((1, 6)), seed=4)["truth"]
+    assert method.truth.to_json() == drawn.to_json() == robot.truth.to_json()
+    q, poses = method.measured["calibration"]
+    vq, vposes = method.measured["validation"]
+    assert poses.shape == (len(q), 6) and len(q) + len(vq) + method.unmeasured == 40
+    _, again = pcr.calibrate_spatial(nominal, q, poses, vq, vposes, stages=EXTRINSICS)
+    for key in ("rms_position", "validation_rms_position", "validation_rms_angle"):
+        assert method.calibration[key] == pytest.approx(again[key], rel=1e-9), key
+    assert set(method.accuracy) == {(p, m) for p in ("square", "circle", "helix")
+                                    for m in ("nominal", "identified")}
+    helix = method.accuracy[("helix", "identified")]
+    assert len(helix["poses"]) == 4 and helix["ap_p"]["max"] >= helix["ap_p"]["mean"] > 0
+    assert method.seconds["calibration"] > 0 and method.seconds["sensitivity"] == 0
+    with pytest.raises(ValueError, match="helix.num_poses"):
+        pcr.run_spatial_method(nominal, robot, helix_poses=0)

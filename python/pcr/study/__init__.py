@@ -4,7 +4,8 @@ A study is a table of trials. Each trial draws a virtual robot from its factors 
 camera noise, number and choice of calibration configurations, unmodelled effects, the design)
 and its seed, runs the whole method on it (sample, measure, calibrate in three stages, validate,
 evaluate the square and the circle by ISO 9283) and gives one row of outcomes, named as in pcr's
-JSON report, in SI units.
+JSON report, in SI units. A spatial robot file runs the spatial method (its Table 3, the square,
+the circle and the helix in 3-D).
 
     import pcr.study
     table = pcr.study.run("tolerance", "tolerance-results")   # a pandas DataFrame
@@ -28,10 +29,11 @@ except ModuleNotFoundError as _missing:
 from ._definition import Study, Trial, builtin_studies  # noqa: E402
 from ._run import Progress, run  # noqa: E402
 from ._store import read_results, read_study  # noqa: E402
-from ._trial import FACTORS, outcome_columns, run_trial  # noqa: E402
+from ._trial import FACTORS, outcome_columns, run_trial, spatial_outcome_columns  # noqa: E402
 
 __all__ = ["FACTORS", "Progress", "Study", "Trial", "builtin_studies", "outcome_columns",
-           "plot", "read_results", "read_study", "run", "run_trial", "sensitivity", "summary"]
+           "plot", "read_results", "read_study", "run", "run_trial", "sensitivity",
+           "spatial_outcome_columns", "summary"]
 
 
 def plot(directory, output=None, outcomes=None):

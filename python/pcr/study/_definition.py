@@ -10,7 +10,7 @@ from importlib import resources
 
 import numpy as np
 
-from ._trial import check_factor
+from ._trial import BUILTIN_ROBOTS, check_factor
 
 try:
     import tomllib as _toml
@@ -72,11 +72,11 @@ class Study:
         except UnicodeDecodeError as e:
             raise ValueError(f"{path}: not UTF-8 text ({e})") from None
         study = Study.from_toml(text, path)
-        # Robot files are named relative to the study file.
+        # Robot files are named relative to the study file; built-in robots by their name.
         here = os.path.dirname(os.path.abspath(path))
 
         def located(robot):
-            return robot if robot == "default" else os.path.join(here, robot)
+            return robot if robot in BUILTIN_ROBOTS else os.path.join(here, robot)
 
         factors = dict(study.factors)
         if "robot" in factors:

@@ -15,11 +15,27 @@ DEFAULT_OUTCOMES = ("table3.identified_model_validation_set.e_p_m.mean",
                     "table3.nominal_model_validation_set.e_p_m.mean",
                     "table3.identified_model_validation_set.e_theta_rad.mean",
                     "accuracy.square.identified.ap_p.mean")
+# A spatial study's (pcr.study.spatial_outcome_columns): the rms errors, Table 4 on the helix.
+SPATIAL_OUTCOMES = ("table3.identified_model_validation_set.rms_position_m",
+                    "table3.nominal_model_validation_set.rms_position_m",
+                    "table3.identified_model_validation_set.rms_angle_rad",
+                    "accuracy.helix.identified.ap_p.mean")
+# The outcomes drawn with the noise floor sqrt(3) sigma (a dashed line): rms errors.
+_FLOORS = {"rms_position_m": "noise.floor_position_m", "rms_angle_rad": "noise.floor_angle_rad"}
+
+
+def default_outcomes(table):
+    """The planar outcomes when the table has them, else the spatial ones."""
+    return DEFAULT_OUTCOMES if all(c in table.columns for c in DEFAULT_OUTCOMES) \
+        else SPATIAL_OUTCOMES
 
 
 _QUANTITIES = {  # an outcome's quantity -> (words, factor from SI, display unit)
     "e_p_m": ("position error e_p", 1e6, "µm"),
     "e_theta_rad": ("orientation error e_θ", 1e6, "µrad"),
+    "e_angle_rad": ("orientation error e_θ", 1e6, "µrad"),
+    "rms_position_m": ("rms position error", 1e6, "µm"),
+    "rms_angle_rad": ("rms orientation error", 1e6, "µrad"),
     "ap_p": ("position accuracy AP_p", 1e6, "µm"),
     "ap_theta_abs": ("orientation accuracy |AP_θ|", 1e6, "µrad"),
     "rp_l": ("position repeatability RP_l", 1e6, "µm"),
@@ -147,6 +163,12 @@ def factors_figure(table, study, outcomes):
             ax.boxplot([d if len(d) else [np.nan] for d in data], whis=(5, 95), showfliers=True)
             ax.set_xticks(range(1, len(levels) + 1),
                           [_factor_label(f, v) for v in levels], fontsize=8)
+            floor = _FLOORS.get(o.split(".")[-1])
+            if floor in ok.columns and ok[floor].notna().any():  # per level: noise may vary
+                floors = [ok.loc[ok[f] == v, floor].median() * scale for v in levels]
+                ax.hlines(floors, np.arange(len(levels)) + 0.55, np.arange(len(levels)) + 1.45,
+                          colors="0.4", linestyles="--", linewidth=1, label="noise floor √3 σ")
+                ax.legend(fontsize=7, loc="best")
             if all(len(d) and np.all(d > 0) for d in data):
                 ax.set_yscale("log")
                 plain_ticks(ax.yaxis, *ax.get_ylim())
@@ -179,6 +201,10 @@ def sensitivity_figure(table, study, outcome):
     b.set_xlim(-1, 1)
     b.set_xlabel("Spearman correlation of |error| with the outcome")
     b.set_title("parameters (error against the truth)", fontsize=10)
+    if top.empty:  # a spatial study's rows: no truth in the calibration's gauge to compare with
+        b.set_yticks([])
+        b.text(0.5, 0.5, "no parameter errors in these rows", ha="center", va="center",
+               transform=b.transAxes)
     fig.suptitle(f"study {study.name}, robot {_robots(study)}: what sets the\n"
                  f"{outcome_label(outcome)[0]}", fontsize=11)
     return fig, ranking, parameters
@@ -200,7 +226,7 @@ def plot(directory, output=None, outcomes=None):
     if table.empty:
         raise ValueError(f"{directory}: no finished trial to plot yet")
     study = read_study(directory)
-    outcomes = list(outcomes or DEFAULT_OUTCOMES)
+    outcomes = list(outcomes or default_outcomes(table))
     for o in outcomes:
         if o not in table.columns:
             raise ValueError(f"outcome {o!r}: no such column in {directory}")

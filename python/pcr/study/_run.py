@@ -13,7 +13,8 @@ import pcr
 
 from ._definition import Study
 from ._store import ResultStore, read_results
-from ._trial import FACTORS, factor_values, outcome_columns, run_trial
+from ._trial import (FACTORS, check_applicable, factor_values, load_robot, run_trial,
+                     study_columns)
 
 
 def run_batch(trials, robots):
@@ -32,15 +33,16 @@ def _robots(study):
     names = {c.get("robot", FACTORS["robot"].default) for c in study.combinations()}
     texts = {}
     for name in names:
-        robot = pcr.Robot.default() if name == "default" else pcr.Robot.load(name)
-        texts[name] = robot.to_json()
+        texts[name] = load_robot(name).to_json()
     return texts
 
 
-def _columns(robots):
-    """Outcome columns for the largest robot of the study (smaller ones leave the rest NaN)."""
-    limbs = max(pcr.Robot.from_json(t).num_limbs for t in robots.values())
-    return outcome_columns(pcr.parameter_names(limbs))
+def _check(study, robots):
+    """ValueError, before any trial runs, for a combination that sets a factor its robot's kind
+    (planar or spatial) does not have."""
+    for combination in study.combinations():
+        robot = pcr.Robot.from_json(robots[combination.get("robot", FACTORS["robot"].default)])
+        check_applicable(combination, robot, f"study {study.name!r}")
 
 
 class Progress:
@@ -129,7 +131,8 @@ def run(study, output, *, trials=None, workers=None, client=None, scheduler=None
     if not flush_seconds >= 0:
         raise ValueError(f"flush_seconds = {flush_seconds!r}: expected a number >= 0")
     robots = _robots(study)
-    store = ResultStore(output, study, _columns(robots), robots)
+    _check(study, robots)
+    store = ResultStore(output, study, study_columns(robots), robots)
     done = store.done()
     todo = [t for t in study.trial_list() if t.index not in done]
     bar = Progress(study.trials * len(study.combinations()), len(done),

@@ -44,6 +44,16 @@ def summary(directory):
                      f"{_um(r['mean_worst_m'])} | {_um(r['max_worst_m'])} | "
                      f"{r['branch_mismatches']} ({r['trials_with_mismatches']}) |")
     ok = table[table["failure"].isna()]
+    if "noise.floor_position_m" in ok and ok["noise.floor_position_m"].notna().any():
+        lines += ["", "| Table 3 set (spatial) | rms position, median (um) | rms position, worst "
+                  "(um) | rms angle, median (urad) | rms angle, worst (urad) |",
+                  "|---|---|---|---|---|"]
+        for s in _TABLE3_SETS:
+            p, a = ok[f"table3.{s}.rms_position_m"], ok[f"table3.{s}.rms_angle_rad"]
+            lines.append(f"| {s} | {_um(p.median())} | {_um(p.max())} | {_um(a.median())} | "
+                         f"{_um(a.max())} |")
+        lines.append(f"| noise floor sqrt(3) sigma | {_um(ok['noise.floor_position_m'].median())}"
+                     f" | | {_um(ok['noise.floor_angle_rad'].median())} | |")
     unreachable = ok["configurations.unreachable"]
     lines += ["", "configurations the virtual robots did not measure (no stable equilibrium "
               f"there): {int(unreachable.sum())} in {int((unreachable > 0).sum())} trials"]
