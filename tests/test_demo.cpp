@@ -159,6 +159,34 @@ TEST(Demo, SpatialRobotFileRunsTheSpatialMethod) {
                            "calibration-report.txt", "accuracy-helix-identified.csv"}) {
     EXPECT_TRUE(fs::exists(out / file)) << file;
   }
+  // The errors behind Table 3, one row per set, configuration and model (python -m pcr.plot
+  // draws them into figures.md, which the report links): the identified model's on the
+  // validation set give the report's rms.
+  std::ifstream errors_csv(out / "calibration-errors.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(errors_csv, line));
+  EXPECT_EQ(line, "set,configuration,model,e_p,e_angle");
+  int count = 0, validation_rows = 0;
+  double sum2 = 0;
+  while (std::getline(errors_csv, line)) {
+    ++count;
+    if (line.rfind("validation,", 0) == 0 && line.find(",identified,") != std::string::npos) {
+      const std::size_t model_end = line.find(",identified,") + 12;
+      const double e_p = std::stod(line.substr(model_end, line.find(',', model_end) - model_end));
+      sum2 += e_p * e_p;
+      ++validation_rows;
+    }
+  }
+  const int calibration = report["configurations"]["calibration"].get<int>();
+  const int validation = report["configurations"]["validation"].get<int>();
+  EXPECT_EQ(count, 2 * (calibration + validation));
+  ASSERT_EQ(validation_rows, validation);
+  EXPECT_NEAR(std::sqrt(sum2 / validation_rows),
+              errors["identified_model_validation_set"]["rms_position_m"].get<double>(), 1e-12);
+  std::ifstream md(out / "report.md");
+  std::stringstream report_md;
+  report_md << md.rdbuf();
+  EXPECT_NE(report_md.str().find("[figures.md](figures.md)"), std::string::npos);
 }
 
 TEST(Demo, RejectsAnUnknownEffect) {

@@ -255,21 +255,53 @@ std::string table3_row(const std::string& label, const pcr::PoseErrorStats& s) {
          fmt(" | %.3f | %.3f | %.3f |\n", s.max_theta * 1e6, s.mean_theta * 1e6, s.min_theta * 1e6);
 }
 
-/// Per-configuration errors for the plots (Figures 8 and 9), those behind Table 3.
-std::string errors_csv(const pcr::CalibrationTable& table) {
+/// One set's errors per configuration under one model: position (m) and angle (rad).
+struct ErrorColumns {
+  const char* set;
+  const char* model;
+  const std::vector<double>& position;
+  const std::vector<double>& angle;
+};
+
+/// Per-configuration errors for the plots (Figures 8 and 9), those behind Table 3:
+/// `set,configuration,model,e_p,<angle>` (the planar e_theta, the spatial e_angle).
+std::string errors_csv(const char* angle, const std::vector<ErrorColumns>& columns) {
   std::ostringstream csv;
   csv.precision(10);
-  csv << "set,configuration,model,e_p,e_theta\n";
-  const auto add = [&](const char* set, const char* model, const pcr::ConfigurationErrors& e) {
-    for (std::size_t j = 0; j < e.e_p.size(); ++j) {
-      csv << set << "," << j << "," << model << "," << e.e_p[j] << "," << e.e_theta[j] << "\n";
-    }
-  };
-  add("calibration", "nominal", table.nominal_calibration_errors);
-  add("calibration", "identified", table.identified_calibration_errors);
-  add("validation", "nominal", table.nominal_validation_errors);
-  add("validation", "identified", table.identified_validation_errors);
+  csv << "set,configuration,model,e_p," << angle << "\n";
+  for (const ErrorColumns& c : columns) {
+    for (std::size_t j = 0; j < c.position.size(); ++j)
+      csv << c.set << "," << j << "," << c.model << "," << c.position[j] << "," << c.angle[j]
+          << "\n";
+  }
   return csv.str();
+}
+
+std::string errors_csv(const pcr::CalibrationTable& t) {
+  return errors_csv("e_theta", {{"calibration", "nominal", t.nominal_calibration_errors.e_p,
+                                 t.nominal_calibration_errors.e_theta},
+                                {"calibration", "identified", t.identified_calibration_errors.e_p,
+                                 t.identified_calibration_errors.e_theta},
+                                {"validation", "nominal", t.nominal_validation_errors.e_p,
+                                 t.nominal_validation_errors.e_theta},
+                                {"validation", "identified", t.identified_validation_errors.e_p,
+                                 t.identified_validation_errors.e_theta}});
+}
+
+/// The spatial Table 3's errors per configuration; e_angle: the angle of the rotation between
+/// the predicted and the measured marker orientation.
+std::string errors_csv(const pcr::SpatialCalibrationTable& t) {
+  std::vector<ErrorColumns> columns = {
+      {"calibration", "nominal", t.nominal_calibration.position, t.nominal_calibration.angle},
+      {"calibration", "identified", t.identified_calibration.position,
+       t.identified_calibration.angle}};
+  if (t.has_validation) {
+    columns.push_back(
+        {"validation", "nominal", t.nominal_validation.position, t.nominal_validation.angle});
+    columns.push_back({"validation", "identified", t.identified_validation.position,
+                       t.identified_validation.angle});
+  }
+  return errors_csv("e_angle", columns);
 }
 
 /// Table 4: the paper's square and circle commanded with the nominal and the identified model. The
@@ -564,7 +596,7 @@ void run_demo(const DemoArgs& args) {
 }
 
 /// The method on a virtual spatial robot drawn from the --robot file (pcr::run_spatial_method):
-/// the same report directory, its tables for a spatial robot (no figures yet).
+/// the same report directory, its tables for a spatial robot; figures.md as the planar one's.
 void run_spatial_demo(const DemoArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   if (!args.effects.empty())
@@ -610,7 +642,8 @@ void run_spatial_demo(const DemoArgs& args) {
       args.robot + "\n\nSeed " + std::to_string(args.seed) +
       fmt(". Measurement noise %.3g nm and %.3g urad per axis (the noise floor of "
           "an rms error: %.3g nm, %.3g urad). Units: um and mrad in Table 4, SI in "
-          "every file. Figures: not drawn for spatial robots yet.\n\n",
+          "every file. Figures: [figures.md](figures.md), drawn from these files by "
+          "`python -m pcr.plot DIR` (which `scripts/run.sh demo` runs).\n\n",
           robot.noise_position() * 1e9, vr_options.noise_angle * 1e6,
           std::sqrt(3.0) * robot.noise_position() * 1e9,
           std::sqrt(3.0) * vr_options.noise_angle * 1e6);
@@ -634,6 +667,7 @@ void run_spatial_demo(const DemoArgs& args) {
   pcr::save_spatial_robot(identified, (out / "identified.json").string());
   const std::string text = pcr::spatial_calibration_report_text(result.calibration, result.table);
   pcr::write_file_atomically((out / "calibration-report.txt").string(), text);
+  pcr::write_file_atomically((out / "calibration-errors.csv").string(), errors_csv(result.table));
   report["calibration"] =
       json::parse(pcr::spatial_calibration_report_json(result.calibration, result.table));
   md += "## 2. Calibration and validation (Table 3)\n\n```\n" + text + "```\n\n";
@@ -660,6 +694,7 @@ void run_spatial_demo(const DemoArgs& args) {
                      "calibration.csv",
                      "validation.csv",
                      "calibration-report.txt",
+                     "calibration-errors.csv",
                      "accuracy-{square,circle,helix}-{nominal,identified}.csv"};
   finish_report(out, start, report, md, outputs, progress);
 }

@@ -3,6 +3,9 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+import json  # noqa: E402
+import pathlib  # noqa: E402
+
 import matplotlib.image  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
@@ -270,3 +273,124 @@ def test_demo_figures_and_their_page(demo_output, tmp_path):
     r = subprocess.run([sys.executable, "-m", "pcr.plot", str(tmp_path)], capture_output=True,
                        text=True)
     assert r.returncode == 2 and "not a `pcr demo` output" in r.stderr
+
+
+# ---- a spatial robot's demo: data/spatial-demo (its README says how it was made) -------------
+
+SPATIAL_DEMO = pathlib.Path(__file__).parent / "data" / "spatial-demo"
+SPATIAL_FIGURES = {"robot", "sensitivity", "calibration-errors", "accuracy-square",
+                   "accuracy-circle", "accuracy-helix"}
+
+
+def csv_columns(path):
+    """The CSV's columns as float arrays (str where not numbers), read here, not by pcr.plot."""
+    import csv
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    out = {}
+    for name in rows[0]:
+        try:
+            out[name] = np.array([float(r[name]) for r in rows])
+        except ValueError:
+            out[name] = np.array([r[name] for r in rows])
+    return out
+
+
+@pytest.fixture
+def spatial_demo(tmp_path):
+    import shutil
+    d = tmp_path / "spatial-demo"
+    shutil.copytree(SPATIAL_DEMO, d)
+    return d
+
+
+def test_spatial_demo_figures_and_their_page(spatial_demo):
+    import hashlib
+    import subprocess
+    import sys
+
+    d = spatial_demo
+    before = {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in d.iterdir()}
+    r = subprocess.run([sys.executable, "-m", "pcr.plot", str(d)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert {p.stem for p in (d / "figures").glob("*.png")} == SPATIAL_FIGURES
+    for p in (d / "figures").glob("*.png"):
+        check_png(p)
+    page = (d / "figures.md").read_text()
+    for name in SPATIAL_FIGURES:
+        assert f"(figures/{name}.png)" in page
+    assert page.startswith("# pcr demo: figures of continuum-stewart-gough (virtual robot)")
+    assert "Table 2" in page and "Table 3" in page and "Table 4" in page
+    # Nothing the demo wrote changed; report.md links the page.
+    assert {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in d.iterdir()
+            if p.name in before} == before
+    assert "[figures.md](figures.md)" in (d / "report.md").read_text()
+
+
+def test_spatial_robot_figure_starts_each_rod_at_its_hole(spatial_demo):
+    from pcr.plot._demo import _spatial_robot_figure
+
+    robot = pcr.Robot.load(spatial_demo / "identified.json")
+    fig = _spatial_robot_figure(spatial_demo, robot, None)
+    ax = fig.axes[0]
+    assert ax.name == "3d" and "4 configurations" in ax.get_title()  # home and the 3 farthest
+    with open(spatial_demo / "identified.json") as f:
+        holes = np.array([rod["A"] for rod in json.load(f)["rods"]]) * 1e3  # mm
+    rods = [line for line in ax.get_lines() if line.get_label().startswith("rod ")]
+    assert len(rods) == len(holes)  # one labelled line per rod (the last configuration)
+    for line, hole in zip(rods, holes):
+        start = np.array([a[0] for a in line.get_data_3d()])
+        assert np.allclose(start, hole, atol=1e-6), (start, hole)
+
+
+def test_spatial_sensitivity_bars_are_the_ranking(spatial_demo):
+    c = csv_columns(spatial_demo / "sensitivity.csv")
+    order = np.argsort(c["rank"])
+    fig = pcr.plot.plot_sensitivity(spatial_demo / "sensitivity.csv", floor=(2e-7, 2e-6))
+    ax = fig.axes[0]
+    widths = np.array([bar.get_width() for bar in ax.patches])
+    assert np.allclose(widths, c["position_error_m"][order] * 1e6)  # um, most influential first
+    assert [t.get_text() for t in ax.get_yticklabels()] == list(c["param"][order])
+    assert ax.get_xscale() == "log" and "(µm)" in ax.get_xlabel()
+    assert ax.get_lines()[0].get_xdata()[0] == pytest.approx(0.2)  # the floor, um
+
+
+def test_spatial_calibration_errors_per_configuration(spatial_demo):
+    with open(spatial_demo / "report.json") as f:
+        noise = json.load(f)["noise"]
+    floor = (np.sqrt(3) * noise["position_m"], np.sqrt(3) * noise["angle_rad"])
+    fig = pcr.plot.plot_calibration_errors(calibration=spatial_demo / "calibration-errors.csv",
+                                           floor=floor)
+    rows = {s: len(csv_columns(spatial_demo / f"{s}.csv")["q1"])
+            for s in ("calibration", "validation")}
+    for axes, s in ((fig.axes[:2], "calibration"), (fig.axes[2:], "validation")):
+        for ax in axes:
+            nominal, identified, noise_floor = ax.get_lines()
+            assert len(nominal.get_xdata()) == len(identified.get_xdata()) == rows[s]
+        assert axes[0].get_lines()[2].get_ydata()[0] == pytest.approx(floor[0] * 1e6)
+    assert "e_angle" in fig.axes[1].get_ylabel()
+
+
+@pytest.mark.parametrize("path_name", ["square", "circle", "helix"])
+def test_spatial_path_in_3d_and_its_accuracy(spatial_demo, path_name):
+    sources = [spatial_demo / f"accuracy-{path_name}-{m}.csv" for m in ("nominal", "identified")]
+    fig = pcr.plot.plot_spatial_path_accuracy(*sources, label=path_name)
+    ax3, ax_p, ax_a = fig.axes
+    c = csv_columns(sources[0])
+    commanded = np.array(ax3.get_lines()[0].get_data_3d()).T
+    assert len(commanded) == len(c["pose"])  # every pose of the CSV
+    assert np.allclose(commanded, np.column_stack([c["x_c"], c["y_c"], c["z_c"]]) * 1e3)
+    for k, source in enumerate(sources):  # AP_p: the barycentre's distance to the command
+        m = csv_columns(source)
+        distance = np.linalg.norm(np.column_stack([m["x_bar"] - m["x_c"], m["y_bar"] - m["y_c"],
+                                                   m["z_bar"] - m["z_c"]]), axis=1)
+        assert np.allclose(ax_p.get_lines()[2 * k].get_ydata(), distance * 1e6, rtol=1e-6)
+    assert "(µm)" in ax_p.get_ylabel() and fig.texts[0].get_text().startswith(path_name)
+
+
+def test_a_spatial_demo_without_its_errors_file_draws_the_rest(spatial_demo):
+    (spatial_demo / "calibration-errors.csv").unlink()
+    written = pcr.plot.demo_figures(spatial_demo)
+    assert {pathlib.Path(p).stem for p in written if p.endswith(".png")} == \
+        SPATIAL_FIGURES - {"calibration-errors"}
+    assert "no calibration-errors.csv" in (spatial_demo / "figures.md").read_text()

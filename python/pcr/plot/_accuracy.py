@@ -11,11 +11,16 @@ import pcr
 from ._common import (MM, angle_unit, format_factor, length_unit, new_figure, nice_below,
                       plain_ticks, read_csv, save, title)
 
+_MODEL_COLOURS = {"nominal": "tab:red", "identified": "tab:blue"}
+
 
 def read_calibration_errors(source):
     """The demo's calibration-errors.csv (a path or a DataFrame) as {set: {model: (e_p, e_theta)}}
-    in configuration order (m, rad), for ``plot_calibration_errors``."""
+    in configuration order (m, rad), for ``plot_calibration_errors``. A spatial robot's has
+    e_angle (the angle of the orientation error) for e_theta."""
     c = read_csv(source)
+    if "e_theta" not in c:
+        c["e_theta"] = c["e_angle"]
     out = {}
     for set_name in dict.fromkeys(c["set"]):
         out[set_name] = {}
@@ -27,7 +32,7 @@ def read_calibration_errors(source):
 
 
 def plot_calibration_errors(nominal=None, identified=None, calibration=None, validation=None,
-                            path=None, fig=None, *, name=None):
+                            path=None, fig=None, *, name=None, floor=None):
     """Position and orientation errors per configuration of the nominal and identified models,
     on the calibration set and (optionally) the validation set: the paper's Figures 8 and 9.
     Log scale, in um and urad.
@@ -35,12 +40,16 @@ def plot_calibration_errors(nominal=None, identified=None, calibration=None, val
     calibration, validation: (q (N, n) m, measured ^Se T_M (N, 3)) pairs, solved with the
     models `nominal` and `identified` (pcr.Robot), or precomputed {"nominal": (e_p, e_theta),
     "identified": (e_p, e_theta)} dicts (m, rad). calibration may instead be the demo's
-    calibration-errors.csv (a path or a DataFrame): both sets come from it. name: the robot, for
-    the title.
+    calibration-errors.csv (a path or a DataFrame): both sets come from it (a spatial robot's:
+    its e_angle, the angle of the orientation error, for e_theta). name: the robot, for the
+    title. floor: (position m, angle rad), the noise floor, drawn dashed.
     """
     inputs = []
+    angle = "orientation error |e_θ|"
     if isinstance(calibration, (str, os.PathLike)) or hasattr(calibration, "columns"):
         inputs.append(calibration)
+        if "e_angle" in read_csv(calibration):
+            angle = "orientation error e_angle"
         sets = read_calibration_errors(calibration)
         calibration, validation = sets["calibration"], sets.get("validation")
     sets = [("calibration", calibration)]
@@ -56,12 +65,15 @@ def plot_calibration_errors(nominal=None, identified=None, calibration=None, val
             errors = {"nominal": pcr.pose_errors_per_configuration(nominal, q, measured),
                       "identified": pcr.pose_errors_per_configuration(identified, q, measured)}
         for col, (unit, factor, what) in enumerate((("µm", 1e6, "position error e_p"),
-                                                    ("µrad", 1e6, "orientation error |e_θ|"))):
+                                                    ("µrad", 1e6, angle))):
             ax = axes[row, col]
             for model, marker in (("nominal", "o"), ("identified", "s")):
                 e = np.abs(np.asarray(errors[model][col], dtype=float)) * factor
                 ax.semilogy(np.arange(1, len(e) + 1), e, marker, ms=3, label=f"{model} model "
                             f"(mean {np.nanmean(e):.3g} {unit})")
+            if floor is not None:
+                ax.axhline(floor[col] * factor, color="0.4", ls="--", lw=0.8,
+                           label=f"noise floor {floor[col] * factor:.3g} {unit}")
             plain_ticks(ax.yaxis, *ax.get_ylim())
             ax.set_xlabel(f"configuration of the {label} set")
             ax.set_ylabel(f"{what} ({unit})")
@@ -199,4 +211,90 @@ def plot_trajectory_accuracy(commanded, attained=None, path=None, fig=None, *, n
         ax.grid(True, alpha=0.3)
     fig.suptitle(title(name, (f"{label}: " if label else "") + "ISO 9283 accuracy of each pose "
                        "(barycentre of its cycles minus the commanded pose)"), fontsize=11)
+    return save(fig, path, inputs)
+
+
+def read_spatial_trajectory(source):
+    """The per-pose statistics of a spatial robot's path (the spatial demo's accuracy-*.csv, a path
+    or a DataFrame) in pose order: {"commanded": (N, 3), "barycentre": (N, 3) (m), "ap_p" (N,)
+    (m), "ap_angle" (N,) (rad, |(AP_a, AP_b, AP_c)|, the angle of the orientation error),
+    "rp_l" (N,) (m)}."""
+    c = read_csv(source)
+    order = np.argsort(c["pose"])
+    return {"commanded": np.column_stack([c["x_c"], c["y_c"], c["z_c"]])[order],
+            "barycentre": np.column_stack([c["x_bar"], c["y_bar"], c["z_bar"]])[order],
+            "ap_p": c["ap_p"][order],
+            "ap_angle": np.linalg.norm(np.column_stack([c["ap_a"], c["ap_b"], c["ap_c"]]),
+                                       axis=1)[order],
+            "rp_l": c["rp_l"][order]}
+
+
+def plot_spatial_path_accuracy(nominal, identified, path=None, fig=None, *, name=None,
+                               label=None):
+    """A spatial robot's path commanded with the nominal and the identified model (Table 4 in
+    3-D): the commanded poses' positions in 3-D with each model's attained barycentres, their
+    errors magnified by a factor per model (printed; the largest error about a seventh of the
+    path's size); the accuracy AP_p per pose of both models with their repeatability RP_l, and
+    the angle of the orientation error |AP_abc| per pose. Log scales: the models differ by
+    orders of magnitude.
+
+    nominal, identified: the spatial demo's accuracy-<path>-<model>.csv (paths or DataFrames;
+    ``read_spatial_trajectory``). name: the robot; label: the path ("helix").
+    """
+    inputs = [s for s in (nominal, identified) if isinstance(s, (str, os.PathLike))]
+    models = {"nominal": read_spatial_trajectory(nominal),
+              "identified": read_spatial_trajectory(identified)}
+    commanded = models["nominal"]["commanded"]
+    size = max(float(np.ptp(commanded, axis=0).max()), 1e-6)
+    shown = np.concatenate([np.concatenate([m["ap_p"], m["rp_l"]]) for m in models.values()])
+    scale, unit = length_unit(np.nanmax(shown))
+
+    fig = fig if fig is not None else new_figure((13, 6.0))
+    grid = fig.add_gridspec(2, 2, width_ratios=[1.15, 1])
+    ax3 = fig.add_subplot(grid[:, 0], projection="3d")
+    ax_p = fig.add_subplot(grid[0, 1])
+    ax_a = fig.add_subplot(grid[1, 1], sharex=ax_p)
+    c = commanded * MM
+    ax3.plot(*c.T, ".-", color="k", ms=4, lw=0.8, label="commanded")
+    points = [c]
+    for model, m in models.items():
+        error = m["barycentre"] - m["commanded"]
+        largest = np.linalg.norm(error, axis=1).max()
+        k = nice_below(0.15 * size / largest) if largest > 0 else 1.0
+        shown_at = (m["commanded"] + k * error) * MM
+        ax3.plot(*shown_at.T, ".-", color=_MODEL_COLOURS[model], ms=3, lw=0.8,
+                 label=f"attained, {model} model (errors × {format_factor(k)})")
+        points.append(shown_at)
+    every = np.vstack(points)  # equal scales on the three axes: the path is seen as it is
+    centre = 0.5 * (every.min(axis=0) + every.max(axis=0))
+    half = 0.5 * max(float(np.ptp(every, axis=0).max()), 1e-9)
+    for set_limits, middle in zip((ax3.set_xlim, ax3.set_ylim, ax3.set_zlim), centre):
+        set_limits(middle - half, middle + half)
+    ax3.set_box_aspect((1, 1, 1))
+    ax3.set_xlabel("x (mm)")
+    ax3.set_ylabel("y (mm)")
+    ax3.set_zlabel("z (mm)")
+    ax3.legend(fontsize=8, loc="upper left")
+
+    pose = np.arange(1, len(commanded) + 1)
+    t_scale, t_unit = angle_unit(max(m["ap_angle"].max() for m in models.values()))
+    for model, m in models.items():
+        colour = _MODEL_COLOURS[model]
+        ax_p.semilogy(pose, m["ap_p"] * scale, ".-", ms=4, color=colour,
+                      label=f"AP_p, {model} (mean {m['ap_p'].mean() * scale:.3g} {unit})")
+        ax_p.semilogy(pose, m["rp_l"] * scale, ":", lw=1, color=colour,
+                      label=f"RP_l, {model}")
+        ax_a.semilogy(pose, m["ap_angle"] * t_scale, ".-", ms=4, color=colour,
+                      label=f"{model} (mean {m['ap_angle'].mean() * t_scale:.3g} {t_unit})")
+    ax_p.set_ylabel(f"position ({unit})")
+    ax_p.set_title("accuracy AP_p and repeatability RP_l of each pose", fontsize=9)
+    ax_a.set_ylabel(f"|AP_abc| ({t_unit})")
+    ax_a.set_title("orientation error of each pose (the angle of AP_a, AP_b, AP_c)", fontsize=9)
+    ax_a.set_xlabel("pose along the path")
+    for ax in (ax_p, ax_a):
+        plain_ticks(ax.yaxis, *ax.get_ylim())
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(title(name, (f"{label}: " if label else "") + "ISO 9283 accuracy in 3-D of each "
+                       "pose (barycentre of its cycles minus the commanded pose)"), fontsize=11)
     return save(fig, path, inputs)

@@ -129,3 +129,50 @@ def nice_below(value):
 def format_factor(k):
     """A magnification as printed: 20, 5000, 2 000 000."""
     return f"{k:,.0f}".replace(",", " ") if k >= 1 else f"{k:g}"
+
+
+def calibration_joints(source):
+    """The joints (N, n) of a dataset CSV (a `pcr demo` calibration.csv: q1..qn, then the pose)."""
+    columns = read_csv(source)
+    names = sorted((c for c in columns if c[:1] == "q" and c[1:].isdigit()),
+                   key=lambda c: int(c[1:]))
+    return np.column_stack([columns[c] for c in names])
+
+
+def farthest_from_home(q, count=3):
+    """The `count` rows of the joints q (N, n) farthest from home (q = 0), largest |q_i| first:
+    those whose rods bend most."""
+    return q[np.argsort(-np.abs(q).max(axis=1))[:count]]
+
+
+class FigurePage:
+    """The figures of a directory and the page that shows them section by section (figures.md):
+    ``figure`` draws one into DIR/figures/, ``write`` writes the page."""
+
+    def __init__(self, directory):
+        self.directory = os.fspath(directory)
+        self.out = os.path.join(self.directory, "figures")
+        os.makedirs(self.out, exist_ok=True)
+        self.sections = []  # (heading, [(file, caption)])
+
+    def figure(self, section, file, caption, draw):
+        """draw(path) writes the figure at DIR/figures/file, shown under `section`."""
+        draw(os.path.join(self.out, file))
+        if not self.sections or self.sections[-1][0] != section:
+            self.sections.append((section, []))
+        self.sections[-1][1].append((file, caption))
+
+    def write(self, heading, notes=()):
+        """Writes DIR/figures.md; returns the figures' paths and the page's."""
+        text = [f"# {heading}\n",
+                "Drawn by `python -m pcr.plot` from the files of this directory (the numbers: "
+                "[report.md](report.md); the formats: docs/formats.md).\n", *notes]
+        written = []
+        for section, items in self.sections:
+            text.append(f"## {section}\n")
+            for file, caption in items:
+                text.append(f"![{file}](figures/{file})\n\n{caption}\n")
+                written.append(os.path.join(self.out, file))
+        page = os.path.join(self.directory, "figures.md")
+        write_atomically(page, "\n".join(text).encode())
+        return written + [page]
