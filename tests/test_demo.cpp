@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 
+#include "sanitized_build.hpp"
 #include "scratch_directory.hpp"
 
 namespace {
@@ -124,16 +125,9 @@ TEST(Demo, NoVisionRunIntoAFreshDirectoryWritesItsReport) {
 /// it (pcr::run_spatial_method), its report at the noise floor sqrt(3) sigma (211 nm for the
 /// reference robot) and its six paths.
 TEST(Demo, SpatialRobotFileRunsTheSpatialMethod) {
-#if defined(__SANITIZE_ADDRESS__)
-  constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-  constexpr bool kSanitized = __has_feature(address_sanitizer);
-#else
-  constexpr bool kSanitized = false;
-#endif
   // Its Table 2 alone is 728 FK solves with derivatives: 3 s in Release, minutes under the
   // sanitizers (the spatial method's code runs there in test_spatial_trajectory's evaluation).
-  if (kSanitized) GTEST_SKIP() << "Release build only (slow under the sanitizers)";
+  if (pcr::test::kSanitized) GTEST_SKIP() << "Release build only (slow under the sanitizers)";
   const pcr::test::ScratchDirectory scratch("demo");
   const fs::path out = scratch.path() / "out";
   ASSERT_EQ(run_demo(scratch, "--robot " + std::string(PCR_SOURCE_DIR) +

@@ -13,6 +13,7 @@
 #include "pcr/calib/calibrator.hpp"
 #include "pcr/calib/sampling.hpp"
 #include "pcr/robot_io.hpp"
+#include "sanitized_build.hpp"
 
 namespace pcr {
 namespace {
@@ -215,16 +216,9 @@ TEST(Sampling, DesignNames) {
 }
 
 TEST(Sampling, DOptimalBeatsPoissonDiscOnTheIdentifiableSubspace) {
-#if defined(__SANITIZE_ADDRESS__)
-  constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-  constexpr bool kSanitized = __has_feature(address_sanitizer);
-#else
-  constexpr bool kSanitized = false;
-#endif
   // 300 candidates' identification Jacobians: 8 s in Release, over 3 min under the sanitizers,
   // where DOptimalIsDeterministicAndChecksItsInputs runs the same code on 60.
-  if (kSanitized) GTEST_SKIP() << "Release build only (slow under the sanitizers)";
+  if (pcr::test::kSanitized) GTEST_SKIP() << "Release build only (slow under the sanitizers)";
   const RobotDescription robot = default_robot();
   SamplingOptions options;
   options.count = 30;

@@ -13,21 +13,12 @@
 #include "pcr/csv_io.hpp"
 #include "pcr/robot_io.hpp"
 #include "random_robots.hpp"
+#include "sanitized_build.hpp"
 
 namespace pcr {
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
+using test::kSanitized;  // sanitized_build.hpp
 
 // The map's reachable points against a brute-force FK scan of the stroke box: the scan's poses
 // whose orientation lies within delta of the map's mark the grid cells they fall in. Each such cell
