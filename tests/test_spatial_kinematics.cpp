@@ -488,6 +488,9 @@ TEST(SpatialKinematics, ColdStartOnMoreRandomRobots) {
       continue;
     }
     EXPECT_TRUE(fk.summary.converged()) << "robot " << trial << to_string(fk.summary.status);
+    // Small joints around home: the robot's own equilibrium is stable. (Newton from straight rods
+    // can land on an unstable one with rods folded over; the cold FK goes on to a stable one.)
+    EXPECT_EQ(fk.summary.stability, Stability::kStable) << "robot " << trial;
     EXPECT_LT(e.position, 1e-9) << "robot " << trial;
     EXPECT_LT(e.angle, 1e-6) << "robot " << trial;
     worst.position = std::max(worst.position, e.position);
@@ -499,7 +502,7 @@ TEST(SpatialKinematics, ColdStartOnMoreRandomRobots) {
       "cold FK of %d random robots: %d failed, %d mechanisms, %d by continuation; at most %d "
       "evaluations; within %.2e m, %.2e rad of a CVODE FK\n",
       kRobots, failed, mechanisms, bowed, most_evaluations, worst.position, worst.angle);
-  EXPECT_LE(failed, 2);
+  EXPECT_LE(failed, 1);
 }
 
 // ---- Inverse kinematics -------------------------------------------------------------------------

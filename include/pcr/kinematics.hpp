@@ -165,15 +165,6 @@ template <class Solution>
 Solution buckled_seed(const RobotParams<double>& robot, const Solution& at, int k,
                       int first_rod = 0);
 
-/// Whether a solution can warm-start the next solve: a converged one, or a valid equilibrium
-/// whose joints lie outside their stroke (kOutOfRange) or whose error estimate exceeds the
-/// accuracy targets (kInaccurate).
-inline bool usable_as_warm_start(const SolverSummary& summary);
-
-/// Whether a solution is an equilibrium of the robot, within the stroke or not: usable as a warm
-/// start, or IK's kUnstable (an equilibrium that would not hold).
-inline bool is_equilibrium(const SolverSummary& summary);
-
 /// One input of a sequence (see SequenceSolver): warm-started from `warm` when there is one (may
 /// be null), retried from home when that fails (the warm start lies on another branch, or too far
 /// along a fold). The summary counts the iterations and residual evaluations of both.

@@ -207,6 +207,20 @@ inline void mark_inaccurate(const SolverOptions& options, SolverSummary& summary
   }
 }
 
+/// Whether a solution can warm-start the next solve: a converged one, or a valid equilibrium
+/// whose joints lie outside their stroke (kOutOfRange) or whose error estimate exceeds the
+/// accuracy targets (kInaccurate).
+inline bool usable_as_warm_start(const SolverSummary& summary) {
+  return summary.converged() || summary.status == SolveStatus::kOutOfRange ||
+         summary.status == SolveStatus::kInaccurate;
+}
+
+/// Whether a solution is an equilibrium of the robot, within the stroke or not: usable as a warm
+/// start, or IK's kUnstable (an equilibrium that would not hold).
+inline bool is_equilibrium(const SolverSummary& summary) {
+  return usable_as_warm_start(summary) || summary.status == SolveStatus::kUnstable;
+}
+
 /// Why a kInaccurate solution is not accurate, in words for an error message.
 inline std::string inaccuracy_message(const SolverSummary& summary) {
   char text[240];

@@ -461,15 +461,6 @@ inline bool within_stroke(const RobotParams<double>& robot, const JointVector& q
   return true;
 }
 
-inline bool usable_as_warm_start(const SolverSummary& summary) {
-  return summary.converged() || summary.status == SolveStatus::kOutOfRange ||
-         summary.status == SolveStatus::kInaccurate;
-}
-
-inline bool is_equilibrium(const SolverSummary& summary) {
-  return usable_as_warm_start(summary) || summary.status == SolveStatus::kUnstable;
-}
-
 namespace internal {
 
 /// A warm solve; when it stops at a fold and through_folds, the trace through it; then a cold

@@ -663,13 +663,17 @@ inline SpatialForwardSolution spatial_forward_kinematics(
   return out;
 }
 
-/// Forward kinematics from a cold start: Newton from the straight-rod guess at q
-/// (straight_rods_guess); if that fails and options.continuation, the bowed cold start
+/// Forward kinematics from a cold start, from up to three starts in turn: Newton from the
+/// straight-rod guess at q (straight_rods_guess); with options.continuation, the bowed cold start
 /// (spatial_homotopy_solve: from the robot of which straight rods at q are the equilibrium to the
-/// robot itself); if that fails too, the home solution (q = 0, from its straight-rod guess)
-/// followed by natural continuation in joint space from 0 to q. The solves from straight rods
-/// have kColdIterationFactor times options.max_iterations. A failure reports the first solve's
-/// status.
+/// robot itself); then the home solution (q = 0, from its straight-rod guess) followed by natural
+/// continuation in joint space from 0 to q. Each start's solution is refined
+/// (spatial_refine_rod_steps) and checked. Newton from straight rods can land on a far,
+/// strongly bent equilibrium, so with SolverOptions::check_stability a start that gives an
+/// unstable one is not the answer while a later start may give a stable one: the first stable
+/// solution is returned, else the first converged one. The solves from straight rods have
+/// kColdIterationFactor times options.max_iterations. A failure reports the first start's status;
+/// the summary counts the work of every start tried.
 inline SpatialForwardSolution spatial_forward_kinematics(
     const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
     const SolverOptions& options = SolverOptions()) {
@@ -678,37 +682,61 @@ inline SpatialForwardSolution spatial_forward_kinematics(
     out.summary.status = SolveStatus::kInvalidInput;
     return out;
   }
-  internal::SpatialForwardProblem problem(robot, internal::starting_rod_steps(options, 0));
   SolverOptions direct = options;
   direct.continuation = false;
   direct.max_iterations = kColdIterationFactor * options.max_iterations;
-  SpatialShootingPoint<double> x = straight_rods_guess(robot, q);
-  out.summary.status =
-      internal::spatial_solve_path(problem, x, q, q, out.warm, direct, out.summary);
-  const SolveStatus cold = out.summary.status;
-  if (!out.summary.converged() && options.continuation) {
-    x = straight_rods_guess(robot, q);
-    out.summary.status =
-        internal::spatial_homotopy_solve(robot, x, problem.rod_steps(), options, out.summary);
-    if (out.summary.converged()) {  // there: its Jacobian and tangent, for the refinement
-      out.summary.status =
-          internal::spatial_solve_path(problem, x, q, q, out.warm, direct, out.summary);
-    }
-  }
   const SpatialJointVector home = SpatialJointVector::Zero(robot.num_rods);
-  if (!out.summary.converged() && options.continuation && !q.isZero(0.0)) {
-    x = straight_rods_guess(robot, home);
-    out.summary.status =
-        internal::spatial_solve_path(problem, x, home, home, out.warm, direct, out.summary);
-    if (out.summary.converged()) {
-      out.summary.status =
-          internal::spatial_solve_path(problem, x, home, q, out.warm, options, out.summary);
+  enum class Start { kStraight, kBowed, kFromHome };
+  // Solves x at q from `start` (x set here), in problem at its starting step count.
+  const auto solve_from = [&](Start start, internal::SpatialForwardProblem& problem,
+                              SpatialShootingPoint<double>& x) {
+    SolverSummary& summary = out.summary;
+    switch (start) {
+      case Start::kStraight:
+        x = straight_rods_guess(robot, q);
+        return internal::spatial_solve_path(problem, x, q, q, out.warm, direct, summary);
+      case Start::kBowed: {
+        x = straight_rods_guess(robot, q);
+        const SolveStatus status =
+            internal::spatial_homotopy_solve(robot, x, problem.rod_steps(), options, summary);
+        if (status != SolveStatus::kConverged) return status;
+        // There: its Jacobian and tangent, for the refinement.
+        return internal::spatial_solve_path(problem, x, q, q, out.warm, direct, summary);
+      }
+      case Start::kFromHome: {
+        x = straight_rods_guess(robot, home);
+        const SolveStatus status =
+            internal::spatial_solve_path(problem, x, home, home, out.warm, direct, summary);
+        if (status != SolveStatus::kConverged) return status;
+        return internal::spatial_solve_path(problem, x, home, q, out.warm, options, summary);
+      }
     }
+    return SolveStatus::kMaxIterations;
+  };
+  SpatialForwardSolution unstable;  // the first converged start's, when it is unstable
+  SolveStatus first = SolveStatus::kMaxIterations;
+  for (const Start start : {Start::kStraight, Start::kBowed, Start::kFromHome}) {
+    if (start != Start::kStraight && !options.continuation) break;
+    if (start == Start::kFromHome && q.isZero(0.0)) break;
+    internal::SpatialForwardProblem problem(robot, internal::starting_rod_steps(options, 0));
+    SpatialShootingPoint<double> x;
+    out.summary.status = solve_from(start, problem, x);
+    if (start == Start::kStraight) first = out.summary.status;
+    out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
+                                                            out.summary, out.summary.status);
+    internal::fill_solution(problem, x, out);
+    internal::report_spatial_solution(robot, options, out);
+    if (!usable_as_warm_start(out.summary)) continue;
+    if (out.summary.stability != Stability::kUnstable) return out;
+    if (!usable_as_warm_start(unstable.summary)) unstable = out;
   }
-  if (!out.summary.converged()) out.summary.status = cold;
-  out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
-                                                          out.summary, out.summary.status);
-  internal::fill_solution(problem, x, out);
+  if (usable_as_warm_start(unstable.summary)) {  // no start gave a stable equilibrium
+    unstable.summary.iterations = out.summary.iterations;
+    unstable.summary.residual_evaluations = out.summary.residual_evaluations;
+    unstable.summary.continuation_steps = out.summary.continuation_steps;
+    return unstable;
+  }
+  out.summary.status = first;
   internal::report_spatial_solution(robot, options, out);
   return out;
 }
