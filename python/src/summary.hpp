@@ -30,8 +30,7 @@ void def_summary_properties(py::class_<T, Extra...>& cls) {
          "the solve reached its input (status 'converged')")
       .def_property_readonly(
           "status", [](const T& s) { return std::string(to_string(s.summary.status)); },
-          "converged, singular, bifurcation, max_iterations, non_finite, out_of_range, "
-          "unstable, unsupported, invalid_input")
+          "the status in words: the name of one of pcr.SolveStatus's values (status_code)")
       .def_property_readonly(
           "status_code", [](const T& s) { return s.summary.status; },
           "the status as a SolveStatus (s.status_code == pcr.SolveStatus.converged)")
