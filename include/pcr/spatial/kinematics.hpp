@@ -617,8 +617,9 @@ inline SolveStatus spatial_homotopy_solve(const SpatialRobotParams<double>& robo
   return t >= 1.0 ? SolveStatus::kConverged : SolveStatus::kMaxIterations;
 }
 
-inline void fill_solution(const SpatialForwardProblem& problem,
-                          const SpatialShootingPoint<double>& x, SpatialForwardSolution& out) {
+/// A solution's configuration from the point x of `problem` (forward or inverse).
+template <class Problem, class Solution>
+void fill_solution(const Problem& problem, const SpatialShootingPoint<double>& x, Solution& out) {
   const int n = problem.robot().num_rods;
   out.pose = x.pose;
   out.q.resize(n);
@@ -904,6 +905,30 @@ Solution spatial_buckled_seed(const SpatialRobotParams<double>& robot, const Sol
 
 namespace internal {
 
+/// The straight pose path of IK from `start` to the pose that `request` imposes
+/// (spatial_imposed_pose, nearest start): a line for the position, a constant-rate turn for the
+/// orientation; at(1) is that pose to the bit.
+struct SpatialPosePath {
+  SpatialPosePath(const SpatialInverseProblem& problem, const SpatialPose<double>& from,
+                  const SpatialPose<double>& request)
+      : start(from),
+        pose(spatial_imposed_pose(problem.robot().num_rods, request, from)),
+        whole(problem.pose_step(start, pose)) {}
+
+  SpatialPose<double> at(double t) const {
+    if (t == 1.0) return pose;
+    SpatialPose<double> out;
+    out.position = start.position + t * (pose.position - start.position);
+    out.orientation = quaternion_product<double>(start.orientation / start.orientation.norm(),
+                                                 quaternion_exp<double>(t * whole.tail<3>()));
+    return out;
+  }
+
+  SpatialPose<double> start;
+  SpatialPose<double> pose;
+  Eigen::Matrix<double, 6, 1> whole;
+};
+
 /// Solves the inverse problem at the pose that `request` imposes (spatial_imposed_pose, nearest
 /// x.pose) from the solution x at x.pose (x updated): the whole step
 /// first, predicted along the tangent -J^-1 (d r / d pose) d pose when `warm` holds them, with
@@ -916,17 +941,7 @@ inline SolveStatus spatial_inverse_path(SpatialInverseProblem& problem,
                                         SpatialShootingPoint<double>& x,
                                         const SpatialPose<double>& request, SpatialWarmStart& warm,
                                         const SolverOptions& options, SolverSummary& summary) {
-  const SpatialPose<double> start = x.pose;
-  const SpatialPose<double> pose = spatial_imposed_pose(problem.robot().num_rods, request, start);
-  const Eigen::Matrix<double, 6, 1> whole = problem.pose_step(start, pose);
-  const auto pose_at = [&](double t) {
-    if (t == 1.0) return pose;
-    SpatialPose<double> at;
-    at.position = start.position + t * (pose.position - start.position);
-    at.orientation = quaternion_product<double>(start.orientation / start.orientation.norm(),
-                                                quaternion_exp<double>(t * whole.tail<3>()));
-    return at;
-  };
+  const SpatialPosePath path(problem, x.pose, request);
   // The predictor's scaled length, or -1 when there is no tangent to predict along (or no pose
   // change: no branch to follow).
   const auto predict = [&](const SpatialShootingPoint<double>& from, const SpatialPose<double>& to,
@@ -958,7 +973,7 @@ inline SolveStatus spatial_inverse_path(SpatialInverseProblem& problem,
     }
     const double t_next = std::min(1.0, t + dt);
     SpatialShootingPoint<double> trial;
-    const double predictor = predict(x, pose_at(t_next), trial);
+    const double predictor = predict(x, path.at(t_next), trial);
     const SpatialShootingPoint<double> predicted = trial;
     status = spatial_newton(problem, trial, options,
                             first ? options.max_iterations : options.max_continuation_iterations,
@@ -1088,13 +1103,7 @@ SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& ro
     out.summary.status =
         spatial_refine_rod_steps(problem, x, out.warm.lu, options, out.summary, out.summary.status);
   }
-  out.summary.rod_steps = problem.rod_steps();
-  out.pose = x.pose;
-  out.q.resize(n);
-  for (int i = 0; i < n; ++i) {
-    out.q(i) = x.q[i];
-    out.wrenches[i] = x.wrenches[i];
-  }
+  fill_solution(problem, x, out);
   const int conjugate_limb = report_spatial_solution(robot, options, out);
   if (out.summary.stability == Stability::kUnstable && options.stable_inverse) {
     look_for_stable_spatial_inverse(robot, pose, options, conjugate_limb, out);

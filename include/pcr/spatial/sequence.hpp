@@ -6,10 +6,11 @@
 //     (q = 0), solved once.
 //   kPath: each input continued from the last usable solution on its branch (a long jump of the
 //     inputs as a path of steps where one step would leave it: spatial_solve_path), retried cold
-//     when that fails.
-// There is no fold tracing for spatial robots yet: SolverOptions::through_folds has no effect.
+//     when that fails; where the branch ends at a fold, followed through it first with
+//     SolverOptions::through_folds (pcr/spatial/arclength.hpp), as the planar sequences do.
 
 #include "pcr/kinematics.hpp"
+#include "pcr/spatial/arclength.hpp"
 #include "pcr/spatial/kinematics.hpp"
 
 namespace pcr {
@@ -37,7 +38,10 @@ struct SequenceTraits<SpatialForwardSolution> {
       return spatial_forward_kinematics(robot, q, w, options);
     };
     return internal::solve_with_cold_fallback(
-        warm, warm_solve, /*through_folds=*/false, warm_solve,
+        warm, warm_solve, options.through_folds,
+        [&](const SpatialForwardSolution& w) {
+          return spatial_forward_kinematics_through_folds(robot, q, w, options);
+        },
         [&] { return spatial_forward_kinematics(robot, q, options); });
   }
 };
@@ -62,7 +66,10 @@ struct SequenceTraits<SpatialInverseSolution> {
       return spatial_inverse_kinematics(robot, pose, w, options);
     };
     return internal::solve_with_cold_fallback(
-        warm, warm_solve, /*through_folds=*/false, warm_solve,
+        warm, warm_solve, options.through_folds,
+        [&](const SpatialInverseSolution& w) {
+          return spatial_inverse_kinematics_through_folds(robot, pose, w, options);
+        },
         [&] { return spatial_inverse_kinematics(robot, pose, options); });
   }
 };

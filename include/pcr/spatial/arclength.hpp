@@ -1,0 +1,218 @@
+#pragma once
+// Spatial FK and IK through folds: pseudo-arclength continuation (pcr/internal/arclength.hpp's
+// trace_curve, the rule the planar core follows) along the straight input path from a warm start,
+// on the spatial shooting problems of pcr/spatial/kinematics.hpp. The curve's local coordinates
+// are those of spatial_newton: the scaled wrench (and joint) steps and the platform's turn on the
+// right as a rotation vector (Problem::retract), then t; the unit quaternion itself never enters
+// the bordered system. Header-only, no heap, no exceptions, at most
+// SolverOptions::max_arclength_steps points.
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include "pcr/internal/arclength.hpp"
+#include "pcr/kinematics.hpp"
+#include "pcr/spatial/kinematics.hpp"
+
+namespace pcr {
+namespace internal {
+
+/// A point of a spatial curve of solutions: the shooting point and where its input lies on the
+/// path.
+struct SpatialCurvePoint {
+  SpatialShootingPoint<double> x;
+  double t = 0;
+};
+
+/// FK's input path: the joints from q0 to q1 on a line.
+struct SpatialJointPath {
+  SpatialJointVector q0;
+  SpatialJointVector dq;
+
+  void place(SpatialShootingPoint<double>& x, double t) const {
+    for (int i = 0; i < q0.size(); ++i) x.q[i] = q0(i) + t * dq(i);
+  }
+  /// d residual / d t at x, the point `problem` last evaluated.
+  SpatialVector rate(const SpatialForwardProblem& problem, const SpatialShootingPoint<double>& x,
+                     double) const {
+    return problem.input_jacobian(x) * dq;
+  }
+};
+
+/// IK's input path: the straight pose path (SpatialPosePath), of which each point imposes what IK
+/// imposes, the free orientation directions kept (spatial_imposed_pose).
+struct SpatialPoseCurvePath {
+  SpatialPosePath path;
+  int num_rods;
+
+  SpatialPose<double> imposed(const SpatialPose<double>& current, double t) const {
+    return spatial_imposed_pose(num_rods, path.at(t), current);
+  }
+  void place(SpatialShootingPoint<double>& x, double t) const { x.pose = imposed(x.pose, t); }
+  /// d residual / d t at x, the point `problem` last evaluated: the pose columns times the imposed
+  /// pose's rate, by a central difference of the path (a closed form, no rod integrated).
+  SpatialVector rate(const SpatialInverseProblem& problem, const SpatialShootingPoint<double>& x,
+                     double t) const {
+    constexpr double h = 1e-6;
+    const Eigen::Matrix<double, 6, 1> rate =
+        problem.pose_step(imposed(x.pose, t - h), imposed(x.pose, t + h)) / (2 * h);
+    return problem.pose_jacobian(x) * rate;
+  }
+};
+
+/// A spatial shooting problem along its input path, as the curve trace_curve follows.
+template <class Problem, class InputPath>
+class SpatialArclengthCurve {
+ public:
+  using Point = SpatialCurvePoint;
+  using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxSpatialUnknowns + 1, 1>;
+  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxSpatialUnknowns + 1,
+                               kMaxSpatialUnknowns + 1>;
+
+  SpatialArclengthCurve(Problem& problem, const InputPath& path) : problem_(problem), path_(path) {}
+
+  int size() const { return problem_.size(); }
+  double t(const Point& p) const { return p.t; }
+
+  /// The unknowns retracted as spatial_newton steps them, the input moved along its path.
+  Point advance(const Point& p, const Vector& step) const {
+    const int n = size();
+    Point out;
+    out.t = p.t + step(n);
+    out.x = problem_.retract(p.x, SpatialVector(step.head(n)));
+    path_.place(out.x, out.t);
+    return out;
+  }
+
+  Vector offset(const Point& from, const Point& to) const {
+    const int n = size();
+    Vector d(n + 1);
+    d << problem_.step_between(from.x, to.x), to.t - from.t;
+    return d;
+  }
+
+  bool bordered(const Point& p, const Vector& tangent, Vector& g, Matrix& m,
+                SolverSummary& summary) {
+    const int n = size();
+    SpatialVector r;
+    SpatialJacobian J;
+    problem_.evaluate(p.x, r, &J);
+    ++summary.residual_evaluations;
+    m.resize(n + 1, n + 1);
+    m.topLeftCorner(n, n) = J;
+    m.topRightCorner(n, 1) = path_.rate(problem_, p.x, p.t);
+    m.bottomRows(1) = tangent.transpose();
+    g.head(n) = r;
+    return m.allFinite() && r.allFinite();
+  }
+
+ private:
+  Problem& problem_;
+  const InputPath& path_;
+};
+
+/// FK or IK from `warm` (a solution at the path's start) along `path` by pseudo-arclength
+/// continuation (see spatial_forward_kinematics_through_folds). solve_at_end(last) solves the
+/// input itself from the last point traced, just past it.
+template <class Solution, class Problem, class InputPath, class SolveAtEnd, class Visitor>
+Solution spatial_solve_through_folds(const SpatialRobotParams<double>& robot, Problem& problem,
+                                     const InputPath& path, const Solution& warm,
+                                     const SolverOptions& options, SolveAtEnd&& solve_at_end,
+                                     Visitor&& visit) {
+  Solution out;
+  SolverSummary& summary = out.summary;
+  SpatialCurvePoint point;
+  point.x = spatial_shooting_point(robot, warm);
+  SpatialArclengthCurve<Problem, InputPath> curve(problem, path);
+  const ArclengthTrace trace = trace_curve(
+      curve, point, options, summary, options.max_arclength_steps, [&](const SpatialCurvePoint& p) {
+        Solution at;
+        at.summary.status = SolveStatus::kConverged;
+        at.summary.path_fraction = p.t;
+        fill_solution(problem, p.x, at);
+        report_spatial_solution(robot, options, at);
+        visit(static_cast<const Solution&>(at));
+      });
+  summary.folds_passed = trace.folds;
+  summary.first_fold = trace.first_fold;
+  fill_solution(problem, point.x, out);
+  if (trace.reached) {
+    Solution reached = solve_at_end(static_cast<const Solution&>(out));
+    reached.summary.iterations += summary.iterations;
+    reached.summary.residual_evaluations += summary.residual_evaluations;
+    reached.summary.continuation_steps += summary.continuation_steps;
+    reached.summary.folds_passed = trace.folds;
+    reached.summary.first_fold = trace.first_fold;
+    if (reached.summary.converged()) return reached;
+  }
+  summary.status = SolveStatus::kSingular;
+  summary.path_fraction = trace.t;
+  return out;
+}
+
+}  // namespace internal
+
+/// Spatial forward kinematics from a warm start along the straight joint path to q by
+/// pseudo-arclength continuation, as forward_kinematics_through_folds: through folds, where the
+/// joints' path turns back (the robot snaps through). The solution at q when the curve of
+/// solutions comes back to it (after an even number of folds; solved there from the point just
+/// past q by spatial_forward_kinematics, its RK4 steps refined), else the last point traced with
+/// status kSingular. summary.folds_passed and first_fold say where it turned. visit(point) sees
+/// every point of the curve (path_fraction: where its joints lie on the path; its stability
+/// checked as SolverOptions::check_stability says). The trace keeps the warm start's RK4 steps
+/// (options.rod_steps when fixed).
+template <class Visitor = NoPathVisitor>
+SpatialForwardSolution spatial_forward_kinematics_through_folds(
+    const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
+    const SpatialForwardSolution& warm_start, const SolverOptions& options = SolverOptions(),
+    Visitor&& visit = Visitor()) {
+  if (!internal::spatial_inputs_valid(robot, q, options) || warm_start.q.size() != robot.num_rods ||
+      !warm_start.q.allFinite()) {
+    SpatialForwardSolution out;
+    out.summary.status = SolveStatus::kInvalidInput;
+    return out;
+  }
+  internal::SpatialForwardProblem problem(
+      robot, internal::starting_rod_steps(options, warm_start.summary.rod_steps));
+  const internal::SpatialJointPath path{warm_start.q, q - warm_start.q};
+  return internal::spatial_solve_through_folds(
+      robot, problem, path, warm_start, options,
+      [&](const SpatialForwardSolution& last) {
+        return spatial_forward_kinematics(robot, q, last, options);
+      },
+      visit);
+}
+
+/// As spatial_forward_kinematics_through_folds, for IK along the straight pose path from the
+/// warm start's pose (SpatialPosePath). The pose's end solve keeps the equilibrium it reaches,
+/// stable or not (no search for a stable one: the trace follows the robot's branch).
+template <class Visitor = NoPathVisitor>
+SpatialInverseSolution spatial_inverse_kinematics_through_folds(
+    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+    const SpatialInverseSolution& warm_start, const SolverOptions& options = SolverOptions(),
+    Visitor&& visit = Visitor()) {
+  SpatialInverseSolution out;
+  if (spatial_inverse_free_angles(robot.num_rods) < 0) {
+    out.summary.status = SolveStatus::kUnsupported;
+    return out;
+  }
+  if (!internal::spatial_inputs_valid(robot, warm_start.q, options) ||
+      !internal::spatial_pose_valid(pose) || !internal::spatial_pose_valid(warm_start.pose)) {
+    out.summary.status = SolveStatus::kInvalidInput;
+    return out;
+  }
+  internal::SpatialInverseProblem problem(
+      robot, internal::starting_rod_steps(options, warm_start.summary.rod_steps));
+  const internal::SpatialPoseCurvePath path{
+      internal::SpatialPosePath(problem, warm_start.pose, pose), robot.num_rods};
+  SolverOptions on_branch = options;
+  on_branch.stable_inverse = false;
+  return internal::spatial_solve_through_folds(
+      robot, problem, path, warm_start, options,
+      [&](const SpatialInverseSolution& last) {
+        return spatial_inverse_kinematics(robot, pose, last, on_branch);
+      },
+      visit);
+}
+
+}  // namespace pcr
