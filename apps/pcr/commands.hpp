@@ -234,14 +234,6 @@ struct RowsArguments {
 
   SequenceMode mode() const { return path ? SequenceMode::kPath : SequenceMode::kIndependent; }
   void apply(SolverOptions& options) const { options.through_folds = through_folds; }
-
-  /// Spatial robots have no fold tracing yet (pcr/spatial/sequence.hpp).
-  void require_spatial_support(const std::string& robot_path) const {
-    if (through_folds) {
-      throw InputError("--through-folds: " + robot_path +
-                       " is a spatial robot, whose solvers do not trace folds yet");
-    }
-  }
 };
 
 /// The row loop of `pcr fk` and `pcr ik`: `solve_row(row, out)` solves each input row (as its

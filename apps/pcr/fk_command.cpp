@@ -19,7 +19,6 @@ struct FkArguments {
 void run_spatial_fk(const FkArguments& args) {
   using namespace pcr;
   args.solve.require_no_planar_load(args.robot);
-  args.rows.require_spatial_support(args.robot);
   const SpatialRobotDescription robot = load_spatial_robot(args.robot);
   const int n = robot.params.num_rods;
   const CsvTable table = cli::read_joint_table(args.input, n);
@@ -28,7 +27,9 @@ void run_spatial_fk(const FkArguments& args) {
   for (const std::string& c : cli::spatial_pose_columns()) header.push_back(c);
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
-  SpatialForwardSequence sequence(robot.params, args.solve.options(), args.rows.mode());
+  SolverOptions options = args.solve.options();
+  args.rows.apply(options);
+  SpatialForwardSequence sequence(robot.params, options, args.rows.mode());
   const auto solve_row = [&](const CsvRow row, CsvWriter& out) {
     SpatialJointVector q(n);
     for (int i = 0; i < n; ++i) q(i) = row[static_cast<std::size_t>(i)];

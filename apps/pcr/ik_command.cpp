@@ -21,7 +21,6 @@ struct IkArguments {
 void run_spatial_ik(const IkArguments& args) {
   using namespace pcr;
   args.solve.require_no_planar_load(args.robot);
-  args.rows.require_spatial_support(args.robot);
   const SpatialRobotDescription robot = load_spatial_robot(args.robot);
   const int n = robot.params.num_rods;
   const int free_angles = spatial_inverse_free_angles(n);
@@ -40,7 +39,9 @@ void run_spatial_ik(const IkArguments& args) {
   for (const std::string& q : cli::joint_names(n)) header.push_back(q);
   for (const std::string& c : cli::summary_columns()) header.push_back(c);
 
-  SpatialInverseSequence sequence(robot.params, args.solve.options(), args.rows.mode());
+  SolverOptions options = args.solve.options();
+  args.rows.apply(options);
+  SpatialInverseSequence sequence(robot.params, options, args.rows.mode());
   const auto solve_row = [&](const CsvRow row, CsvWriter& out) {
     SpatialPose<double> pose;
     pose.position = Vector3<double>(row[0], row[1], row[2]);
