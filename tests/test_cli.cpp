@@ -351,10 +351,11 @@ TEST_F(Cli, SpatialRobotFilesAreRefusedWhereTheyDoNotBelong) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--force/--moment"), std::string::npos) << r.err;
   // Fold tracing is a spatial path's too: with no fold on the way, the same rows as without it.
-  const std::string poses = "0,0,0.4,0,0,0\n0.001,0,0.4,0,0,0.01\n";
-  r = run("ik --path --through-folds --robot '" + kSpatialRobot + "'", poses);
+  const std::string joints = "0,0,0,0,0,0\n0.002,0.001,0,0,0.001,0.002\n";
+  r = run("fk --path --through-folds --robot '" + kSpatialRobot + "'", joints);
   EXPECT_EQ(r.status, 0) << r.err;
-  EXPECT_EQ(r.out, run("ik --path --robot '" + kSpatialRobot + "'", poses).out);
+  EXPECT_EQ(data_lines(r.out).size(), 2u) << r.out;
+  EXPECT_EQ(r.out, run("fk --path --robot '" + kSpatialRobot + "'", joints).out);
   // A bad field: file, field and value.
   std::string text = slurp(kSpatialRobot);
   const std::size_t at = text.find("\"density\": 8000.0");
