@@ -151,6 +151,21 @@ inline double joint_for_height(const SpatialRobotParams<double>& robot, double h
 /// tilted and twisted frames, under gravity with a payload off its centre.
 inline SpatialRobotParams<double> mixed_robot(std::mt19937_64& rng, int n) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // Each number is drawn in a statement of its own, in order: the draws within one expression
+  // (the arguments of a call, the operands of a product) have no order that C++ fixes, so gcc
+  // and clang would build different robots from the same seed.
+  const auto draw3 = [&](double x_scale, double y_scale, double z_scale) {
+    const double x = x_scale * u(rng);
+    const double y = y_scale * u(rng);
+    const double z = z_scale * u(rng);
+    return Vector3d(x, y, z);
+  };
+  const auto turn = [&](const Vector3d& angles) {
+    return (Eigen::AngleAxisd(angles.x(), Vector3d::UnitX()) *
+            Eigen::AngleAxisd(angles.y(), Vector3d::UnitY()) *
+            Eigen::AngleAxisd(angles.z(), Vector3d::UnitZ()))
+        .toRotationMatrix();
+  };
   const SpatialRobotParams<double> reference = continuum_stewart_gough();
   SpatialRobotParams<double> robot = reference;
   robot.num_rods = n;
@@ -164,36 +179,30 @@ inline SpatialRobotParams<double> mixed_robot(std::mt19937_64& rng, int n) {
         base_angle + (i % 2 == 0 ? 1 : -1) * (40 * M_PI / 180 + 0.1 * u(rng));
     const double base_radius = 0.087 * (1 + 0.1 * u(rng));
     const double platform_radius = 0.087 * (1 + 0.1 * u(rng));
+    const double base_height = 0.002 * u(rng);
     limb.A = Vector3d(base_radius * std::cos(base_angle), base_radius * std::sin(base_angle),
-                      0.002 * u(rng));
+                      base_height);
+    const double platform_height = 0.002 * u(rng);
     limb.B = Vector3d(platform_radius * std::cos(platform_angle),
-                      platform_radius * std::sin(platform_angle), 0.002 * u(rng));
+                      platform_radius * std::sin(platform_angle), platform_height);
     limb.rod.length = 0.4 + 0.002 * u(rng);
     limb.rod.diameter = 2e-3 * (1 + 0.2 * u(rng));
-    const Matrix3d base = (Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitX()) *
-                           Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitY()) *
-                           Eigen::AngleAxisd(M_PI * u(rng), Vector3d::UnitZ()))
-                              .toRotationMatrix();
+    const Matrix3d base = turn(draw3(0.1, 0.1, M_PI));
     limb.base_orientation = quaternion_of<double>(base);
     // The tip frame: the base frame (as if the platform were W) turned by up to 0.1 rad about
     // each axis: clamped rods bend and twist by that much on top of the layout's S shapes.
-    const Matrix3d tip = (Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitX()) *
-                          Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitY()) *
-                          Eigen::AngleAxisd(0.1 * u(rng), Vector3d::UnitZ()))
-                             .toRotationMatrix() *
-                         base;
+    const Matrix3d tip = turn(draw3(0.1, 0.1, 0.1)) * base;
     limb.tip_orientation = quaternion_of<double>(tip);
     limb.attachment = u(rng) > 0 ? SpatialAttachment::kClamped : SpatialAttachment::kSpherical;
     if (u(rng) > 0) {
       limb.actuation = SpatialActuation::kTranslatedClamp;
-      limb.actuator_direction =
-          (base.col(2) + 0.05 * Vector3d(u(rng), u(rng), u(rng))).normalized();
+      limb.actuator_direction = (base.col(2) + draw3(0.05, 0.05, 0.05)).normalized();
     }
   }
   robot.platform_mass = 0.1 + 0.2 * (u(rng) + 1);
-  robot.platform_centre_of_mass = Vector3d(0.01 * u(rng), 0.01 * u(rng), 0.02 * u(rng));
-  robot.external_force = Vector3d(0.3 * u(rng), 0.3 * u(rng), 0.3 * u(rng));
-  robot.external_moment = Vector3d(0.02 * u(rng), 0.02 * u(rng), 0.02 * u(rng));
+  robot.platform_centre_of_mass = draw3(0.01, 0.01, 0.02);
+  robot.external_force = draw3(0.3, 0.3, 0.3);
+  robot.external_moment = draw3(0.02, 0.02, 0.02);
   return robot;
 }
 

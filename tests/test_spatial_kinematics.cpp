@@ -451,12 +451,10 @@ TEST(SpatialKinematics, RandomRobotsMatchCvode) {
 
 // The cold start on more robots drawn around the reference (3 to 6 rods, every kind of rod,
 // gravity and payload on and off) at random joints within +-10 mm, each solution checked by a
-// CVODE FK from it. A mechanism at its joints (the joints do not fix the pose) must say so. The
-// draw depends on the compiler: mixed_robot draws several numbers in one expression, whose order
-// C++ leaves open. Measured: with clang, 22 of 24 solved and stable, 7 of them by continuation,
-// within 3.1e-10 m and 7.3e-9 rad of CVODE; robots 10 (five rods) and 23 (six rods) fail. With gcc,
-// 23 of 24 (robot 11 fails), one of them a mechanism (singularity 9e-15, 1.2e-7 m from CVODE's
-// pose, estimated 1.7e-3 m). The bound is the known limit docs/kinematics.md states.
+// CVODE FK from it. A mechanism at its joints (the joints do not fix the pose) must say so.
+// Measured: 22 of 24 solved and stable, 7 of them by continuation, within 3.1e-10 m and 7.3e-9 rad
+// of CVODE; robots 10 (five rods) and 23 (six rods) fail. The bound is the known limit
+// docs/kinematics.md states.
 TEST(SpatialKinematics, ColdStartOnMoreRandomRobots) {
   std::mt19937_64 rng(2027);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
