@@ -16,6 +16,7 @@
 #include <array>
 
 #include "pcr/internal/newton.hpp"
+#include "pcr/internal/solver_linkage.hpp"
 #include "pcr/robot.hpp"
 #include "pcr/shooting.hpp"
 #include "pcr/solver.hpp"
@@ -73,7 +74,7 @@ struct InverseSolution {
 };
 
 /// Forward kinematics warm-started from a previous solution (the normal case in a control loop).
-inline ForwardSolution forward_kinematics(
+PCR_SOLVER_INLINE ForwardSolution forward_kinematics(
     const RobotParams<double>& robot, const JointVector& q, const ForwardSolution& warm_start,
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
@@ -81,9 +82,9 @@ inline ForwardSolution forward_kinematics(
 /// The home solution, q = 0: from the straight, unloaded guess, or for a robot whose straight
 /// guess fails (a pre-stressed robot with n >= 4 limbs) from a bowed variant of the robot (see
 /// docs/kinematics.md, "Accuracy and branches").
-inline ForwardSolution home_solution(const RobotParams<double>& robot,
-                                     const SolverOptions& options = SolverOptions(),
-                                     const PlatformLoad<double>& load = PlatformLoad<double>());
+PCR_SOLVER_INLINE ForwardSolution
+home_solution(const RobotParams<double>& robot, const SolverOptions& options = SolverOptions(),
+              const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// `robot` saying which of its homes it is in (LimbParams::home_bow), from its home pose
 /// `measured` (^W T_P at q = 0): of the homes the robot reaches saying nothing and saying each
@@ -91,15 +92,16 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot,
 /// whose pose lies nearest, in pose_distance with weight l_mean (1 nm ties keep the earlier: a
 /// robot in the home it reaches unsaid comes back as it is). The home solve of `out` reaches that
 /// home. False when no home solves.
-inline bool choose_home(const RobotParams<double>& robot, const Pose2<double>& measured,
-                        RobotParams<double>& out, const SolverOptions& options = SolverOptions(),
-                        const PlatformLoad<double>& load = PlatformLoad<double>());
+PCR_SOLVER_INLINE bool choose_home(const RobotParams<double>& robot, const Pose2<double>& measured,
+                                   RobotParams<double>& out,
+                                   const SolverOptions& options = SolverOptions(),
+                                   const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Forward kinematics from a cold start: the home solution, then forward_kinematics_from_home.
-inline ForwardSolution forward_kinematics(
-    const RobotParams<double>& robot, const JointVector& q,
-    const SolverOptions& options = SolverOptions(),
-    const PlatformLoad<double>& load = PlatformLoad<double>());
+PCR_SOLVER_INLINE ForwardSolution
+forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
+                   const SolverOptions& options = SolverOptions(),
+                   const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Forward kinematics from the home solution (home_solution's, with or without its stability
 /// checked), on the branch connected to it: a (continued) path from home to q. When
@@ -108,28 +110,28 @@ inline ForwardSolution forward_kinematics(
 /// whose rods bow to their left, else the one where they bow to their right (then the same with
 /// twice and with half the bow). A home that did not converge is returned as it is. The summary
 /// does not count the home solve's iterations.
-inline ForwardSolution forward_kinematics_from_home(
+PCR_SOLVER_INLINE ForwardSolution forward_kinematics_from_home(
     const RobotParams<double>& robot, const JointVector& q, const ForwardSolution& home,
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Inverse kinematics warm-started from a previous solution. For n = 2 only x and y of `pose`
 /// are imposed and theta is solved for.
-inline InverseSolution inverse_kinematics(
+PCR_SOLVER_INLINE InverseSolution inverse_kinematics(
     const RobotParams<double>& robot, const Pose2<double>& pose, const InverseSolution& warm_start,
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Inverse kinematics from a cold start: the home solution, then inverse_kinematics_from_home.
-inline InverseSolution inverse_kinematics(
-    const RobotParams<double>& robot, const Pose2<double>& pose,
-    const SolverOptions& options = SolverOptions(),
-    const PlatformLoad<double>& load = PlatformLoad<double>());
+PCR_SOLVER_INLINE InverseSolution
+inverse_kinematics(const RobotParams<double>& robot, const Pose2<double>& pose,
+                   const SolverOptions& options = SolverOptions(),
+                   const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// Inverse kinematics from the home solution along the straight pose path from home's pose, on
 /// the branch connected to home. A home that did not converge is returned as a failed solution.
 /// The summary does not count the home solve's iterations.
-inline InverseSolution inverse_kinematics_from_home(
+PCR_SOLVER_INLINE InverseSolution inverse_kinematics_from_home(
     const RobotParams<double>& robot, const Pose2<double>& pose, const ForwardSolution& home,
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
@@ -168,13 +170,13 @@ Solution buckled_seed(const RobotParams<double>& robot, const Solution& at, int 
 /// One input of a sequence (see SequenceSolver): warm-started from `warm` when there is one (may
 /// be null), retried from home when that fails (the warm start lies on another branch, or too far
 /// along a fold). The summary counts the iterations and residual evaluations of both.
-inline ForwardSolution forward_kinematics_or_cold(
+PCR_SOLVER_INLINE ForwardSolution forward_kinematics_or_cold(
     const RobotParams<double>& robot, const JointVector& q, const ForwardSolution* warm,
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());
 
 /// IK of one input of a sequence; as forward_kinematics_or_cold.
-inline InverseSolution inverse_kinematics_or_cold(
+PCR_SOLVER_INLINE InverseSolution inverse_kinematics_or_cold(
     const RobotParams<double>& robot, const Pose2<double>& pose, const InverseSolution* warm,
     const SolverOptions& options = SolverOptions(),
     const PlatformLoad<double>& load = PlatformLoad<double>());

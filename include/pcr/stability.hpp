@@ -30,6 +30,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pcr/internal/solver_linkage.hpp"
 #include "pcr/robot.hpp"
 #include "pcr/shooting.hpp"
 
@@ -289,16 +290,9 @@ EquilibriumStability equilibrium_stability_in_lanes(
   return result;
 }
 
-inline EquilibriumStability equilibrium_stability(
+PCR_SOLVER_INLINE EquilibriumStability equilibrium_stability(
     const RobotParams<double>& robot, const JointVector& q, const Pose2<double>& pose,
-    const std::array<Wrench<double>, kMaxLimbs>& wrenches, int rod_steps, bool axial_compliance) {
-  const int n = robot.num_limbs;
-  if (n < 1 || n > kMaxLimbs || q.size() != n || rod_steps < 1) return EquilibriumStability();
-  return with_lane_count(n, [&](auto lanes) {
-    return equilibrium_stability_in_lanes<decltype(lanes)::value>(robot, q, pose, wrenches,
-                                                                  rod_steps, axial_compliance);
-  });
-}
+    const std::array<Wrench<double>, kMaxLimbs>& wrenches, int rod_steps, bool axial_compliance);
 
 }  // namespace internal
 
@@ -323,5 +317,21 @@ inline EquilibriumStability equilibrium_stability(
     const std::array<Wrench<double>, kMaxLimbs>& wrenches, int rod_steps) {
   return internal::equilibrium_stability(robot, q, pose, wrenches, rod_steps, true);
 }
+
+#if PCR_SOLVER_DEFINITIONS
+// The bodies of the entry points declared above (pcr/internal/solver_linkage.hpp).
+
+PCR_SOLVER_INLINE EquilibriumStability internal::equilibrium_stability(
+    const RobotParams<double>& robot, const JointVector& q, const Pose2<double>& pose,
+    const std::array<Wrench<double>, kMaxLimbs>& wrenches, int rod_steps, bool axial_compliance) {
+  const int n = robot.num_limbs;
+  if (n < 1 || n > kMaxLimbs || q.size() != n || rod_steps < 1) return EquilibriumStability();
+  return with_lane_count(n, [&](auto lanes) {
+    return equilibrium_stability_in_lanes<decltype(lanes)::value>(robot, q, pose, wrenches,
+                                                                  rod_steps, axial_compliance);
+  });
+}
+
+#endif  // PCR_SOLVER_DEFINITIONS
 
 }  // namespace pcr

@@ -37,6 +37,14 @@ message("${output}")
 if(NOT result EQUAL 0 OR NOT output MATCHES "pose: x = ")
   message(FATAL_ERROR "pcr_consumer failed (${result})")
 endif()
+# Linking pcr::solvers instead of the header-only core changes where the solvers are compiled,
+# not what they compute.
+execute_process(COMMAND ${build}/pcr_consumer_solvers RESULT_VARIABLE result
+                OUTPUT_VARIABLE solvers_output)
+if(NOT result EQUAL 0 OR NOT solvers_output STREQUAL output)
+  message(FATAL_ERROR "pcr_consumer_solvers (${result}) printed\n${solvers_output}\n"
+                      "instead of pcr_consumer's")
+endif()
 
 # The installed `pcr` hands the calibration subcommands to the `pcr-full` installed next to it.
 if(",${EXPECTED_COMPONENTS}," MATCHES ",calib,")

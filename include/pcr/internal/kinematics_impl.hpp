@@ -252,10 +252,12 @@ Solution solve_through_folds(ShootingProblem::Kind kind, const RobotParams<doubl
 
 }  // namespace internal
 
-inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
-                                          const ForwardSolution& warm_start,
-                                          const SolverOptions& options,
-                                          const PlatformLoad<double>& load) {
+#if PCR_SOLVER_DEFINITIONS
+PCR_SOLVER_INLINE ForwardSolution forward_kinematics(const RobotParams<double>& robot,
+                                                     const JointVector& q,
+                                                     const ForwardSolution& warm_start,
+                                                     const SolverOptions& options,
+                                                     const PlatformLoad<double>& load) {
   ShootingVector u0, u1;
   const SolveStatus input = internal::forward_path(robot, q, warm_start, options, u0, u1);
   if (input != SolveStatus::kConverged) return internal::refused(q, input);
@@ -265,6 +267,7 @@ inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, cons
   internal::check_stability(robot, options, solution);
   return solution;
 }
+#endif
 
 template <class Visitor>
 ForwardSolution forward_kinematics_through_folds(
@@ -292,8 +295,10 @@ InverseSolution inverse_kinematics_through_folds(
   return solution;
 }
 
-inline ForwardSolution home_solution(const RobotParams<double>& robot, const SolverOptions& options,
-                                     const PlatformLoad<double>& load) {
+#if PCR_SOLVER_DEFINITIONS
+PCR_SOLVER_INLINE ForwardSolution home_solution(const RobotParams<double>& robot,
+                                                const SolverOptions& options,
+                                                const PlatformLoad<double>& load) {
   ForwardSolution home;
   if (!internal::valid_robot(robot) || !options.is_valid()) {
     home.summary.status = SolveStatus::kInvalidInput;
@@ -311,9 +316,9 @@ inline ForwardSolution home_solution(const RobotParams<double>& robot, const Sol
   return home;
 }
 
-inline bool choose_home(const RobotParams<double>& robot, const Pose2<double>& measured,
-                        RobotParams<double>& out, const SolverOptions& options,
-                        const PlatformLoad<double>& load) {
+PCR_SOLVER_INLINE bool choose_home(const RobotParams<double>& robot, const Pose2<double>& measured,
+                                   RobotParams<double>& out, const SolverOptions& options,
+                                   const PlatformLoad<double>& load) {
   const int n = robot.num_limbs;
   double mean_length = 0;
   for (int i = 0; i < n; ++i) mean_length += robot.limb(i).rod.length / n;
@@ -334,6 +339,7 @@ inline bool choose_home(const RobotParams<double>& robot, const Pose2<double>& m
   }
   return best < HUGE_VAL;
 }
+#endif
 
 namespace internal {
 
@@ -353,19 +359,21 @@ auto solve_cold(const RobotParams<double>& robot, const SolverOptions& options,
 
 }  // namespace internal
 
-inline ForwardSolution forward_kinematics(const RobotParams<double>& robot, const JointVector& q,
-                                          const SolverOptions& options,
-                                          const PlatformLoad<double>& load) {
+#if PCR_SOLVER_DEFINITIONS
+PCR_SOLVER_INLINE ForwardSolution forward_kinematics(const RobotParams<double>& robot,
+                                                     const JointVector& q,
+                                                     const SolverOptions& options,
+                                                     const PlatformLoad<double>& load) {
   return internal::solve_cold(robot, options, load, [&](const ForwardSolution& home) {
     return forward_kinematics_from_home(robot, q, home, options, load);
   });
 }
 
-inline ForwardSolution forward_kinematics_from_home(const RobotParams<double>& robot,
-                                                    const JointVector& q,
-                                                    const ForwardSolution& home,
-                                                    const SolverOptions& options,
-                                                    const PlatformLoad<double>& load) {
+PCR_SOLVER_INLINE ForwardSolution forward_kinematics_from_home(const RobotParams<double>& robot,
+                                                               const JointVector& q,
+                                                               const ForwardSolution& home,
+                                                               const SolverOptions& options,
+                                                               const PlatformLoad<double>& load) {
   if (!home.summary.converged()) return home;  // q = 0 then, path_fraction 0: nothing solved
   ForwardSolution solution = forward_kinematics(robot, q, home, options, load);
   // With n >= 4 limbs, straight rods at home carry a self-stress: a path from a home where some
@@ -396,11 +404,11 @@ inline ForwardSolution forward_kinematics_from_home(const RobotParams<double>& r
   return solution;
 }
 
-inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
-                                          const Pose2<double>& pose,
-                                          const InverseSolution& warm_start,
-                                          const SolverOptions& options,
-                                          const PlatformLoad<double>& load) {
+PCR_SOLVER_INLINE InverseSolution inverse_kinematics(const RobotParams<double>& robot,
+                                                     const Pose2<double>& pose,
+                                                     const InverseSolution& warm_start,
+                                                     const SolverOptions& options,
+                                                     const PlatformLoad<double>& load) {
   ShootingVector u0, u1;
   const SolveStatus input = internal::inverse_path(robot, pose, warm_start, options, u0, u1);
   if (input != SolveStatus::kConverged) return internal::refused(pose, input);
@@ -414,19 +422,20 @@ inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
   return solution;
 }
 
-inline InverseSolution inverse_kinematics(const RobotParams<double>& robot,
-                                          const Pose2<double>& pose, const SolverOptions& options,
-                                          const PlatformLoad<double>& load) {
+PCR_SOLVER_INLINE InverseSolution inverse_kinematics(const RobotParams<double>& robot,
+                                                     const Pose2<double>& pose,
+                                                     const SolverOptions& options,
+                                                     const PlatformLoad<double>& load) {
   return internal::solve_cold(robot, options, load, [&](const ForwardSolution& home) {
     return inverse_kinematics_from_home(robot, pose, home, options, load);
   });
 }
 
-inline InverseSolution inverse_kinematics_from_home(const RobotParams<double>& robot,
-                                                    const Pose2<double>& pose,
-                                                    const ForwardSolution& home,
-                                                    const SolverOptions& options,
-                                                    const PlatformLoad<double>& load) {
+PCR_SOLVER_INLINE InverseSolution inverse_kinematics_from_home(const RobotParams<double>& robot,
+                                                               const Pose2<double>& pose,
+                                                               const ForwardSolution& home,
+                                                               const SolverOptions& options,
+                                                               const PlatformLoad<double>& load) {
   if (!home.summary.converged()) {
     InverseSolution failed = as_inverse_warm_start(home);
     failed.summary.path_fraction = 0.0;
@@ -434,6 +443,7 @@ inline InverseSolution inverse_kinematics_from_home(const RobotParams<double>& r
   }
   return inverse_kinematics(robot, pose, as_inverse_warm_start(home), options, load);
 }
+#endif
 
 inline InverseSolution as_inverse_warm_start(const ForwardSolution& fk) {
   InverseSolution warm;
@@ -497,10 +507,12 @@ Solution solve_with_cold_fallback(const Solution* warm, WarmSolve&& warm_solve, 
 
 }  // namespace internal
 
-inline ForwardSolution forward_kinematics_or_cold(const RobotParams<double>& robot,
-                                                  const JointVector& q, const ForwardSolution* warm,
-                                                  const SolverOptions& options,
-                                                  const PlatformLoad<double>& load) {
+#if PCR_SOLVER_DEFINITIONS
+PCR_SOLVER_INLINE ForwardSolution forward_kinematics_or_cold(const RobotParams<double>& robot,
+                                                             const JointVector& q,
+                                                             const ForwardSolution* warm,
+                                                             const SolverOptions& options,
+                                                             const PlatformLoad<double>& load) {
   return internal::solve_with_cold_fallback(
       warm,
       [&](const ForwardSolution& w) { return forward_kinematics(robot, q, w, options, load); },
@@ -511,11 +523,11 @@ inline ForwardSolution forward_kinematics_or_cold(const RobotParams<double>& rob
       [&] { return forward_kinematics(robot, q, options, load); });
 }
 
-inline InverseSolution inverse_kinematics_or_cold(const RobotParams<double>& robot,
-                                                  const Pose2<double>& pose,
-                                                  const InverseSolution* warm,
-                                                  const SolverOptions& options,
-                                                  const PlatformLoad<double>& load) {
+PCR_SOLVER_INLINE InverseSolution inverse_kinematics_or_cold(const RobotParams<double>& robot,
+                                                             const Pose2<double>& pose,
+                                                             const InverseSolution* warm,
+                                                             const SolverOptions& options,
+                                                             const PlatformLoad<double>& load) {
   return internal::solve_with_cold_fallback(
       warm,
       [&](const InverseSolution& w) { return inverse_kinematics(robot, pose, w, options, load); },
@@ -526,11 +538,11 @@ inline InverseSolution inverse_kinematics_or_cold(const RobotParams<double>& rob
       [&] { return inverse_kinematics(robot, pose, options, load); });
 }
 
-inline ForwardSolution SequenceTraits<ForwardSolution>::home(const Robot& robot,
-                                                             const SolverOptions& options,
-                                                             const Load& load) {
+PCR_SOLVER_INLINE ForwardSolution SequenceTraits<ForwardSolution>::home(
+    const Robot& robot, const SolverOptions& options, const Load& load) {
   return home_solution(robot, internal::unchecked(options), load);
 }
+#endif
 
 template <class Solution>
 const Solution& SequenceSolver<Solution>::solve(const Input& input) {
@@ -553,6 +565,17 @@ const Solution& SequenceSolver<Solution>::solve(const Input& input) {
   }
   return solution;
 }
+
+#if !PCR_SOLVER_DEFINITIONS
+// Without a visitor of its own, the trace through folds is compiled once too
+// (pcr/internal/solver_linkage.hpp, src/solvers/solvers.cpp).
+extern template ForwardSolution forward_kinematics_through_folds<NoPathVisitor>(
+    const RobotParams<double>&, const JointVector&, const ForwardSolution&, const SolverOptions&,
+    const PlatformLoad<double>&, NoPathVisitor&&);
+extern template InverseSolution inverse_kinematics_through_folds<NoPathVisitor>(
+    const RobotParams<double>&, const Pose2<double>&, const InverseSolution&, const SolverOptions&,
+    const PlatformLoad<double>&, NoPathVisitor&&);
+#endif
 
 template <class Visitor>
 void visit_rod_shapes(const RobotParams<double>& robot, const JointVector& q,

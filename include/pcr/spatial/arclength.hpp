@@ -215,4 +215,14 @@ SpatialInverseSolution spatial_inverse_kinematics_through_folds(
       visit);
 }
 
+#if !PCR_SOLVER_DEFINITIONS
+// Without a visitor of their own, compiled once (pcr/internal/solver_linkage.hpp).
+extern template SpatialForwardSolution spatial_forward_kinematics_through_folds<NoPathVisitor>(
+    const SpatialRobotParams<double>&, const SpatialJointVector&, const SpatialForwardSolution&,
+    const SolverOptions&, NoPathVisitor&&);
+extern template SpatialInverseSolution spatial_inverse_kinematics_through_folds<NoPathVisitor>(
+    const SpatialRobotParams<double>&, const SpatialPose<double>&, const SpatialInverseSolution&,
+    const SolverOptions&, NoPathVisitor&&);
+#endif
+
 }  // namespace pcr

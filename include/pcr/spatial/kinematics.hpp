@@ -14,6 +14,7 @@
 
 #include "pcr/internal/branch_rule.hpp"
 #include "pcr/internal/rod_step_ladder.hpp"
+#include "pcr/internal/solver_linkage.hpp"
 #include "pcr/solver.hpp"
 #include "pcr/spatial/shooting.hpp"
 #include "pcr/spatial/stability.hpp"
@@ -637,32 +638,9 @@ void fill_solution(const Problem& problem, const SpatialShootingPoint<double>& x
 /// Jacobian (Newton's when they stop contracting); if that fails, natural continuation from the
 /// warm start's q. RK4 steps per rod: options.rod_steps, or, when 0, chosen from the solution's
 /// estimated discretisation error (spatial_refine_rod_steps), starting from the warm start's.
-inline SpatialForwardSolution spatial_forward_kinematics(
+PCR_SOLVER_INLINE SpatialForwardSolution spatial_forward_kinematics(
     const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
-    const SpatialForwardSolution& warm_start, const SolverOptions& options = SolverOptions()) {
-  SpatialForwardSolution out;
-  if (!internal::spatial_inputs_valid(robot, q, options) || warm_start.q.size() != robot.num_rods ||
-      !warm_start.q.allFinite()) {
-    out.summary.status = SolveStatus::kInvalidInput;
-    return out;
-  }
-  internal::SpatialForwardProblem problem(
-      robot, internal::starting_rod_steps(options, warm_start.summary.rod_steps));
-  SpatialShootingPoint<double> x;
-  x.pose = warm_start.pose;
-  for (int i = 0; i < robot.num_rods; ++i) {
-    x.q[i] = warm_start.q(i);
-    x.wrenches[i] = warm_start.wrenches[i];
-  }
-  out.warm = warm_start.warm;
-  out.summary.status =
-      internal::spatial_solve_path(problem, x, warm_start.q, q, out.warm, options, out.summary);
-  out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
-                                                          out.summary, out.summary.status);
-  internal::fill_solution(problem, x, out);
-  internal::report_spatial_solution(robot, options, out);
-  return out;
-}
+    const SpatialForwardSolution& warm_start, const SolverOptions& options = SolverOptions());
 
 /// Forward kinematics from a cold start, from up to three starts in turn: Newton from the
 /// straight-rod guess at q (straight_rods_guess); with options.continuation, the bowed cold start
@@ -675,72 +653,9 @@ inline SpatialForwardSolution spatial_forward_kinematics(
 /// solution is returned, else the first converged one. The solves from straight rods have
 /// kColdIterationFactor times options.max_iterations. A failure reports the first start's status;
 /// the summary counts the work of every start tried.
-inline SpatialForwardSolution spatial_forward_kinematics(
-    const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
-    const SolverOptions& options = SolverOptions()) {
-  SpatialForwardSolution out;
-  if (!internal::spatial_inputs_valid(robot, q, options)) {
-    out.summary.status = SolveStatus::kInvalidInput;
-    return out;
-  }
-  SolverOptions direct = options;
-  direct.continuation = false;
-  direct.max_iterations = kColdIterationFactor * options.max_iterations;
-  const SpatialJointVector home = SpatialJointVector::Zero(robot.num_rods);
-  enum class Start { kStraight, kBowed, kFromHome };
-  // Solves x at q from `start` (x set here), in problem at its starting step count.
-  const auto solve_from = [&](Start start, internal::SpatialForwardProblem& problem,
-                              SpatialShootingPoint<double>& x) {
-    SolverSummary& summary = out.summary;
-    switch (start) {
-      case Start::kStraight:
-        x = straight_rods_guess(robot, q);
-        return internal::spatial_solve_path(problem, x, q, q, out.warm, direct, summary);
-      case Start::kBowed: {
-        x = straight_rods_guess(robot, q);
-        const SolveStatus status =
-            internal::spatial_homotopy_solve(robot, x, problem.rod_steps(), options, summary);
-        if (status != SolveStatus::kConverged) return status;
-        // There: its Jacobian and tangent, for the refinement.
-        return internal::spatial_solve_path(problem, x, q, q, out.warm, direct, summary);
-      }
-      case Start::kFromHome: {
-        x = straight_rods_guess(robot, home);
-        const SolveStatus status =
-            internal::spatial_solve_path(problem, x, home, home, out.warm, direct, summary);
-        if (status != SolveStatus::kConverged) return status;
-        return internal::spatial_solve_path(problem, x, home, q, out.warm, options, summary);
-      }
-    }
-    return SolveStatus::kMaxIterations;
-  };
-  SpatialForwardSolution unstable;  // the first converged start's, when it is unstable
-  SolveStatus first = SolveStatus::kMaxIterations;
-  for (const Start start : {Start::kStraight, Start::kBowed, Start::kFromHome}) {
-    if (start != Start::kStraight && !options.continuation) break;
-    if (start == Start::kFromHome && q.isZero(0.0)) break;
-    internal::SpatialForwardProblem problem(robot, internal::starting_rod_steps(options, 0));
-    SpatialShootingPoint<double> x;
-    out.summary.status = solve_from(start, problem, x);
-    if (start == Start::kStraight) first = out.summary.status;
-    out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
-                                                            out.summary, out.summary.status);
-    internal::fill_solution(problem, x, out);
-    internal::report_spatial_solution(robot, options, out);
-    if (!usable_as_warm_start(out.summary)) continue;
-    if (out.summary.stability != Stability::kUnstable) return out;
-    if (!usable_as_warm_start(unstable.summary)) unstable = out;
-  }
-  if (usable_as_warm_start(unstable.summary)) {  // no start gave a stable equilibrium
-    unstable.summary.iterations = out.summary.iterations;
-    unstable.summary.residual_evaluations = out.summary.residual_evaluations;
-    unstable.summary.continuation_steps = out.summary.continuation_steps;
-    return unstable;
-  }
-  out.summary.status = first;
-  internal::report_spatial_solution(robot, options, out);
-  return out;
-}
+PCR_SOLVER_INLINE SpatialForwardSolution
+spatial_forward_kinematics(const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
+                           const SolverOptions& options = SolverOptions());
 
 /// Orientation directions that spatial IK solves for rather than imposes, by rod count, so that its
 /// problem is square (7 n + free = 6 n + 6 unknowns): none for six rods (the whole pose imposed);
@@ -1122,28 +1037,143 @@ SpatialInverseSolution spatial_inverse_from(const SpatialRobotParams<double>& ro
 /// halving the step on failure. RK4 steps as spatial_forward_kinematics. An equilibrium that would
 /// not hold is replaced by a stable one at the pose when one is found
 /// (SolverOptions::stable_inverse, look_for_stable_spatial_inverse), else kUnstable.
-inline SpatialInverseSolution spatial_inverse_kinematics(
+PCR_SOLVER_INLINE SpatialInverseSolution spatial_inverse_kinematics(
     const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
-    const SpatialForwardSolution& start, const SolverOptions& options = SolverOptions()) {
-  // The forward solution's factorisation is of another problem: no carried Jacobian.
-  return internal::spatial_inverse_from(robot, pose, start, nullptr, options);
-}
+    const SpatialForwardSolution& start, const SolverOptions& options = SolverOptions());
 
 /// Inverse kinematics warm-started from a previous inverse solution (IK along a path, the normal
 /// case in a control loop): its joints and wrenches predicted along the tangent to the pose, then
 /// chord steps with its factorised Jacobian; on failure, as from a forward solution.
-inline SpatialInverseSolution spatial_inverse_kinematics(
+PCR_SOLVER_INLINE SpatialInverseSolution spatial_inverse_kinematics(
     const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
-    const SpatialInverseSolution& warm_start, const SolverOptions& options = SolverOptions()) {
-  return internal::spatial_inverse_from(robot, pose, warm_start, &warm_start.warm, options);
-}
+    const SpatialInverseSolution& warm_start, const SolverOptions& options = SolverOptions());
 
 /// Inverse kinematics from the home solution (FK at q = 0): as from any forward solution; a home
 /// that did not converge is returned as a failed solution with its status (the summary does not
 /// count the home solve's iterations).
-inline SpatialInverseSolution spatial_inverse_kinematics_from_home(
+PCR_SOLVER_INLINE SpatialInverseSolution spatial_inverse_kinematics_from_home(
     const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
-    const SpatialForwardSolution& home, const SolverOptions& options = SolverOptions()) {
+    const SpatialForwardSolution& home, const SolverOptions& options = SolverOptions());
+
+/// Inverse kinematics from a cold start: the home solution (a cold FK at q = 0), then
+/// spatial_inverse_kinematics_from_home.
+PCR_SOLVER_INLINE SpatialInverseSolution
+spatial_inverse_kinematics(const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+                           const SolverOptions& options = SolverOptions());
+
+#if PCR_SOLVER_DEFINITIONS
+// The bodies of the entry points declared above (pcr/internal/solver_linkage.hpp).
+
+PCR_SOLVER_INLINE SpatialForwardSolution
+spatial_forward_kinematics(const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
+                           const SpatialForwardSolution& warm_start, const SolverOptions& options) {
+  SpatialForwardSolution out;
+  if (!internal::spatial_inputs_valid(robot, q, options) || warm_start.q.size() != robot.num_rods ||
+      !warm_start.q.allFinite()) {
+    out.summary.status = SolveStatus::kInvalidInput;
+    return out;
+  }
+  internal::SpatialForwardProblem problem(
+      robot, internal::starting_rod_steps(options, warm_start.summary.rod_steps));
+  SpatialShootingPoint<double> x;
+  x.pose = warm_start.pose;
+  for (int i = 0; i < robot.num_rods; ++i) {
+    x.q[i] = warm_start.q(i);
+    x.wrenches[i] = warm_start.wrenches[i];
+  }
+  out.warm = warm_start.warm;
+  out.summary.status =
+      internal::spatial_solve_path(problem, x, warm_start.q, q, out.warm, options, out.summary);
+  out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
+                                                          out.summary, out.summary.status);
+  internal::fill_solution(problem, x, out);
+  internal::report_spatial_solution(robot, options, out);
+  return out;
+}
+
+PCR_SOLVER_INLINE SpatialForwardSolution
+spatial_forward_kinematics(const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
+                           const SolverOptions& options) {
+  SpatialForwardSolution out;
+  if (!internal::spatial_inputs_valid(robot, q, options)) {
+    out.summary.status = SolveStatus::kInvalidInput;
+    return out;
+  }
+  SolverOptions direct = options;
+  direct.continuation = false;
+  direct.max_iterations = kColdIterationFactor * options.max_iterations;
+  const SpatialJointVector home = SpatialJointVector::Zero(robot.num_rods);
+  enum class Start { kStraight, kBowed, kFromHome };
+  // Solves x at q from `start` (x set here), in problem at its starting step count.
+  const auto solve_from = [&](Start start, internal::SpatialForwardProblem& problem,
+                              SpatialShootingPoint<double>& x) {
+    SolverSummary& summary = out.summary;
+    switch (start) {
+      case Start::kStraight:
+        x = straight_rods_guess(robot, q);
+        return internal::spatial_solve_path(problem, x, q, q, out.warm, direct, summary);
+      case Start::kBowed: {
+        x = straight_rods_guess(robot, q);
+        const SolveStatus status =
+            internal::spatial_homotopy_solve(robot, x, problem.rod_steps(), options, summary);
+        if (status != SolveStatus::kConverged) return status;
+        // There: its Jacobian and tangent, for the refinement.
+        return internal::spatial_solve_path(problem, x, q, q, out.warm, direct, summary);
+      }
+      case Start::kFromHome: {
+        x = straight_rods_guess(robot, home);
+        const SolveStatus status =
+            internal::spatial_solve_path(problem, x, home, home, out.warm, direct, summary);
+        if (status != SolveStatus::kConverged) return status;
+        return internal::spatial_solve_path(problem, x, home, q, out.warm, options, summary);
+      }
+    }
+    return SolveStatus::kMaxIterations;
+  };
+  SpatialForwardSolution unstable;  // the first converged start's, when it is unstable
+  SolveStatus first = SolveStatus::kMaxIterations;
+  for (const Start start : {Start::kStraight, Start::kBowed, Start::kFromHome}) {
+    if (start != Start::kStraight && !options.continuation) break;
+    if (start == Start::kFromHome && q.isZero(0.0)) break;
+    internal::SpatialForwardProblem problem(robot, internal::starting_rod_steps(options, 0));
+    SpatialShootingPoint<double> x;
+    out.summary.status = solve_from(start, problem, x);
+    if (start == Start::kStraight) first = out.summary.status;
+    out.summary.status = internal::spatial_refine_rod_steps(problem, x, out.warm.lu, options,
+                                                            out.summary, out.summary.status);
+    internal::fill_solution(problem, x, out);
+    internal::report_spatial_solution(robot, options, out);
+    if (!usable_as_warm_start(out.summary)) continue;
+    if (out.summary.stability != Stability::kUnstable) return out;
+    if (!usable_as_warm_start(unstable.summary)) unstable = out;
+  }
+  if (usable_as_warm_start(unstable.summary)) {  // no start gave a stable equilibrium
+    unstable.summary.iterations = out.summary.iterations;
+    unstable.summary.residual_evaluations = out.summary.residual_evaluations;
+    unstable.summary.continuation_steps = out.summary.continuation_steps;
+    return unstable;
+  }
+  out.summary.status = first;
+  internal::report_spatial_solution(robot, options, out);
+  return out;
+}
+
+PCR_SOLVER_INLINE SpatialInverseSolution
+spatial_inverse_kinematics(const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+                           const SpatialForwardSolution& start, const SolverOptions& options) {
+  // The forward solution's factorisation is of another problem: no carried Jacobian.
+  return internal::spatial_inverse_from(robot, pose, start, nullptr, options);
+}
+
+PCR_SOLVER_INLINE SpatialInverseSolution
+spatial_inverse_kinematics(const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+                           const SpatialInverseSolution& warm_start, const SolverOptions& options) {
+  return internal::spatial_inverse_from(robot, pose, warm_start, &warm_start.warm, options);
+}
+
+PCR_SOLVER_INLINE SpatialInverseSolution spatial_inverse_kinematics_from_home(
+    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+    const SpatialForwardSolution& home, const SolverOptions& options) {
   if (!home.summary.converged()) {
     SpatialInverseSolution out;
     out.summary = home.summary;
@@ -1154,14 +1184,14 @@ inline SpatialInverseSolution spatial_inverse_kinematics_from_home(
   return spatial_inverse_kinematics(robot, pose, home, options);
 }
 
-/// Inverse kinematics from a cold start: the home solution (a cold FK at q = 0), then
-/// spatial_inverse_kinematics_from_home.
-inline SpatialInverseSolution spatial_inverse_kinematics(
-    const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
-    const SolverOptions& options = SolverOptions()) {
+PCR_SOLVER_INLINE SpatialInverseSolution
+spatial_inverse_kinematics(const SpatialRobotParams<double>& robot, const SpatialPose<double>& pose,
+                           const SolverOptions& options) {
   const SpatialForwardSolution home =
       spatial_forward_kinematics(robot, SpatialJointVector::Zero(robot.num_rods), options);
   return spatial_inverse_kinematics_from_home(robot, pose, home, options);
 }
+
+#endif  // PCR_SOLVER_DEFINITIONS
 
 }  // namespace pcr

@@ -33,17 +33,7 @@ struct SequenceTraits<SpatialForwardSolution> {
   }
   static SpatialForwardSolution continued(const Robot& robot, const Input& q,
                                           const SpatialForwardSolution* warm,
-                                          const SolverOptions& options, const Load&) {
-    const auto warm_solve = [&](const SpatialForwardSolution& w) {
-      return spatial_forward_kinematics(robot, q, w, options);
-    };
-    return internal::solve_with_cold_fallback(
-        warm, warm_solve, options.through_folds,
-        [&](const SpatialForwardSolution& w) {
-          return spatial_forward_kinematics_through_folds(robot, q, w, options);
-        },
-        [&] { return spatial_forward_kinematics(robot, q, options); });
-  }
+                                          const SolverOptions& options, const Load&);
 };
 
 template <>
@@ -61,20 +51,43 @@ struct SequenceTraits<SpatialInverseSolution> {
   }
   static SpatialInverseSolution continued(const Robot& robot, const Input& pose,
                                           const SpatialInverseSolution* warm,
-                                          const SolverOptions& options, const Load&) {
-    const auto warm_solve = [&](const SpatialInverseSolution& w) {
-      return spatial_inverse_kinematics(robot, pose, w, options);
-    };
-    return internal::solve_with_cold_fallback(
-        warm, warm_solve, options.through_folds,
-        [&](const SpatialInverseSolution& w) {
-          return spatial_inverse_kinematics_through_folds(robot, pose, w, options);
-        },
-        [&] { return spatial_inverse_kinematics(robot, pose, options); });
-  }
+                                          const SolverOptions& options, const Load&);
 };
 
 using SpatialForwardSequence = SequenceSolver<SpatialForwardSolution>;
 using SpatialInverseSequence = SequenceSolver<SpatialInverseSolution>;
+
+#if PCR_SOLVER_DEFINITIONS
+// The bodies of the entry points declared above (pcr/internal/solver_linkage.hpp).
+
+PCR_SOLVER_INLINE SpatialForwardSolution SequenceTraits<SpatialForwardSolution>::continued(
+    const Robot& robot, const Input& q, const SpatialForwardSolution* warm,
+    const SolverOptions& options, const Load&) {
+  const auto warm_solve = [&](const SpatialForwardSolution& w) {
+    return spatial_forward_kinematics(robot, q, w, options);
+  };
+  return internal::solve_with_cold_fallback(
+      warm, warm_solve, options.through_folds,
+      [&](const SpatialForwardSolution& w) {
+        return spatial_forward_kinematics_through_folds(robot, q, w, options);
+      },
+      [&] { return spatial_forward_kinematics(robot, q, options); });
+}
+
+PCR_SOLVER_INLINE SpatialInverseSolution SequenceTraits<SpatialInverseSolution>::continued(
+    const Robot& robot, const Input& pose, const SpatialInverseSolution* warm,
+    const SolverOptions& options, const Load&) {
+  const auto warm_solve = [&](const SpatialInverseSolution& w) {
+    return spatial_inverse_kinematics(robot, pose, w, options);
+  };
+  return internal::solve_with_cold_fallback(
+      warm, warm_solve, options.through_folds,
+      [&](const SpatialInverseSolution& w) {
+        return spatial_inverse_kinematics_through_folds(robot, pose, w, options);
+      },
+      [&] { return spatial_inverse_kinematics(robot, pose, options); });
+}
+
+#endif  // PCR_SOLVER_DEFINITIONS
 
 }  // namespace pcr

@@ -42,6 +42,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pcr/internal/solver_linkage.hpp"
 #include "pcr/spatial/cosserat_rod.hpp"
 #include "pcr/spatial/robot.hpp"
 #include "pcr/spatial/shooting.hpp"
@@ -175,7 +176,55 @@ inline Matrix3<double> spherical_tip_stiffness(const SpatialRodCheck& rod,
 
 /// spatial_equilibrium_stability, optionally without the rods' axial compliance in the platform's
 /// stiffness (tests compare that of the inextensible model with finite differences).
+PCR_SOLVER_INLINE SpatialEquilibriumStability spatial_equilibrium_stability(
+    const SpatialRobotParams<double>& robot, const SpatialShootingPoint<double>& point,
+    int rod_steps, bool axial_compliance);
+
+}  // namespace internal
+
+/// The stability of the equilibrium `point` (joints, pose, proximal wrenches) of a spatial robot
+/// (1 to kMaxSpatialRods rods) under its dead loads, its rods integrated in rod_steps RK4 steps
+/// (a solution's summary.rod_steps; stability_rod_steps of it checks at half the cost). The
+/// configuration is taken as given: call it on a converged solution.
 inline SpatialEquilibriumStability spatial_equilibrium_stability(
+    const SpatialRobotParams<double>& robot, const SpatialShootingPoint<double>& point,
+    int rod_steps) {
+  return internal::spatial_equilibrium_stability(robot, point, rod_steps, true);
+}
+
+/// The shooting point of a forward or inverse solution (pose, q, wrenches).
+template <class Solution>
+SpatialShootingPoint<double> spatial_shooting_point(const SpatialRobotParams<double>& robot,
+                                                    const Solution& solution) {
+  SpatialShootingPoint<double> point;
+  point.pose = solution.pose;
+  for (int i = 0; i < robot.num_rods && i < solution.q.size(); ++i) {
+    point.q[i] = solution.q(i);
+    point.wrenches[i] = solution.wrenches[i];
+  }
+  return point;
+}
+
+/// The stability of a forward solution's equilibrium.
+inline SpatialEquilibriumStability spatial_equilibrium_stability(
+    const SpatialRobotParams<double>& robot, const SpatialForwardSolution& solution,
+    int rod_steps) {
+  if (solution.q.size() != robot.num_rods) return SpatialEquilibriumStability();
+  return spatial_equilibrium_stability(robot, spatial_shooting_point(robot, solution), rod_steps);
+}
+
+/// The stability of an inverse solution's equilibrium.
+inline SpatialEquilibriumStability spatial_equilibrium_stability(
+    const SpatialRobotParams<double>& robot, const SpatialInverseSolution& solution,
+    int rod_steps) {
+  if (solution.q.size() != robot.num_rods) return SpatialEquilibriumStability();
+  return spatial_equilibrium_stability(robot, spatial_shooting_point(robot, solution), rod_steps);
+}
+
+#if PCR_SOLVER_DEFINITIONS
+// The bodies of the entry points declared above (pcr/internal/solver_linkage.hpp).
+
+PCR_SOLVER_INLINE SpatialEquilibriumStability internal::spatial_equilibrium_stability(
     const SpatialRobotParams<double>& robot, const SpatialShootingPoint<double>& point,
     int rod_steps, bool axial_compliance) {
   SpatialEquilibriumStability result;
@@ -220,45 +269,6 @@ inline SpatialEquilibriumStability spatial_equilibrium_stability(
   return result;
 }
 
-}  // namespace internal
-
-/// The stability of the equilibrium `point` (joints, pose, proximal wrenches) of a spatial robot
-/// (1 to kMaxSpatialRods rods) under its dead loads, its rods integrated in rod_steps RK4 steps
-/// (a solution's summary.rod_steps; stability_rod_steps of it checks at half the cost). The
-/// configuration is taken as given: call it on a converged solution.
-inline SpatialEquilibriumStability spatial_equilibrium_stability(
-    const SpatialRobotParams<double>& robot, const SpatialShootingPoint<double>& point,
-    int rod_steps) {
-  return internal::spatial_equilibrium_stability(robot, point, rod_steps, true);
-}
-
-/// The shooting point of a forward or inverse solution (pose, q, wrenches).
-template <class Solution>
-SpatialShootingPoint<double> spatial_shooting_point(const SpatialRobotParams<double>& robot,
-                                                    const Solution& solution) {
-  SpatialShootingPoint<double> point;
-  point.pose = solution.pose;
-  for (int i = 0; i < robot.num_rods && i < solution.q.size(); ++i) {
-    point.q[i] = solution.q(i);
-    point.wrenches[i] = solution.wrenches[i];
-  }
-  return point;
-}
-
-/// The stability of a forward solution's equilibrium.
-inline SpatialEquilibriumStability spatial_equilibrium_stability(
-    const SpatialRobotParams<double>& robot, const SpatialForwardSolution& solution,
-    int rod_steps) {
-  if (solution.q.size() != robot.num_rods) return SpatialEquilibriumStability();
-  return spatial_equilibrium_stability(robot, spatial_shooting_point(robot, solution), rod_steps);
-}
-
-/// The stability of an inverse solution's equilibrium.
-inline SpatialEquilibriumStability spatial_equilibrium_stability(
-    const SpatialRobotParams<double>& robot, const SpatialInverseSolution& solution,
-    int rod_steps) {
-  if (solution.q.size() != robot.num_rods) return SpatialEquilibriumStability();
-  return spatial_equilibrium_stability(robot, spatial_shooting_point(robot, solution), rod_steps);
-}
+#endif  // PCR_SOLVER_DEFINITIONS
 
 }  // namespace pcr
