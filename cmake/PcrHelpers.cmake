@@ -19,6 +19,9 @@ function(pcr_add_test name)
   target_compile_definitions(${name} PRIVATE PCR_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
                                              PCR_BINARY_DIR="${PROJECT_BINARY_DIR}")
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60)
+  if("inputs" IN_LIST ARG_LABELS)
+    set_property(GLOBAL APPEND PROPERTY PCR_INPUT_CHECKS ${name})
+  endif()
   # Not gtest_discover_tests(PROPERTIES LABELS ...), which flattens a list value (LABELS unit cli
   # reaches set_tests_properties as three words). ctest runs this script after the discovered
   # tests' own, which leaves their names in <name>_TESTS.
