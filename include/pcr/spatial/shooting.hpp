@@ -31,7 +31,6 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>  // cross products
 #include <Eigen/LU>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -41,6 +40,7 @@
 #include "pcr/solver.hpp"
 #include "pcr/spatial/cosserat_rod.hpp"
 #include "pcr/spatial/quaternion.hpp"
+#include "pcr/spatial/rigid_fit.hpp"
 #include "pcr/spatial/robot.hpp"
 
 namespace pcr {
@@ -327,37 +327,22 @@ inline void spatial_residual(const SpatialRobotParams<double>& robot,
 }
 
 /// The straight-rod guess at q: every rod straight from its proximal end along its base
-/// tangent, the platform pose the rigid (least-squares, Kabsch) fit of its attachments B_i to
-/// those straight tips, no wrenches. For n < 3 rods (or collinear attachments) the fit keeps the
-/// platform's orientation the identity and places its origin at the tips' centroid less the
-/// attachments'.
+/// tangent, the platform pose the rigid fit of its attachments B_i to those straight tips
+/// (fit_rigid_motion; for n < 3 rods or collinear attachments, the identity orientation and the
+/// centroids matched), no wrenches.
 inline SpatialShootingPoint<double> straight_rods_guess(const SpatialRobotParams<double>& robot,
                                                         const SpatialJointVector& q) {
   const int n = robot.num_rods;
   SpatialShootingPoint<double> point;
-  Vector3<double> tips[kMaxSpatialRods];
-  Vector3<double> tip_centroid = Vector3<double>::Zero(), b_centroid = Vector3<double>::Zero();
+  Vector3<double> attachments[kMaxSpatialRods], tips[kMaxSpatialRods];
   for (int i = 0; i < n; ++i) {
     const SpatialLimbParams<double>& limb = robot.limb(i);
     point.q[i] = q(i);
+    attachments[i] = limb.B;
     tips[i] = limb.proximal_position(q(i)) +
               limb.rod_at(q(i)).length * rotation_of(limb.base_orientation).col(2);
-    tip_centroid += tips[i] / n;
-    b_centroid += limb.B / n;
   }
-  Matrix3<double> H = Matrix3<double>::Zero();
-  for (int i = 0; i < n; ++i) {
-    H += (robot.limb(i).B - b_centroid) * (tips[i] - tip_centroid).transpose();
-  }
-  Matrix3<double> R = Matrix3<double>::Identity();
-  const Eigen::JacobiSVD<Matrix3<double>> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  if (n >= 3 && svd.singularValues()(1) > 1e-9 * svd.singularValues()(0)) {
-    Matrix3<double> D = Matrix3<double>::Identity();
-    D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-    R = svd.matrixV() * D * svd.matrixU().transpose();
-  }
-  point.pose.orientation = quaternion_of(R);
-  point.pose.position = tip_centroid - R * b_centroid;
+  point.pose = fit_rigid_motion(attachments, tips, n);
   return point;
 }
 
