@@ -104,6 +104,42 @@ TEST(CsvIo, HeaderErrors) {
   EXPECT_NE(m.find("duplicate column 'x'"), std::string::npos) << m;
 }
 
+// A text column (an image's file name) is kept per row, in any position of the header, with the
+// numeric columns read around it; without a header, without the column or with an empty field,
+// an error naming the line (and column).
+TEST(CsvIo, TextColumnsAreKeptPerRow) {
+  pcr::CsvReadOptions options;
+  options.columns = {"q1", "q2"};
+  options.text_columns = {"image"};
+  const auto read = [&](const std::string& text) {
+    std::istringstream in(text);
+    return pcr::parse_csv(in, "rows.csv", options);
+  };
+  const pcr::CsvTable t = read("q2,image,#note,q1\n2,a b.png,x,1\n4,dir/c.png,y,3\n");
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_TRUE(t.rows[0] == std::vector<double>({1, 2}));
+  EXPECT_TRUE(t.rows[1] == std::vector<double>({3, 4}));
+  ASSERT_EQ(t.texts.size(), 2u);
+  EXPECT_EQ(t.texts[0], std::vector<std::string>{"a b.png"});
+  EXPECT_EQ(t.texts[1], std::vector<std::string>{"dir/c.png"});
+  const auto error = [&](const std::string& text) {
+    try {
+      read(text);
+    } catch (const pcr::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  std::string m = error("1,2,a.png\n");
+  EXPECT_NE(m.find("rows.csv:1"), std::string::npos) << m;
+  EXPECT_NE(m.find("header"), std::string::npos) << m;
+  m = error("q1,q2\n1,2\n");
+  EXPECT_NE(m.find("missing column 'image'"), std::string::npos) << m;
+  m = error("q1,q2,image\n1,2,a.png\n1,2,\n");
+  EXPECT_NE(m.find("rows.csv:3:3"), std::string::npos) << m;
+  EXPECT_NE(m.find("empty"), std::string::npos) << m;
+}
+
 TEST(CsvIo, FormatDoubleRoundTripsBitForBit) {
   std::mt19937_64 rng(42);
   for (int i = 0; i < 20000; ++i) {

@@ -34,6 +34,9 @@ struct CsvReadOptions {
   /// With a header line and expected columns: skip (do not parse) columns not in `columns`
   /// instead of rejecting them. For reading tables written by other tools (e.g. `pcr fk` output).
   bool ignore_other_columns{false};
+  /// Columns kept as text, not parsed (a file name per row), picked by their header name: the
+  /// header is then required and must name each of them; an empty field is an error.
+  std::vector<std::string> text_columns;
 };
 
 /// One row of a CsvTable: a view of its numeric fields, valid while the table lives.
@@ -103,7 +106,9 @@ struct CsvTable {
   bool has_header{false};
   std::vector<std::string> columns;  ///< names of the numeric columns (expected or read)
   CsvRows rows;                      ///< numeric columns only, in `columns` order
-  std::vector<int> line_numbers;     ///< 1-based source line of each row
+  /// Per row, the fields of CsvReadOptions::text_columns in their order.
+  std::vector<std::vector<std::string>> texts;
+  std::vector<int> line_numbers;  ///< 1-based source line of each row
   /// 1-based field of each of `columns` in the source's lines (a header may reorder them), for
   /// messages naming a value's line and column; 0 for a column the source did not have.
   std::vector<int> source_columns;

@@ -111,8 +111,14 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
   table.source = source;
   table.columns = options.columns;
   const std::string text = read_table_text(in, source);
-  // Field index in the source line -> position in the numeric row (-1: comment column).
+  // Field index in the source line -> position in the numeric row (-1: comment column; -2 - k:
+  // text column k).
   std::vector<int> mapping;
+  const auto text_column = [&](std::string_view name) {
+    const auto& t = options.text_columns;
+    const auto found = std::find(t.begin(), t.end(), name);
+    return found == t.end() ? -1 : static_cast<int>(found - t.begin());
+  };
   std::vector<std::string> header_names;
   std::vector<std::string_view> fields;
   bool first = true;
@@ -138,12 +144,17 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
           if (fields[j].empty()) {
             fail(source, line_number, static_cast<int>(j) + 1, "empty column name in the header");
           }
-          if (fields[j][0] != '#') numeric.emplace_back(fields[j]);
+          if (fields[j][0] != '#' && text_column(fields[j]) < 0) numeric.emplace_back(fields[j]);
+        }
+        for (const std::string& c : options.text_columns) {
+          if (std::find(fields.begin(), fields.end(), c) == fields.end()) {
+            fail(source, line_number, 0, "missing column " + quoted(c) + " in the header");
+          }
         }
         if (options.columns.empty()) {
           table.columns = numeric;
           for (std::string_view f : fields) {
-            mapping.push_back(f[0] == '#' ? -1 : 0);
+            mapping.push_back(f[0] == '#' ? -1 : text_column(f) >= 0 ? -2 - text_column(f) : 0);
           }
           int k = 0;
           for (int& m : mapping) {
@@ -153,6 +164,10 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
           mapping.assign(fields.size(), -1);
           for (std::size_t j = 0; j < fields.size(); ++j) {
             if (fields[j][0] == '#') continue;
+            if (text_column(fields[j]) >= 0) {
+              mapping[j] = -2 - text_column(fields[j]);
+              continue;
+            }
             int found = -1;
             for (std::size_t k = 0; k < options.columns.size(); ++k) {
               if (options.columns[k] == fields[j]) found = static_cast<int>(k);
@@ -185,6 +200,11 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
         }
         continue;
       }
+      if (!options.text_columns.empty()) {
+        fail(source, line_number, 0,
+             "expected a header line naming the columns (a text column such as " +
+                 quoted(options.text_columns.front()) + " among them)");
+      }
       if (options.columns.empty()) {
         for (std::size_t j = 0; j < fields.size(); ++j) {
           table.columns.push_back("column " + std::to_string(j + 1));
@@ -213,7 +233,17 @@ CsvTable parse_csv(std::istream& in, const std::string& source, const CsvReadOpt
       table.line_numbers.reserve(lines_left);
     }
     double* const row = table.rows.append();
+    if (!options.text_columns.empty()) table.texts.emplace_back(options.text_columns.size());
     for (std::size_t j = 0; j < fields.size(); ++j) {
+      if (mapping[j] <= -2) {
+        const std::string_view text = trim(fields[j]);
+        if (text.empty()) {
+          fail(source, line_number, static_cast<int>(j) + 1,
+               "column " + std::to_string(j + 1) + " (" + header_names[j] + "): empty field");
+        }
+        table.texts.back()[static_cast<std::size_t>(-2 - mapping[j])] = std::string(text);
+        continue;
+      }
       if (mapping[j] < 0) continue;
       const std::optional<double> value = parse_number(fields[j]);
       const int column = static_cast<int>(j) + 1;

@@ -1,8 +1,9 @@
 #pragma once
-// What the robot loaders of pcr::io share (the planar robot_io.cpp and spatial_robot_io.cpp): the
-// JSON parse with its guards (nesting, duplicate keys, overflowing numbers, syntax errors by line
-// and column), a reader whose every error names the file, the field path and the value, and the
-// pretty printer the writers use. Internal to pcr::io: nlohmann_json stays private.
+// What the JSON file readers share (the planar robot_io.cpp and spatial_robot_io.cpp of pcr::io,
+// the tag board file of pcr::vision): the JSON parse with its guards (nesting, duplicate keys,
+// overflowing numbers, syntax errors by line and column), a reader whose every error names the
+// file, the field path and the value, and the pretty printer the writers use. Internal to the
+// libraries (no installed header): nlohmann_json stays private.
 
 #include <Eigen/Core>
 #include <cmath>
@@ -11,8 +12,11 @@
 #include <sstream>
 #include <string>
 
+#include "pcr/csv_io.hpp"  // format_double
 #include "pcr/input_error.hpp"
 #include "pcr/robot_io.hpp"
+#include "pcr/spatial/robot.hpp"
+#include "pcr/spatial/robot_io.hpp"  // kUnitQuaternionTolerance
 
 namespace pcr::json_io {
 
@@ -95,6 +99,41 @@ class JsonReader {
       in_range(value[static_cast<std::size_t>(i)], index(path, i), lo, hi, unit);
     }
     return v;
+  }
+
+  /// An array of numbers of unit norm within kUnitQuaternionTolerance (a quaternion (w, x, y, z)
+  /// or a direction), refused rather than normalised.
+  template <int N>
+  Eigen::Matrix<double, N, 1> unit(const Json& value, const std::string& path,
+                                   const char* what) const {
+    const Eigen::Matrix<double, N, 1> v = vector<N>(value, path);
+    const double norm = v.norm();
+    if (!(std::abs(norm - 1.0) <= kUnitQuaternionTolerance)) {
+      fail(path,
+           std::string("expected ") + what + " of unit norm (within " +
+               format_double(kUnitQuaternionTolerance) + "; its norm is " + format_double(norm) +
+               ")",
+           value);
+    }
+    return v;
+  }
+
+  /// A point within kMaxCoordinate of the origin in every coordinate (m).
+  Vector3<double> point(const Json& value, const std::string& path) const {
+    return vector_in_range<3>(value, path, -kMaxCoordinate, kMaxCoordinate, "m");
+  }
+
+  /// A pose {"position": [x, y, z], "orientation": [w, x, y, z]}, both optional (identity).
+  SpatialPose<double> frame(const Json& value, const std::string& path) const {
+    check_object(value, path, {"position", "orientation"});
+    SpatialPose<double> pose;
+    if (value.contains("position"))
+      pose.position = point(value["position"], join(path, "position"));
+    if (value.contains("orientation")) {
+      pose.orientation =
+          unit<4>(value["orientation"], join(path, "orientation"), "a quaternion (w, x, y, z)");
+    }
+    return pose;
   }
 
  private:

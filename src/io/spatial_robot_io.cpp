@@ -30,27 +30,6 @@ class SpatialReader : public JsonReader {
  public:
   using JsonReader::JsonReader;
 
-  /// An array of numbers of unit norm within kUnitQuaternionTolerance (a quaternion (w, x, y, z)
-  /// or a direction), refused rather than normalised.
-  template <int N>
-  Eigen::Matrix<double, N, 1> unit(const Json& value, const std::string& path,
-                                   const char* what) const {
-    const Eigen::Matrix<double, N, 1> v = vector<N>(value, path);
-    const double norm = v.norm();
-    if (!(std::abs(norm - 1.0) <= kUnitQuaternionTolerance)) {
-      fail(path,
-           std::string("expected ") + what + " of unit norm (within " +
-               format_double(kUnitQuaternionTolerance) + "; its norm is " + format_double(norm) +
-               ")",
-           value);
-    }
-    return v;
-  }
-
-  Vector3<double> point(const Json& value, const std::string& path) const {
-    return vector_in_range<3>(value, path, -kMaxCoordinate, kMaxCoordinate, "m");
-  }
-
   SpatialLimbParams<double> limb(const Json& l, const std::string& path) const {
     check_object(l, path,
                  {"length", "diameter", "young_modulus", "shear_modulus", "density",
@@ -114,19 +93,6 @@ class SpatialReader : public JsonReader {
       fail(join(path, "attachment"), "expected \"clamped\" or \"spherical\"", attachment);
     }
     return limb;
-  }
-
-  /// A pose {"position": [x, y, z], "orientation": [w, x, y, z]}, both optional (identity).
-  SpatialPose<double> frame(const Json& value, const std::string& path) const {
-    check_object(value, path, {"position", "orientation"});
-    SpatialPose<double> pose;
-    if (value.contains("position"))
-      pose.position = point(value["position"], join(path, "position"));
-    if (value.contains("orientation")) {
-      pose.orientation =
-          unit<4>(value["orientation"], join(path, "orientation"), "a quaternion (w, x, y, z)");
-    }
-    return pose;
   }
 
   /// Reads the rod uncertainty fields present in `object` over `out` (overrides).
