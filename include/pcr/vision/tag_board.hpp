@@ -52,7 +52,24 @@ struct BoardTag {
 
 struct TagBoard {
   std::vector<BoardTag> tags;
+  /// ^M T_P, the platform frame in the board frame (the robot file's extrinsics.marker): the
+  /// identity when the tags are given in P (M = P).
+  SpatialPose<double> marker_T_platform;
 };
+
+/// The tag board file (JSON, SI units; docs/vision.md, "The tag board file"):
+///   {
+///     "format": "pcr-tag-board", "version": 1,   // both optional
+///     "family": "tag36h11", "tag_size": 0.024,   // defaults for the tags (optional)
+///     "marker": {"position": [x, y, z], "orientation": [w, x, y, z]},  // ^M T_P (optional)
+///     "tags": [ {"id": 10, "family": ..., "tag_size": ..., "comment": ...,
+///                "pose": {"position": [...], "orientation": [...]}} ]  // the tag in P
+///   }
+/// The tags' poses are read in P and kept in M (^M T_P pose). Every error names `source`, the
+/// field and the value (an unknown field, a quaternion not of unit norm, an id that is not an
+/// integer, and what check_board refuses).
+TagBoard parse_tag_board(const std::string& json_text, const std::string& source);
+TagBoard load_tag_board(const std::string& path);
 
 /// Throws InputError naming `source` and the tag for a board without tags, an unknown family, an
 /// id the family does not have, a size that is not positive, or a family and id given twice.
