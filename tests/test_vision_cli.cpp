@@ -1,10 +1,12 @@
-// `pcr render`, `pcr measure` and `pcr camera` run as programs: one rendered robot measured end to
-// end against the render's ground truth, every bad input docs/vision.md lists ("Command-line
-// checks") exiting non-zero with a message naming the mount, the file or the id and writing no
+// `pcr render`, `pcr measure`, `pcr camera` and `pcr measure-poses` run as programs: one rendered
+// robot measured end to end against the render's ground truth (a planar robot's description, a
+// spatial robot's platform poses), every bad input docs/vision.md lists ("Command-line checks")
+// exiting non-zero with a message naming the mount, the file, the row or the id and writing no
 // output, and a camera calibrated from rendered chessboards.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "pcr/csv_io.hpp"
 #include "pcr/robot_io.hpp"
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
@@ -95,8 +98,18 @@ class VisionCli : public ::testing::Test {
     return path(name);
   }
 
-  /// Runs `pcr measure` expecting a failure; checks the exit status, that every `needle` is in the
-  /// message and that no output file (nor a temporary one) was left.
+  /// Checks that `r` failed, that every `needle` is in its message and that no output file named
+  /// bad_out* (nor a temporary one) was left.
+  static void expect_failure(const Result& r, const std::vector<std::string>& needles) {
+    EXPECT_NE(r.status, 0) << r.all();
+    for (const std::string& n : needles)
+      EXPECT_NE(r.err.find(n), std::string::npos) << "'" << n << "' not in: " << r.err;
+    for (const auto& e : fs::directory_iterator(dir()))
+      EXPECT_EQ(e.path().filename().string().rfind("bad_out", 0), std::string::npos)
+          << "left " << e.path();
+  }
+
+  /// Runs `pcr measure` expecting a failure (expect_failure).
   static void expect_measure_error(const std::string& mounts, const std::string& camera,
                                    const std::string& image,
                                    const std::vector<std::string>& needles) {
@@ -104,12 +117,7 @@ class VisionCli : public ::testing::Test {
     const Result r =
         run("measure --mounts '" + mounts + "' --camera '" + camera + "' --image '" + image +
             "' --output '" + output + "' --annotated '" + path("bad_out.png") + "'");
-    EXPECT_NE(r.status, 0) << r.all();
-    for (const std::string& n : needles)
-      EXPECT_NE(r.err.find(n), std::string::npos) << "'" << n << "' not in: " << r.err;
-    for (const auto& e : fs::directory_iterator(dir()))
-      EXPECT_EQ(e.path().filename().string().rfind("bad_out", 0), std::string::npos)
-          << "left " << e.path();
+    expect_failure(r, needles);
   }
 };
 
@@ -319,6 +327,293 @@ TEST_F(VisionCli, CameraFromRenderedChessboards) {
   EXPECT_NE(bad.status, 0) << bad.all();
   EXPECT_NE(bad.err.find("blank_board.png"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(path("bad_out.yaml")));
+}
+
+// ---- A spatial robot: `pcr measure-poses` -----------------------------------------------------
+
+const std::string kSpatialRobot =
+    std::string(PCR_SOURCE_DIR) + "/robots/continuum-stewart-gough.json";
+
+// A rotation matrix as a (w, x, y, z) quaternion, through Eigen.
+Eigen::Vector4d quaternion_wxyz(const Eigen::Matrix3d& R) {
+  const Eigen::Quaterniond q(R);
+  return {q.w(), q.x(), q.y(), q.z()};
+}
+Eigen::Matrix3d rotation_wxyz(const Eigen::Vector4d& q) {
+  return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+}
+struct Frame {  // a rigid pose through Eigen, independent of pcr::SpatialPose
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  Frame operator*(const Frame& o) const { return {R * o.R, t + R * o.t}; }
+  Frame inverse() const { return {R.transpose(), -(R.transpose() * t)}; }
+};
+Frame frame_of(const nlohmann::json& j) {
+  const nlohmann::json &p = j["position"], &q = j["orientation"];
+  return {rotation_wxyz(Eigen::Vector4d(q[0], q[1], q[2], q[3])),
+          Eigen::Vector3d(p[0], p[1], p[2])};
+}
+nlohmann::json frame_json(const Frame& f) {
+  const Eigen::Vector4d q = quaternion_wxyz(f.R);
+  return {{"position", {f.t.x(), f.t.y(), f.t.z()}}, {"orientation", {q[0], q[1], q[2], q[3]}}};
+}
+
+// The platform's board (frame P): four 24 mm tags around a 16 mm one on its top face, 5 mm above
+// P, and a 16 mm tag on a 30 degree bevel at its edge (as tests/test_spatial_vision.cpp's).
+struct SpatialBoardTag {
+  int id;
+  double size;
+  Frame in_platform;
+};
+std::vector<SpatialBoardTag> spatial_board() {
+  const auto turn = [](double angle, const Eigen::Vector3d& axis) {
+    return Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+  };
+  std::vector<SpatialBoardTag> tags;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d at((k % 2 ? 0.035 : -0.035), (k / 2 ? 0.035 : -0.035), 0.005);
+    tags.push_back({10 + k, 0.024, {turn(0.4 * k, Eigen::Vector3d::UnitZ()), at}});
+  }
+  tags.push_back({14, 0.016, {turn(-0.3, Eigen::Vector3d::UnitZ()), {0, 0, 0.005}}});
+  tags.push_back({15, 0.016, {turn(-M_PI / 6, Eigen::Vector3d::UnitX()), {0, -0.07, 0}}});
+  return tags;
+}
+
+// The board frame M off P (the file's "marker", ^M T_P): its poses are M's, not P's.
+const Frame kMarkerTPlatform{
+    Eigen::AngleAxisd(0.05, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix(),
+    {0.004, -0.003, 0.002}};
+
+nlohmann::json spatial_board_json() {
+  nlohmann::json j = {{"format", "pcr-tag-board"},
+                      {"version", 1},
+                      {"family", kDefaultTagFamily},
+                      {"marker", frame_json(kMarkerTPlatform)}};
+  for (const SpatialBoardTag& t : spatial_board())
+    j["tags"].push_back({{"id", t.id}, {"tag_size", t.size}, {"pose", frame_json(t.in_platform)}});
+  return j;
+}
+
+class SpatialVisionCli : public VisionCli {
+ protected:
+  static constexpr int kRows = 4;
+  // ^S T_M of each row, and the camera: 640 x 640 px, f = 750 px, barrel distortion, 0.75 m
+  // above W, about 0.35 m above the platform (0.47 mm/px on it).
+  static std::vector<Frame> truths_;
+
+  static void SetUpTestSuite() {
+    scratch_ = std::make_unique<pcr::test::ScratchDirectory>("spatial_vision_cli");
+    Scene scene;
+    scene.camera.width = scene.camera.height = 640;
+    scene.camera.K << 750, 0, 322.4, 0, 751, 317.9, 0, 0, 1;
+    scene.camera.distortion << -0.1, 0.03, 0.0002, -0.0003, 0.0;
+    scene.plane = PlanePose::looking_down(0.75, 0.05, -0.03);
+    save_camera(scene.camera, path("camera.yaml"));
+    const Frame camera_T_world{scene.plane.rotation, scene.plane.translation};
+    std::ofstream(path("board.json")) << spatial_board_json().dump(2);
+    std::ofstream rows(path("rows.csv"));
+    rows << "q1,q2,q3,q4,q5,q6,image\n";
+    for (int k = 0; k < kRows; ++k) {
+      // Platform poses ^W T_P about 0.4 m above the base, moved by up to 2 cm, tilted by up to
+      // 0.1 rad; the joints are only carried through to the dataset.
+      const Frame world_T_platform{
+          (Eigen::AngleAxisd(0.1 * std::sin(k + 1.0), Eigen::Vector3d::UnitX()) *
+           Eigen::AngleAxisd(0.08 * std::cos(2.0 * k), Eigen::Vector3d::UnitY()) *
+           Eigen::AngleAxisd(0.3 * k - 0.4, Eigen::Vector3d::UnitZ()))
+              .toRotationMatrix(),
+          {0.02 * std::cos(1.3 * k), 0.015 * std::sin(2.1 * k), 0.4 + 0.01 * k}};
+      scene.tags_3d.clear();
+      for (const SpatialBoardTag& t : spatial_board()) {
+        const Frame w = world_T_platform * t.in_platform;
+        scene.tags_3d.push_back(RenderTag3d{kDefaultTagFamily, t.id, t.size,
+                                            SpatialPose<double>{w.t, quaternion_wxyz(w.R)}});
+      }
+      truths_.push_back(camera_T_world * world_T_platform * kMarkerTPlatform.inverse());
+      RenderOptions opt;
+      opt.supersampling = 3;
+      opt.blur_sigma_px = 0.8;
+      opt.noise_sigma = 0.02;
+      opt.gradient = 0.15;
+      opt.white = 0.8;
+      opt.seed = 40 + k;
+      const std::string image = "pose" + std::to_string(k) + ".png";
+      write_png(render_scene(scene, opt), path(image));
+      for (int i = 0; i < 6; ++i) rows << 0.001 * (k + 1) * (i - 2) << ",";
+      rows << image << "\n";  // relative: to the rows file's directory
+    }
+  }
+
+  /// Runs `pcr measure-poses` with `board` and `rows` expecting a failure naming every `needle`
+  /// and writing no output.
+  static void expect_poses_error(const std::string& board, const std::string& rows,
+                                 const std::vector<std::string>& needles,
+                                 const std::string& robot = kSpatialRobot) {
+    const Result r =
+        run("measure-poses --robot '" + robot + "' --board '" + board + "' --camera '" +
+            path("camera.yaml") + "' --input '" + rows + "' --output '" + path("bad_out.csv") +
+            "' --covariance '" + path("bad_out_cov.csv") + "'");
+    expect_failure(r, needles);
+  }
+
+  static std::string write(const std::string& name, const std::string& text) {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  }
+};
+
+std::vector<Frame> SpatialVisionCli::truths_;
+
+// The 0.9999 quantile of chi-square with 6 degrees of freedom.
+constexpr double kChiSquare6Quantile9999 = 27.856;
+
+// Each row's measured ^S T_M lies within the command's own predicted covariance of the truth of
+// the render: its Mahalanobis distance d2 = e^T S^-1 e (e = (dp in S, dtheta in M)) below
+// chi-square(6)'s 0.9999 quantile; the joints are carried through unchanged.
+TEST_F(SpatialVisionCli, MeasuredPosesAgreeWithTheRenderedTruthWithinTheirCovariance) {
+  const Result r =
+      run("measure-poses --robot '" + kSpatialRobot + "' --board '" + path("board.json") +
+          "' --camera '" + path("camera.yaml") + "' --input '" + path("rows.csv") + "' --output '" +
+          path("dataset.csv") + "' --covariance '" + path("covariance.csv") + "'");
+  ASSERT_EQ(r.status, 0) << r.all();
+  const CsvTable data = read_csv(path("dataset.csv"));
+  const CsvTable cov = read_csv(path("covariance.csv"));
+  ASSERT_EQ(data.columns, (std::vector<std::string>{"q1", "q2", "q3", "q4", "q5", "q6", "x", "y",
+                                                    "z", "rx", "ry", "rz"}));
+  ASSERT_EQ(data.rows.size(), static_cast<std::size_t>(kRows));
+  ASSERT_EQ(cov.rows.size(), static_cast<std::size_t>(kRows));
+  ASSERT_EQ(cov.columns.size(), 6u + 21u + 2u);
+  double worst = 0;
+  for (int k = 0; k < kRows; ++k) {
+    const CsvRow row = data.rows[static_cast<std::size_t>(k)];
+    for (int i = 0; i < 6; ++i) EXPECT_DOUBLE_EQ(row[i], 0.001 * (k + 1) * (i - 2));
+    const Eigen::Vector3d p(row[6], row[7], row[8]), turn(row[9], row[10], row[11]);
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(turn.norm(), turn.normalized()).toRotationMatrix();  // not a zero turn
+    const Frame& truth = truths_[static_cast<std::size_t>(k)];
+    const Eigen::AngleAxisd dtheta(truth.R.transpose() * R);
+    Eigen::Matrix<double, 6, 1> e;
+    e << p - truth.t, dtheta.angle() * dtheta.axis();
+    Eigen::Matrix<double, 6, 6> S;
+    const CsvRow c = cov.rows[static_cast<std::size_t>(k)];
+    std::size_t at = 6;
+    for (int a = 0; a < 6; ++a)
+      for (int b = a; b < 6; ++b) S(a, b) = S(b, a) = c[at++];
+    EXPECT_EQ(c[at + 1], 6) << "row " << k << ": every board tag seen";
+    const double d2 = e.dot(S.ldlt().solve(e));
+    EXPECT_LT(d2, kChiSquare6Quantile9999) << "row " << k << ": error " << e.transpose();
+    // A covariance of this camera's scale (um, sub-mrad), not one so wide any pose would pass.
+    EXPECT_LT(std::sqrt(S(0, 0)), 20e-6) << "row " << k;
+    EXPECT_LT(std::sqrt(S(4, 4)), 2e-3) << "row " << k;
+    worst = std::max(worst, d2);
+  }
+  std::printf("%d poses, worst d2 %.2f\n", kRows, worst);
+}
+
+// The command-line round trip: `pcr render` places the board by the robot's forward kinematics at
+// q and writes the truth ^S T_M; `pcr measure-poses` on that image finds it within its covariance.
+TEST_F(SpatialVisionCli, RenderedSpatialRobotMeasuredWithinItsCovariance) {
+  const std::string q = "0.004,-0.002,0.003,0.001,-0.003,0.002";
+  const Result render =
+      run("render --robot '" + kSpatialRobot + "' --board '" + path("board.json") + "' --camera '" +
+          path("camera.yaml") + "' --q " + q +
+          " --height 0.75 --tilt-x 0.05 --tilt-y -0.03 --supersampling 3 --blur 0.8 --noise 0.01 "
+          "--seed 9 --output '" +
+          path("fk.png") + "' --truth '" + path("fk.json") + "'");
+  ASSERT_EQ(render.status, 0) << render.all();
+  write("fk_rows.csv", "image,q1,q2,q3,q4,q5,q6\nfk.png," + q + "\n");  // columns in any order
+  const Result r = run("measure-poses --robot '" + kSpatialRobot + "' --board '" +
+                       path("board.json") + "' --camera '" + path("camera.yaml") + "' --input '" +
+                       path("fk_rows.csv") + "' --output '" + path("fk_dataset.csv") +
+                       "' --covariance '" + path("fk_covariance.csv") + "'");
+  ASSERT_EQ(r.status, 0) << r.all();
+  const nlohmann::json truth = nlohmann::json::parse(slurp(path("fk.json")));
+  const Frame measured_truth = frame_of(truth["camera_T_marker"]);
+  // The truth's frames, from the render's own ^W T_P and the test's camera and ^M T_P.
+  const Frame world_T_platform = frame_of(truth["world_T_platform"]);
+  const PlanePose plane = PlanePose::looking_down(0.75, 0.05, -0.03);
+  const Frame expected =
+      Frame{plane.rotation, plane.translation} * world_T_platform * kMarkerTPlatform.inverse();
+  EXPECT_LT((expected.t - measured_truth.t).norm(), 1e-12);
+  EXPECT_LT((expected.R - measured_truth.R).norm(), 1e-12);
+  // The platform on its 0.4 m rods, nearly upright: a little below 0.4 m above the base.
+  EXPECT_GT(world_T_platform.t.z(), 0.3);
+  EXPECT_LT(world_T_platform.t.z(), 0.4);
+  const CsvTable data = read_csv(path("fk_dataset.csv"));
+  const CsvTable cov = read_csv(path("fk_covariance.csv"));
+  ASSERT_EQ(data.rows.size(), 1u);
+  const CsvRow row = data.rows[0];
+  const Eigen::Vector3d p(row[6], row[7], row[8]), turn(row[9], row[10], row[11]);
+  const Eigen::AngleAxisd dtheta(measured_truth.R.transpose() *
+                                 Eigen::AngleAxisd(turn.norm(), turn.normalized()).matrix());
+  Eigen::Matrix<double, 6, 1> e;
+  e << p - measured_truth.t, dtheta.angle() * dtheta.axis();
+  Eigen::Matrix<double, 6, 6> S;
+  std::size_t at = 6;
+  for (int a = 0; a < 6; ++a)
+    for (int b = a; b < 6; ++b) S(a, b) = S(b, a) = cov.rows[0][at++];
+  const double d2 = e.dot(S.ldlt().solve(e));
+  EXPECT_LT(d2, kChiSquare6Quantile9999) << "error " << e.transpose();
+  std::printf("rendered at q: d2 %.2f, |dp| %.1f um\n", d2, e.head<3>().norm() * 1e6);
+}
+
+TEST_F(SpatialVisionCli, BadInputsNameTheFileRowAndValue) {
+  const std::string rows = path("rows.csv"), board = path("board.json");
+  // A missing image: the row's line and the file.
+  expect_poses_error(board,
+                     write("missing_rows.csv",
+                           "q1,q2,q3,q4,q5,q6,image\n0,0,0,0,0,0,pose0.png\n"
+                           "0,0,0,0,0,0,nowhere.png\n"),
+                     {"missing_rows.csv:3", "nowhere.png"});
+  // Rows with the wrong joint count: a header of 5 joints for 6 rods, a row of 5 joints.
+  expect_poses_error(board, write("five.csv", "q1,q2,q3,q4,q5,image\n0,0,0,0,0,pose0.png\n"),
+                     {"five.csv", "missing column 'q6'"});
+  expect_poses_error(board,
+                     write("short_row.csv", "q1,q2,q3,q4,q5,q6,image\n0,0,0,0,0,pose0.png\n"),
+                     {"short_row.csv:2", "expected 7 columns, got 6"});
+  // Joints beyond any robot (a unit slip): the line, the column and the value.
+  expect_poses_error(board, write("mm.csv", "q1,q2,q3,q4,q5,q6,image\n0,0,12,0,0,0,pose0.png\n"),
+                     {"mm.csv:2", "q3 = 12"});
+  // A board whose ids are not in the image: the row and image, the board's ids and those seen.
+  nlohmann::json j = spatial_board_json();
+  for (auto& t : j["tags"]) t["id"] = t["id"].get<int>() + 40;
+  std::ofstream(path("other_ids.json")) << j.dump();
+  expect_poses_error(path("other_ids.json"), rows,
+                     {"rows.csv:2", "pose0.png", "no tag of the board", "id 50", "id 10"});
+  // An id the family lacks: the board file and the tag.
+  j = spatial_board_json();
+  j["tags"][2]["id"] = 5000;
+  std::ofstream(path("bad_id.json")) << j.dump();
+  expect_poses_error(path("bad_id.json"), rows, {"bad_id.json", "board tag 2", "id 5000"});
+  // Malformed board files: a syntax error (line and column), a misspelt field, a quaternion not
+  // of unit norm, a missing size, a tag given twice.
+  expect_poses_error(write("syntax.json", "{\n  \"tags\": [\n    {\"id\": 1,}\n  ]\n}\n"), rows,
+                     {"syntax.json:3", "JSON syntax error"});
+  j = spatial_board_json();
+  j["tags"][1]["tag_sise"] = 0.02;
+  std::ofstream(path("misspelt.json")) << j.dump();
+  expect_poses_error(path("misspelt.json"), rows, {"misspelt.json", "tags[1].tag_sise"});
+  j = spatial_board_json();
+  j["tags"][0]["pose"]["orientation"] = {1, 0.1, 0, 0};
+  std::ofstream(path("norm.json")) << j.dump();
+  expect_poses_error(path("norm.json"), rows, {"norm.json", "tags[0].pose.orientation", "norm"});
+  j = spatial_board_json();
+  j["tags"][3].erase("tag_size");
+  std::ofstream(path("no_size.json")) << j.dump();
+  expect_poses_error(path("no_size.json"), rows, {"no_size.json", "tags[3].tag_size", "missing"});
+  j = spatial_board_json();
+  j["tags"][4]["id"] = 10;
+  std::ofstream(path("twice.json")) << j.dump();
+  expect_poses_error(path("twice.json"), rows, {"twice.json", "id 10", "twice"});
+  // A planar robot file.
+  expect_poses_error(board, rows, {"femto-3pf.json", "planar"},
+                     std::string(PCR_SOURCE_DIR) + "/robots/femto-3pf.json");
+  // The output over an input is refused, and the input stays.
+  const std::string before = slurp(rows);
+  const Result r =
+      run("measure-poses --robot '" + kSpatialRobot + "' --board '" + board + "' --camera '" +
+          path("camera.yaml") + "' --input '" + rows + "' --output '" + rows + "'");
+  EXPECT_NE(r.status, 0) << r.all();
+  EXPECT_EQ(slurp(rows), before);
 }
 
 }  // namespace

@@ -13,6 +13,9 @@
 #include "pcr/csv_io.hpp"
 #include "pcr/kinematics.hpp"
 #include "pcr/robot_io.hpp"
+#ifdef PCR_HAS_VISION
+#include "pcr/vision/tags.hpp"
+#endif
 
 void register_fk_command(CLI::App& app);
 void register_ik_command(CLI::App& app);
@@ -30,6 +33,9 @@ void register_map_command(CLI::App& app);
 void register_measure_command(CLI::App& app);
 void register_render_command(CLI::App& app);
 void register_camera_command(CLI::App& app);
+#endif
+#if defined(PCR_HAS_VISION) && defined(PCR_HAS_CALIB)
+void register_measure_poses_command(CLI::App& app);
 #endif
 
 namespace pcr::cli {
@@ -301,5 +307,17 @@ inline void add_summary_fields(const SolverSummary& s, bool valid, CsvWriter& ou
   out.add(s.stability_margin);
   out.add(s.singularity);
 }
+
+#ifdef PCR_HAS_VISION
+/// The tag detector's options of the commands that measure tags in images (docs/vision.md, step 1).
+inline void add_detector_options(CLI::App& command, vision::DetectorOptions& options) {
+  command.add_option("--min-margin", options.min_decision_margin, "minimum decision margin")
+      ->check(within(vision::DetectorOptions::kMinDecisionMargin))
+      ->capture_default_str();
+  command.add_option("--max-hamming", options.max_hamming, "maximum corrected bits")
+      ->check(within(vision::DetectorOptions::kMaxHamming))
+      ->capture_default_str();
+}
+#endif
 
 }  // namespace pcr::cli

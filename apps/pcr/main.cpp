@@ -85,6 +85,9 @@ int main(int argc, char** argv) {
   register_render_command(app);
   register_camera_command(app);
 #endif
+#if defined(PCR_HAS_VISION) && defined(PCR_HAS_CALIB)
+  register_measure_poses_command(app);
+#endif
 #ifdef PCR_FULL_TOOL
   // This binary links only pcr::io, so its subcommands start in milliseconds; the others, and the
   // help that lists them all, are the full tool's, which loads Ceres, OpenCV and what they need.

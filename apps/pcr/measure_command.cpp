@@ -30,13 +30,7 @@ void register_measure_command(CLI::App& app) {
   cmd->add_option("--annotated", args->annotated, "annotated PNG for a visual check");
   cmd->add_option("--family", args->family, "tag family of the mounts whose layout file names none")
       ->capture_default_str();
-  cmd->add_option("--min-margin", args->options.detector.min_decision_margin,
-                  "minimum decision margin")
-      ->check(pcr::cli::within(pcr::vision::DetectorOptions::kMinDecisionMargin))
-      ->capture_default_str();
-  cmd->add_option("--max-hamming", args->options.detector.max_hamming, "maximum corrected bits")
-      ->check(pcr::cli::within(pcr::vision::DetectorOptions::kMaxHamming))
-      ->capture_default_str();
+  pcr::cli::add_detector_options(*cmd, args->options.detector);
   cmd->callback([args]() {
     using namespace pcr;
     using namespace pcr::vision;

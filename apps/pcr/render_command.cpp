@@ -1,4 +1,5 @@
-// pcr render: a synthetic image of the robot's rod-mount tags (tests, end-to-end demo).
+// pcr render: a synthetic image of the robot's rod-mount tags, or of a spatial robot's platform
+// tag board (tests, end-to-end demo).
 #ifdef PCR_HAS_VISION
 #include <cmath>
 #include <cstdio>
@@ -9,11 +10,24 @@
 #include <tuple>
 
 #include "commands.hpp"
+#include "pcr/spatial/kinematics.hpp"
+#include "pcr/spatial/robot_io.hpp"
 #include "pcr/vision/render.hpp"
+#include "pcr/vision/tag_board.hpp"
+
+namespace {
+
+nlohmann::json frame_json(const pcr::SpatialPose<double>& pose) {
+  const auto& p = pose.position;
+  const auto& q = pose.orientation;
+  return {{"position", {p.x(), p.y(), p.z()}}, {"orientation", {q[0], q[1], q[2], q[3]}}};
+}
+
+}  // namespace
 
 void register_render_command(CLI::App& app) {
   struct Args {
-    std::string robot, mounts, camera, camera_out, output, truth, q, platform = "0,0,0";
+    std::string robot, mounts, board, camera, camera_out, output, truth, q, platform = "0,0,0";
     std::string chessboard, board_pose = "0,0,0";
     double height = 0.5, tilt_x = 0, tilt_y = 0, wafer = 0.100, square = 0.005;
     pcr::vision::RenderOptions render;
@@ -27,6 +41,8 @@ void register_render_command(CLI::App& app) {
   cmd->add_option(
       "--mounts", args->mounts,
       "mount layout JSON (e.g. data/mounts-femto-3pf.json); required unless --chessboard");
+  cmd->add_option("--board", args->board,
+                  "tag board JSON of a spatial robot's platform (with a spatial --robot)");
   cmd->add_option("--camera", args->camera,
                   "OpenCV camera YAML (default: 4000 x 4000 px, f = 8000 px)");
   cmd->add_option("--camera-out", args->camera_out, "write the camera used as OpenCV YAML");
@@ -72,11 +88,8 @@ void register_render_command(CLI::App& app) {
   cmd->callback([args]() {
     using namespace pcr;
     using namespace pcr::vision;
-    if (args->mounts.empty() && args->chessboard.empty())
-      throw InputError("pcr render: give --mounts or --chessboard");
     check_distinct_outputs(
         {{"--output", args->output}, {"--camera-out", args->camera_out}, {"--truth", args->truth}});
-    const RobotDescription robot = load_robot_or_default(args->robot);
     Scene scene;
     if (args->camera.empty()) {
       scene.camera.width = scene.camera.height = 4000;
@@ -85,90 +98,128 @@ void register_render_command(CLI::App& app) {
       scene.camera = load_camera(args->camera);
     }
     scene.plane = PlanePose::looking_down(args->height, args->tilt_x, args->tilt_y);
-    const int n = robot.params.num_limbs;
-    const std::vector<double> q = args->q.empty()
-                                      ? std::vector<double>{}
-                                      : cli::parse_list(args->q, cli::joint_names(n), "--q");
-    for (std::size_t i = 0; i < q.size(); ++i) {
-      const LimbParams<double>& limb = robot.params.limb(static_cast<int>(i));
-      if (!limb.within_stroke(q[i])) {
-        throw InputError("--q: q" + std::to_string(i + 1) + " = " + format_double(q[i]) +
-                         " m is beyond the stroke of limbs[" + std::to_string(i) + "], q_range [" +
-                         format_double(limb.q_min) + ", " + format_double(limb.q_max) + "] m");
+    nlohmann::json truth;  // what the scene is, for --truth
+    if (cli::is_spatial_robot(args->robot)) {
+      // The platform by forward kinematics at --q, its board seen from above; the truth is the
+      // measurement ^S T_M (S the camera frame) and ^W T_S (the robot file's extrinsics.tracker
+      // for this camera).
+      if (args->board.empty() || !args->mounts.empty() || !args->chessboard.empty() ||
+          args->platform != "0,0,0") {
+        throw InputError("pcr render: " + args->robot +
+                         " is a spatial robot: give its platform's --board (its pose comes from "
+                         "--q; no --mounts, --chessboard or --platform)");
       }
-    }
-    const std::vector<double> pl =
-        cli::parse_list(args->platform, {"x", "y", "theta"}, "--platform");
-    const Pose2<double> platform{pl[0], pl[1], pl[2]};
-    if (!args->mounts.empty()) {
-      scene.tags = mount_tags(load_mounts(args->mounts), robot.params, platform, q,
-                              args->rods ? &scene.segments : nullptr);
-      // The platform is a 100 mm silicon wafer (paper, Sec. 4.1); only an outline, the tags stay on
-      // top.
-      if (args->rods && args->wafer > 0)
-        scene.circles.push_back(RenderCircle{platform.translation(), 0.5 * args->wafer});
-    }
-    if (!args->chessboard.empty()) {
-      RenderChessboard board;
-      std::tie(board.cols, board.rows) = parse_board_size(args->chessboard, "--chessboard");
-      if (!(args->square > 0))
-        throw InputError("--square: must be > 0, got " + std::to_string(args->square));
-      board.square_m = args->square;
-      const std::vector<double> c =
-          cli::parse_list(args->board_pose, {"x", "y", "theta"}, "--board-pose");
-      scene.chessboard =
-          RenderChessboard::centred(board.cols, board.rows, board.square_m, {c[0], c[1], c[2]});
-    }
-    const GrayImage image = render_scene(scene, args->render);
-    OutputTransaction outputs;  // the image, the camera and the truth: all or none
-    write_png(image, args->output, args->bits);
-    if (!args->camera_out.empty()) save_camera(scene.camera, args->camera_out);
-    if (!args->truth.empty()) {
-      nlohmann::json j;
-      j["format"] = "pcr-render-truth";
-      j["image"] = args->output;
+      const SpatialRobotDescription robot = load_spatial_robot(args->robot);
+      const int n = robot.params.num_rods;
+      SpatialJointVector q = SpatialJointVector::Zero(n);
+      if (!args->q.empty()) {
+        const std::vector<double> v = cli::parse_list(args->q, cli::joint_names(n), "--q");
+        for (int i = 0; i < n; ++i) q(i) = v[static_cast<std::size_t>(i)];
+      }
+      const SpatialForwardSolution fk = spatial_forward_kinematics(robot.params, q);
+      if (!fk.summary.converged()) {
+        throw InputError("--q: the forward kinematics of " + args->robot + " at " + args->q +
+                         " did not converge (" + to_string(fk.summary.status) + ")");
+      }
+      const TagBoard board = load_tag_board(args->board);
+      scene.tags_3d = board_tags(board, fk.pose * board.marker_T_platform.inverse());
+      const SpatialPose<double> camera_T_world{scene.plane.translation,
+                                               quaternion_of(scene.plane.rotation)};
+      truth["q"] = std::vector<double>(q.data(), q.data() + n);
+      truth["world_T_platform"] = frame_json(fk.pose);
+      truth["camera_T_marker"] =
+          frame_json(camera_T_world * fk.pose * board.marker_T_platform.inverse());
+      truth["world_T_camera"] = frame_json(camera_T_world.inverse());
+    } else {
+      if (args->mounts.empty() && args->chessboard.empty())
+        throw InputError("pcr render: give --mounts or --chessboard");
+      const RobotDescription robot = load_robot_or_default(args->robot);
+      const int n = robot.params.num_limbs;
+      const std::vector<double> q = args->q.empty()
+                                        ? std::vector<double>{}
+                                        : cli::parse_list(args->q, cli::joint_names(n), "--q");
+      for (std::size_t i = 0; i < q.size(); ++i) {
+        const LimbParams<double>& limb = robot.params.limb(static_cast<int>(i));
+        if (!limb.within_stroke(q[i])) {
+          throw InputError("--q: q" + std::to_string(i + 1) + " = " + format_double(q[i]) +
+                           " m is beyond the stroke of limbs[" + std::to_string(i) +
+                           "], q_range [" + format_double(limb.q_min) + ", " +
+                           format_double(limb.q_max) + "] m");
+        }
+      }
+      const std::vector<double> pl =
+          cli::parse_list(args->platform, {"x", "y", "theta"}, "--platform");
+      const Pose2<double> platform{pl[0], pl[1], pl[2]};
+      if (!args->mounts.empty()) {
+        scene.tags = mount_tags(load_mounts(args->mounts), robot.params, platform, q,
+                                args->rods ? &scene.segments : nullptr);
+        // The platform is a 100 mm silicon wafer (paper, Sec. 4.1); only an outline, the tags stay
+        // on top.
+        if (args->rods && args->wafer > 0)
+          scene.circles.push_back(RenderCircle{platform.translation(), 0.5 * args->wafer});
+      }
+      if (!args->chessboard.empty()) {
+        RenderChessboard board;
+        std::tie(board.cols, board.rows) = parse_board_size(args->chessboard, "--chessboard");
+        if (!(args->square > 0))
+          throw InputError("--square: must be > 0, got " + std::to_string(args->square));
+        board.square_m = args->square;
+        const std::vector<double> c =
+            cli::parse_list(args->board_pose, {"x", "y", "theta"}, "--board-pose");
+        scene.chessboard =
+            RenderChessboard::centred(board.cols, board.rows, board.square_m, {c[0], c[1], c[2]});
+      }
       if (!args->mounts.empty() && args->rods && args->wafer > 0)
-        j["wafer_outline"] = {{"centre_W", {platform.x, platform.y}}, {"diameter", args->wafer}};
+        truth["wafer_outline"] = {{"centre_W", {platform.x, platform.y}},
+                                  {"diameter", args->wafer}};
       if (scene.chessboard) {
         const RenderChessboard& b = *scene.chessboard;
-        j["chessboard"] = {{"cols", b.cols},
-                           {"rows", b.rows},
-                           {"square", b.square_m},
-                           {"corner0_pose", {b.pose.x, b.pose.y, b.pose.theta}}};
+        truth["chessboard"] = {{"cols", b.cols},
+                               {"rows", b.rows},
+                               {"square", b.square_m},
+                               {"corner0_pose", {b.pose.x, b.pose.y, b.pose.theta}}};
       }
-      j["plane_in_camera"] = {
+      truth["plane_in_camera"] = {
           {"rotation",
            std::vector<double>(scene.plane.rotation.data(), scene.plane.rotation.data() + 9)},
           {"translation",
            {scene.plane.translation.x(), scene.plane.translation.y(), scene.plane.translation.z()}},
           {"note", "rotation column-major; plane frame = W"}};
       for (const RenderTag& t : scene.tags) {
-        j["tags"].push_back({{"family", t.family},
-                             {"id", t.id},
-                             {"size", t.size_m},
-                             {"pose", {t.pose.x, t.pose.y, t.pose.theta}},
-                             {"corners_px", [&] {
-                                nlohmann::json c;
-                                for (const auto& p : tag_corner_pixels(scene, t))
-                                  c.push_back({p.x(), p.y()});
-                                return c;
-                              }()}});
+        truth["tags"].push_back({{"family", t.family},
+                                 {"id", t.id},
+                                 {"size", t.size_m},
+                                 {"pose", {t.pose.x, t.pose.y, t.pose.theta}},
+                                 {"corners_px", [&] {
+                                    nlohmann::json c;
+                                    for (const auto& p : tag_corner_pixels(scene, t))
+                                      c.push_back({p.x(), p.y()});
+                                    return c;
+                                  }()}});
       }
       for (int i = 0; i < (args->mounts.empty() ? 0 : robot.params.num_limbs); ++i) {
         const LimbParams<double>& l = robot.params.limb(i);
         const double qi = i < static_cast<int>(q.size()) ? q[i] : 0.0;
         const Eigen::Vector2d A = l.proximal_position(qi), B = platform.transform(l.B);
-        j["limbs"].push_back({{"A_W", {A.x(), A.y()}},
-                              {"alpha_W", l.alpha},
-                              {"B_W", {B.x(), B.y()}},
-                              {"beta_W", l.beta + platform.theta},
-                              {"q", qi}});
+        truth["limbs"].push_back({{"A_W", {A.x(), A.y()}},
+                                  {"alpha_W", l.alpha},
+                                  {"B_W", {B.x(), B.y()}},
+                                  {"beta_W", l.beta + platform.theta},
+                                  {"q", qi}});
       }
-      write_file_atomically(args->truth, j.dump(2) + "\n");
+    }
+    const GrayImage image = render_scene(scene, args->render);
+    OutputTransaction outputs;  // the image, the camera and the truth: all or none
+    write_png(image, args->output, args->bits);
+    if (!args->camera_out.empty()) save_camera(scene.camera, args->camera_out);
+    if (!args->truth.empty()) {
+      truth["format"] = "pcr-render-truth";
+      truth["image"] = args->output;
+      write_file_atomically(args->truth, truth.dump(2) + "\n");
     }
     outputs.commit();
     std::cout << "wrote " << args->output << " (" << image.width << " x " << image.height << " px, "
-              << scene.tags.size() << " tags)\n";
+              << scene.tags.size() + scene.tags_3d.size() << " tags)\n";
   });
 }
 #endif
