@@ -150,14 +150,6 @@ pcr::SpatialDataset spatial_rows(const std::string& path, int rods, const char* 
 }
 
 int calibrate_spatial_robot(const Arguments& a) {
-  for (const auto& [flag, given] :
-       {std::pair<const char*, bool>{"--drop-unreachable", a.drop_unreachable},
-        {"--select-load", a.select_load}}) {
-    if (given) {
-      throw pcr::InputError(std::string(flag) + " is for planar robots only; " + a.robot_path +
-                            " is a spatial robot");
-    }
-  }
   const pcr::SpatialRobotDescription nominal = pcr::load_spatial_robot(a.robot_path);
   const int n = nominal.params.num_rods;
   pcr::SpatialCalibrationOptions options;
@@ -168,12 +160,20 @@ int calibrate_spatial_robot(const Arguments& a) {
   if (!a.validation_path.empty()) validation = spatial_rows(a.validation_path, n, "validation");
   if (a.weight_given) options.orientation_weight = a.weight;  // else the library's default
   options.robust_scale = a.robust_scale;
+  options.drop_unreachable = a.drop_unreachable;
   if (!a.quiet) options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
 
-  const pcr::SpatialCalibrationResult result =
-      pcr::calibrate_spatial(nominal, calibration, options);
-  const pcr::SpatialCalibrationTable table =
-      pcr::spatial_calibration_table(result, calibration, validation, options.fk);
+  // With --select-load the stages' model and, when tried, the load model; `result` is chosen.
+  pcr::SpatialModelSelection selection;
+  if (a.select_load) {
+    selection = pcr::calibrate_selecting_model(nominal, calibration, validation, options);
+  } else {
+    selection.stages = pcr::calibrate_spatial(nominal, calibration, options);
+    selection.stages_table =
+        pcr::spatial_calibration_table(selection.stages, calibration, validation, options.fk);
+  }
+  const pcr::SpatialCalibrationResult& result = selection.chosen();
+  const pcr::SpatialCalibrationTable& table = selection.chosen_table();
 
   pcr::OutputTransaction outputs;                     // the robot and the report: all or none
   pcr::SpatialRobotDescription identified = nominal;  // uncertainty section kept
@@ -181,15 +181,18 @@ int calibrate_spatial_robot(const Arguments& a) {
   pcr::save_spatial_robot(identified, a.output_path);
 
   std::cout << pcr::spatial_calibration_report_text(result, table);
+  if (a.select_load) std::cout << "\nModel selection: " << selection.decision << "\n";
   if (!a.report_path.empty()) {
     json report = json::parse(pcr::spatial_calibration_report_json(result, table));
+    if (a.select_load) {
+      report["model_selection"] = json::parse(pcr::model_selection_json(selection));
+    }
     report["inputs"] = inputs_json(a, result.orientation_weight);
     pcr::write_file_atomically(a.report_path, report.dump(2) + "\n");
   }
   if (!a.residuals_path.empty()) {
-    pcr::write_file_atomically(
-        a.residuals_path,
-        pcr::spatial_residuals_csv(result, table, calibration, options.robust_scale));
+    pcr::write_file_atomically(a.residuals_path,
+                               pcr::spatial_residuals_csv(result, table, calibration));
   }
   outputs.commit();
   return finish(a, pcr::spatial_calibration_warnings(result, table));
@@ -239,7 +242,7 @@ int main(int argc, char** argv) {
   app.add_flag("--quiet", a.quiet, "no progress on stderr");
   app.add_flag("--drop-unreachable", a.drop_unreachable,
                "leave out (and list) the rows without an FK solution on the nominal geometry "
-               "instead of refusing the dataset (planar robots)");
+               "instead of refusing the dataset");
   app.add_flag("--strict", a.strict, "exit 3 when the report has a warning");
   app.add_flag("--identify-load", a.identify_load,
                "identify a constant platform load (f_x, f_y, m_z: air-bearing drag, a cable; a "
@@ -249,7 +252,7 @@ int main(int argc, char** argv) {
   app.add_flag("--select-load", a.select_load,
                "when the residuals exceed the declared noise, also fit the load model (as "
                "--identify-load) and keep it when the validation set supports it (a paired "
-               "t-test on its rows); the report gives both fits (planar robots)")
+               "t-test on its rows); the report gives both fits")
       ->needs(app.get_option("--validation"))
       ->excludes(app.get_option("--identify-load"));
   CLI11_PARSE(app, argc, argv);

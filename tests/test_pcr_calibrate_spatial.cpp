@@ -1,6 +1,7 @@
 // pcr_calibrate on a spatial robot end to end: a hidden virtual spatial robot's measurements in
 // (seeded), an identified spatial robot file out, scored on validation rows against the noise
-// floor sqrt(3) sigma of a perfect model; the report's and the residuals' fields; the refusals.
+// floor sqrt(3) sigma of a perfect model; the report's and the residuals' fields; the model
+// selection, unreachable rows and outliers; the refusals.
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -15,6 +16,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "pcr/calib/spatial_calibrator.hpp"
 #include "pcr/calib/spatial_virtual_robot.hpp"
@@ -26,6 +28,8 @@ namespace pcr {
 namespace {
 
 const std::string kTool = std::string(PCR_BINARY_DIR) + "/apps/pcr_calibrate";
+/// A joint value (m) at which the nominal robot has no equilibrium: every rod 1 cm long.
+constexpr double kUnreachableJoint = -0.39;
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path);
@@ -196,7 +200,73 @@ TEST(PcrCalibrateSpatial, LoadStageIdentifiesAPayload) {
   }
 }
 
-TEST(PcrCalibrateSpatial, RefusesPlanarFlagsWrongColumnsAndOverwritingAnInput) {
+// --select-load, --drop-unreachable and the outliers on a spatial robot: a row the nominal robot
+// cannot reach is refused naming its line, or with --drop-unreachable left out and named; a row
+// measured 1 mm off is named an outlier (report and residuals CSV); the other rows' residuals are
+// at the noise, so the selection keeps the stages' model without fitting the load model
+// (tests/test_spatial_calibration.cpp has the selection of a payload).
+TEST(PcrCalibrateSpatial, SelectsTheModelDropsUnreachableRowsAndNamesOutliers) {
+  const test::ScratchDirectory dir("pcr_calibrate_spatial");
+  const SpatialRobotDescription nominal = continuum_stewart_gough_description();
+  save_spatial_robot(nominal, dir.file("nominal.json"));
+  SpatialVirtualRobotOptions options;
+  options.seed = 11;
+  SpatialVirtualRobot robot(nominal, options);
+  std::mt19937_64 rng(options.seed);
+  SpatialDataset calibration = testing::measured(robot, testing::random_joints(rng, 40, 0.0, 0.01));
+  const SpatialDataset validation =
+      testing::measured(robot, testing::random_joints(rng, 15, 0.0, 0.01));
+  ASSERT_GE(calibration.size(), 35u);
+  constexpr std::size_t kOff = 10;
+  calibration.poses[kOff].position.y() += 1e-3;
+  SpatialJointVector far(6);  // rods 1 cm long: no equilibrium
+  far.setConstant(kUnreachableJoint);
+  calibration.add(far, calibration.poses.back());
+  write_spatial_dataset(calibration, dir.file("calibration.csv"));
+  write_spatial_dataset(validation, dir.file("validation.csv"));
+  const SpatialDataset written = read_spatial_dataset(dir.file("calibration.csv"), 6);
+  const std::string off_line = "line " + std::to_string(written.line_numbers[kOff]);
+  const std::string far_line = "line " + std::to_string(written.line_numbers.back());
+
+  const std::string command =
+      "--robot " + dir.file("nominal.json") + " --data " + dir.file("calibration.csv") +
+      " --validation " + dir.file("validation.csv") + " --output " + dir.file("identified.json") +
+      " --report " + dir.file("report.json") + " --residuals " + dir.file("residuals.csv") +
+      " --quiet --select-load";
+  std::string err;
+  EXPECT_EQ(run(command, dir, &err), 1);
+  EXPECT_NE(err.find(far_line + ": the nominal robot has no equilibrium"), std::string::npos)
+      << err;
+  EXPECT_NE(err.find("--drop-unreachable"), std::string::npos) << err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("identified.json")));
+
+  ASSERT_EQ(run(command + " --drop-unreachable", dir, &err), 0) << err;
+  EXPECT_NE(err.find("left out (drop_unreachable): " + far_line), std::string::npos) << err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir.file("report.json")));
+  ASSERT_EQ(report.at("dropped_rows").size(), 1u);
+  EXPECT_EQ(report.at("dropped_rows").at(0).get<std::string>().rfind(far_line + " (", 0), 0u);
+  ASSERT_EQ(report.at("outlier_rows").size(), 1u) << report.at("outlier_rows");
+  EXPECT_EQ(report.at("outlier_rows").at(0).get<std::string>().rfind(off_line + " (", 0), 0u);
+  EXPECT_GT(report.at("outlier_threshold").get<double>(), 0.0);
+  EXPECT_FALSE(report.at("residuals_exceed_noise").get<bool>());
+  const nlohmann::json& selection = report.at("model_selection");
+  std::printf("selection: %s\n", selection.at("decision").get<std::string>().c_str());
+  EXPECT_FALSE(selection.at("load_tried").get<bool>());
+  EXPECT_FALSE(selection.at("load_chosen").get<bool>());
+  EXPECT_FALSE(report.at("platform_load").at("identified").get<bool>());
+
+  // The residuals CSV flags the row 1 mm off, and it alone.
+  std::istringstream residuals(slurp(dir.file("residuals.csv")));
+  std::string line;
+  std::getline(residuals, line);
+  std::vector<std::size_t> flagged;
+  for (std::size_t row = 0; std::getline(residuals, line); ++row) {
+    if (line.substr(line.rfind(',') + 1) == "1") flagged.push_back(row);
+  }
+  EXPECT_EQ(flagged, std::vector<std::size_t>{kOff});
+}
+
+TEST(PcrCalibrateSpatial, RefusesWrongColumnsAndOverwritingAnInput) {
   const test::ScratchDirectory dir("pcr_calibrate_spatial");
   const std::string robot = dir.file("nominal.json");
   save_spatial_robot(continuum_stewart_gough_description(), robot);
@@ -208,16 +278,6 @@ TEST(PcrCalibrateSpatial, RefusesPlanarFlagsWrongColumnsAndOverwritingAnInput) {
   const std::string common =
       "--robot " + robot + " --data " + dir.file("planar.csv") + " --quiet --output ";
   std::string err;
-  // (--select-load needs --validation, which CLI11 checks first.)
-  for (const char* flag : {"--select-load", "--drop-unreachable"}) {
-    EXPECT_EQ(
-        run(common + dir.file("out.json") + " " + flag + " --validation " + dir.file("planar.csv"),
-            dir, &err),
-        1)
-        << flag;
-    EXPECT_NE(err.find(flag), std::string::npos) << err;
-    EXPECT_NE(err.find("planar robots only"), std::string::npos) << err;
-  }
   EXPECT_EQ(run(common + dir.file("out.json"), dir, &err), 1);
   EXPECT_NE(err.find(dir.file("planar.csv")), std::string::npos) << err;
   // Stages files: the spatial kinds (the load's too) are taken (the data is refused next), a

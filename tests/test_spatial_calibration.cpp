@@ -9,9 +9,11 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "pcr/calib/model_selection.hpp"
 #include "pcr/calib/spatial_calibrator.hpp"
 #include "pcr/calib/spatial_virtual_robot.hpp"
 #include "spatial_calibration_support.hpp"
@@ -140,6 +142,100 @@ TEST(SpatialCalibration, HiddenRobotsAreIdentifiedToTheNoiseFloor) {
     std::printf("  nominal model on the calibration set: %.3g m (as described %.3g m)\n", fitted,
                 as_described);
     EXPECT_LT(fitted, as_described);
+  }
+}
+
+// Three of 60 rows measured 1 mm off (hundreds of noise units: a mislabelled row, another
+// equilibrium): each stage leaves them out (gross outliers), the result names exactly them, and
+// the identified model is scored against the virtual truth as on clean data; least squares is not.
+TEST(SpatialCalibration, GrossOutliersAreNamedAndLeftOut) {
+  const pcr::SpatialRobotDescription nominal = pcr::continuum_stewart_gough_description();
+  pcr::SpatialVirtualRobotOptions options;
+  options.seed = 7;
+  pcr::SpatialVirtualRobot robot(nominal, options);
+  std::mt19937_64 rng(options.seed);
+  SpatialDataset calibration = measured(robot, random_joints(rng, 60, 0.0, 0.01));
+  const std::vector<SpatialJointVector> validation_q = random_joints(rng, 20, 0.0, 0.01);
+  ASSERT_GE(calibration.size(), 50u);
+  const std::size_t corrupted[] = {5, 23, 41};
+  for (const std::size_t j : corrupted)
+    calibration.poses[j].position += Eigen::Vector3d(0, 1e-3, 0);
+
+  const pcr::SpatialCalibrationResult result = pcr::calibrate_spatial(nominal, calibration);
+  for (const std::string& w : result.warnings) std::printf("  warning: %s\n", w.c_str());
+  ASSERT_EQ(result.outliers.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {  // "row 6 (432 x the noise)": 1-based rows
+    const std::string name = "row " + std::to_string(corrupted[k] + 1) + " (";
+    EXPECT_EQ(result.outliers[k].rfind(name, 0), 0u) << result.outliers[k];
+  }
+  EXPECT_GT(result.outlier_threshold, 0.0);
+  EXPECT_FALSE(result.residuals_exceed_noise);  // the other rows are at the noise
+  EXPECT_LT(result.residual_variance, 1.5);
+
+  robot.return_home();
+  const SpatialDataset exact = measured(robot, validation_q, true);
+  const pcr::SpatialPredictionErrors truth_score =
+      pcr::spatial_prediction_errors(result.identified, exact);
+  const double floor_p = std::sqrt(3.0) * robot.noise_position();
+  const double floor_a = std::sqrt(3.0) * options.noise_angle;
+  std::printf(
+      "3 rows 1 mm off: outlier threshold %.3g, variance %.3f; against the truth %.3g m "
+      "%.3g rad (floor %.3g m %.3g rad)\n",
+      result.outlier_threshold, result.residual_variance, truth_score.rms_position,
+      truth_score.rms_angle, floor_p, floor_a);
+  EXPECT_LT(truth_score.rms_position, floor_p);
+  EXPECT_LT(truth_score.rms_angle, floor_a);
+
+  // Plain least squares (robust_scale 0) on the same rows: no outlier is named, and the three
+  // rows pull the model off the truth.
+  pcr::SpatialCalibrationOptions plain;
+  plain.robust_scale = 0;
+  const pcr::SpatialCalibrationResult least_squares =
+      pcr::calibrate_spatial(nominal, calibration, plain);
+  const pcr::SpatialPredictionErrors plain_score =
+      pcr::spatial_prediction_errors(least_squares.identified, exact);
+  std::printf("least squares: variance %.3g; against the truth %.3g m %.3g rad\n",
+              least_squares.residual_variance, plain_score.rms_position, plain_score.rms_angle);
+  EXPECT_TRUE(least_squares.outliers.empty());
+  EXPECT_EQ(least_squares.outlier_threshold, 0.0);
+  EXPECT_TRUE(least_squares.residuals_exceed_noise);
+  EXPECT_GT(plain_score.rms_position, 10 * truth_score.rms_position);
+}
+
+// Model selection on a spatial robot (pcr::calibrate_selecting_model): a 100 g payload the
+// nominal robot does not know leaves residuals beyond the noise, and the load model (the platform
+// wrench's six values in the last stage) predicts the validation rows better: chosen. Without
+// the payload the residuals are at the noise: the stages' model, the load model not even fitted.
+TEST(SpatialCalibration, SelectionKeepsTheLoadModelOnlyForAnUnmodelledPayload) {
+  const pcr::SpatialRobotDescription nominal = pcr::continuum_stewart_gough_description();
+  for (const double payload : {0.1, 0.0}) {
+    pcr::SpatialVirtualRobotOptions options;
+    options.seed = 11;
+    options.effects.payload = payload;
+    pcr::SpatialVirtualRobot robot(nominal, options);
+    std::mt19937_64 rng(options.seed);
+    const SpatialDataset calibration = measured(robot, random_joints(rng, 40, 0.0, 0.01));
+    const SpatialDataset validation = measured(robot, random_joints(rng, 20, 0.0, 0.01));
+    ASSERT_GE(calibration.size(), 35u);
+    ASSERT_GE(validation.size(), 15u);
+    const pcr::SpatialModelSelection selection =
+        pcr::calibrate_selecting_model(nominal, calibration, validation);
+    std::printf("payload %.2f kg: stages' variance %.3g; %s\n", payload,
+                selection.stages.residual_variance, selection.decision.c_str());
+    EXPECT_EQ(selection.stages.residuals_exceed_noise, payload > 0);
+    EXPECT_EQ(selection.tried_load, payload > 0);
+    EXPECT_EQ(selection.load_chosen, payload > 0);
+    EXPECT_EQ(selection.chosen().load_identified, payload > 0);
+    if (payload > 0) {
+      const double weight = payload * nominal.params.gravity.z();
+      const pcr::SpatialParameterEstimate& f_z =
+          selection.load.parameters[static_cast<std::size_t>(pcr::num_spatial_parameters(6) + 2)];
+      std::printf("  f_z %.4f N +- %.4f (m g %.4f N)\n", f_z.deviation, f_z.std_dev, weight);
+      EXPECT_NEAR(f_z.deviation, weight, 4 * f_z.std_dev);
+      EXPECT_GT(selection.t, pcr::kModelSelectionT);
+      EXPECT_LT(selection.load_table.identified_validation.rms_position,
+                selection.stages_table.identified_validation.rms_position);
+    }
   }
 }
 

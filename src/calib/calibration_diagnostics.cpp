@@ -18,31 +18,11 @@ void leave_out_outliers(Identification& id, const std::vector<CalibrationSample>
                         CalibrationResult& result) {
   id.update_loss_scale();
   result.outlier_threshold = id.loss_scale();
-  if (evaluated && id.loss_scale() > 0) {
-    const std::vector<std::size_t> in = id.evaluated_rows();
-    std::vector<Eigen::Index> kept;
-    for (std::size_t b = 0; b < in.size(); ++b) {
-      const std::size_t j = in[b];
-      const Eigen::Index at = 3 * static_cast<Eigen::Index>(b);
-      const double norm = r.segment<3>(at).norm();
-      if (norm > id.loss_scale()) {
-        result.outliers.push_back(origin_of(rows, j) + " (" + format_number(norm) +
-                                  " x the noise)");
-      } else {
-        kept.insert(kept.end(), {at, at + 1, at + 2});
-      }
-    }
-    if (!result.outliers.empty()) {
-      result.warnings.push_back(
-          std::to_string(result.outliers.size()) + " rows are outliers (residual beyond " +
-          format_number(id.loss_scale()) +
-          " x the declared noise), down-weighted: " + listing(result.outliers));
-      const Eigen::MatrixXd J_kept = J(kept, Eigen::all);
-      const Eigen::VectorXd r_kept = r(kept);
-      J = J_kept;
-      r = r_kept;
-    }
-  }
+  if (!evaluated) return;
+  const std::vector<std::size_t> in = id.evaluated_rows();
+  calib_internal::leave_out_outliers(
+      id.loss_scale(), 3, [&](std::size_t b) { return origin_of(rows, in[b]); }, J, r,
+      result.outliers, result.warnings);
 }
 
 void rank_and_gauge_directions(const Identification& id, const std::vector<int>& free,
@@ -181,18 +161,10 @@ void add_warnings(const Identification& id, CalibrationResult* result) {
                                  ": the extrinsics guess or its uncertainty is wrong");
     }
   }
-  // Whitened residuals have unit variance at the declared noise; 5 standard deviations of the
-  // chi-square estimate of the variance above it is an inconsistency, not chance.
   const double dof = 3.0 * static_cast<double>(id.rows() - result->outliers.size()) -
                      static_cast<double>(result->jacobian_rank);
-  const double v = result->residual_variance;
-  result->residuals_exceed_noise = std::isfinite(v) && dof > 0 && v > 1 + 5 * std::sqrt(2 / dof);
-  if (result->residuals_exceed_noise) {
-    result->warnings.push_back(
-        "the residuals are " + format_number(std::sqrt(v)) +
-        " times the declared noise (residual_scale): an unmodelled effect, outliers, wrong "
-        "extrinsics or more noise than declared");
-  }
+  result->residuals_exceed_noise =
+      residuals_exceed_noise(result->residual_variance, dof, result->warnings);
   std::vector<std::string> at_bound;
   for (const ParameterEstimate& p : result->parameters)
     if (p.at_bound) at_bound.push_back(p.name);

@@ -325,18 +325,7 @@ std::string calibration_report_json(const CalibrationResult& result,
 }
 
 std::string model_selection_json(const ModelSelection& selection) {
-  ordered_json out{{"decision", selection.decision},
-                   {"load_tried", selection.tried_load},
-                   {"load_chosen", selection.load_chosen},
-                   {"validation_rows", selection.rows},
-                   {"mean_difference", selection.mean_difference},
-                   {"t", selection.t},
-                   {"threshold_t", kModelSelectionT}};
-  if (selection.tried_load) {
-    out["other_fit"] =
-        ordered_json::parse(calibration_report_json(selection.other(), selection.other_table()));
-  }
-  return out.dump();
+  return report_internal::model_selection_json(selection, calibration_report_json);
 }
 
 }  // namespace pcr

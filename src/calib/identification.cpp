@@ -265,23 +265,16 @@ void Identification::update_loss_scale() {
   const std::vector<std::size_t> in = evaluated_rows();
   if (r.size() != 3 * in.size() || in.empty()) return;
   row_norms_.assign(data_.size(), kNaN);
-  std::vector<double> norms;
   for (std::size_t b = 0; b < in.size(); ++b) {
-    norms.push_back(
-        std::sqrt(r[3 * b] * r[3 * b] + r[3 * b + 1] * r[3 * b + 1] + r[3 * b + 2] * r[3 * b + 2]));
-    row_norms_[in[b]] = norms.back();
+    row_norms_[in[b]] =
+        std::sqrt(r[3 * b] * r[3 * b] + r[3 * b + 1] * r[3 * b + 1] + r[3 * b + 2] * r[3 * b + 2]);
   }
-  std::nth_element(norms.begin(), norms.begin() + norms.size() / 2, norms.end());
-  const double median = norms[norms.size() / 2];
-  if (std::isfinite(median)) loss_scale_ *= std::max(1.0, median / 1.538);
+  loss_scale_ = huber_scale(options_.robust_scale, row_norms_, 3);
 }
 
 void Identification::exclude_gross_outliers() {
-  constexpr double kGrossOutlier = 100;
   std::fill(gross_.begin(), gross_.end(), false);
-  if (!(loss_scale_ > 0) || row_norms_.size() != gross_.size()) return;
-  for (std::size_t j = 0; j < gross_.size(); ++j)
-    gross_[j] = !(row_norms_[j] <= kGrossOutlier * loss_scale_);
+  if (row_norms_.size() == gross_.size()) gross_ = gross_outliers(row_norms_, loss_scale_);
 }
 
 }  // namespace calib_internal

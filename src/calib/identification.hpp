@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "calibration_internal.hpp"
+#include "outlier_rule.hpp"
 #include "pcr/calib/calibrator.hpp"
 
 namespace pcr::calib_internal {
@@ -147,18 +148,10 @@ class Identification {
   /// their 3-row blocks are those of evaluated_rows().
   bool jacobian(Eigen::MatrixXd* J, Eigen::VectorXd* r);
 
-  /// The Huber scale: robust_scale declared noise units, or as many times the rows' typical
-  /// residual when the model is still far (a stage that starts from the nominal geometry sees
-  /// micrometres on every row): a row is an outlier against the others, not against a floor the
-  /// model has not reached. The median norm of a whitened 3-vector at the noise is 1.538.
+  /// The Huber scale of the rows' residuals at the current values (huber_scale, outlier_rule.hpp).
   void update_loss_scale();
 
-  /// Leaves out of the stage the rows whose residual at its start exceeds kGrossOutlier times the
-  /// Huber scale (a measurement of another equilibrium branch, a row millimetres off). The
-  /// Huber cost grows linearly in the residual: one such row outweighs all the others together,
-  /// and Ceres' relative convergence test then stops on decreases many noise units large (a row
-  /// 10 mm off: the validation mean at 0.073 um instead of the floor). They remain among the
-  /// rows whose residuals the result reports, and the next stage looks at them again.
+  /// Leaves out of the stage the gross outliers at its start (gross_outliers, outlier_rule.hpp).
   void exclude_gross_outliers();
   double loss_scale() const { return loss_scale_; }
 

@@ -273,7 +273,7 @@ StageReport Identification::run_stage(const CalibrationStage& stage, bool last, 
   const double used = loss_scale_;
   if (rescale < 8 && used > 0) {
     update_loss_scale();
-    if (loss_scale_ < 0.5 * used) {
+    if (huber_scale_shrank(used, loss_scale_)) {
       const StageReport again = run_stage(stage, last, rescale + 1);
       report.final_cost = again.final_cost;
       report.termination = again.termination;

@@ -1,9 +1,15 @@
-// Model selection between the calibration's stages and the load model (see the header).
+// Model selection between the calibration's stages and the load model (see the header): one rule
+// for planar and spatial robots.
 #include "pcr/calib/model_selection.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <tuple>
+#include <utility>
+
+#include "report_internal.hpp"
 
 namespace pcr {
 namespace {
@@ -26,15 +32,21 @@ std::vector<double> validation_errors(const CalibrationTable& table,
   return out;
 }
 
-}  // namespace
+/// The same for a spatial robot (NaN where FK fails), at the stages' resolved weight and scale.
+std::vector<double> validation_errors(const SpatialCalibrationTable& table,
+                                      const SpatialCalibrationResult& stages) {
+  const SpatialPredictionErrors& errors = table.identified_validation;
+  return report_internal::whitened_norms(errors.position, errors.angle, stages.orientation_weight,
+                                         stages.residual_scale);
+}
 
-ModelSelection calibrate_selecting_model(const RobotDescription& nominal,
-                                         const std::vector<CalibrationSample>& calibration,
-                                         const std::vector<CalibrationSample>& validation,
-                                         const CalibrationOptions& options) {
-  ModelSelection out;
-  out.stages = calibrate(nominal, calibration, options);
-  out.stages_table = calibration_table(out.stages, calibration, validation);
+/// The rule of the header, for either kind of robot: `fit(options)` calibrates and tabulates
+/// (Result, Table), `errors(table)` gives each validation row's whitened error.
+template <class Selection, class Options, class Fit, class Errors>
+Selection select_model(const Options& options, std::size_t validation_rows, const Fit& fit,
+                       const Errors& errors) {
+  Selection out;
+  std::tie(out.stages, out.stages_table) = fit(options);
   // A fit the model cannot evaluate at its result (residual variance NaN) has not shown that it
   // explains the data either.
   const bool unexplained =
@@ -47,17 +59,16 @@ ModelSelection calibrate_selecting_model(const RobotDescription& nominal,
     out.decision = "the stages free the load already: their model";
     return out;
   }
-  if (validation.empty()) {
+  if (validation_rows == 0) {
     out.decision =
         "the stages' model does not explain the data, but without a validation set the load "
         "model cannot be tested: the stages' model";
     return out;
   }
-  CalibrationOptions with_load = options;
+  Options with_load = options;
   with_load.stages = with_load_stage(options.stages);
   try {
-    out.load = calibrate(nominal, calibration, with_load);
-    out.load_table = calibration_table(out.load, calibration, validation);
+    std::tie(out.load, out.load_table) = fit(with_load);
   } catch (const std::exception& e) {
     out.decision =
         std::string("the load model could not be fitted (") + e.what() + "): the stages' model";
@@ -65,10 +76,10 @@ ModelSelection calibrate_selecting_model(const RobotDescription& nominal,
   }
   out.tried_load = true;
 
-  const std::vector<double> a = validation_errors(out.stages_table, options);
-  const std::vector<double> b = validation_errors(out.load_table, options);
+  const std::vector<double> a = errors(out.stages_table, out.stages);
+  const std::vector<double> b = errors(out.load_table, out.stages);
   double sum = 0, sum_squares = 0;
-  for (std::size_t j = 0; j < validation.size(); ++j) {
+  for (std::size_t j = 0; j < a.size() && j < b.size(); ++j) {
     if (!std::isfinite(a[j]) || !std::isfinite(b[j])) continue;
     const double d = a[j] * a[j] - b[j] * b[j];
     sum += d;
@@ -97,6 +108,41 @@ ModelSelection calibrate_selecting_model(const RobotDescription& nominal,
                  fixed("%.3g", kModelSelectionT) +
                  " one-sided 1 %): " + (out.load_chosen ? "the load model" : "the stages' model");
   return out;
+}
+
+}  // namespace
+
+ModelSelection calibrate_selecting_model(const RobotDescription& nominal,
+                                         const std::vector<CalibrationSample>& calibration,
+                                         const std::vector<CalibrationSample>& validation,
+                                         const CalibrationOptions& options) {
+  return select_model<ModelSelection>(
+      options, validation.size(),
+      [&](const CalibrationOptions& o) {
+        CalibrationResult result = calibrate(nominal, calibration, o);
+        CalibrationTable table = calibration_table(result, calibration, validation);
+        return std::make_pair(std::move(result), std::move(table));
+      },
+      [&](const CalibrationTable& table, const CalibrationResult&) {
+        return validation_errors(table, options);
+      });
+}
+
+SpatialModelSelection calibrate_selecting_model(const SpatialRobotDescription& nominal,
+                                                const SpatialDataset& calibration,
+                                                const SpatialDataset& validation,
+                                                const SpatialCalibrationOptions& options) {
+  return select_model<SpatialModelSelection>(
+      options, validation.size(),
+      [&](const SpatialCalibrationOptions& o) {
+        SpatialCalibrationResult result = calibrate_spatial(nominal, calibration, o);
+        SpatialCalibrationTable table =
+            spatial_calibration_table(result, calibration, validation, o.fk);
+        return std::make_pair(std::move(result), std::move(table));
+      },
+      [](const SpatialCalibrationTable& table, const SpatialCalibrationResult& stages) {
+        return validation_errors(table, stages);
+      });
 }
 
 }  // namespace pcr

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "pcr/calib/configuration_errors.hpp"
+#include "pcr/calib/model_selection.hpp"
 #include "pcr/csv_io.hpp"
 
 namespace pcr::report_internal {
@@ -23,6 +24,24 @@ ordered_json stats_json(const PoseErrorStats& s, const char* angle_key = "e_thet
 /// order", "matrix": rows} (NaN entries are written null; read_parameter_covariance,
 /// pcr/calib/predicted_accuracy.hpp, reads it).
 ordered_json covariance_json(const std::vector<std::string>& names, const Eigen::MatrixXd& matrix);
+
+/// A model selection as JSON text (model_selection_json): the decision and its numbers and, when
+/// the load model was fitted, the fit not chosen, `report(result, table)` ("other_fit").
+template <class Result, class Table, class Report>
+std::string model_selection_json(const BasicModelSelection<Result, Table>& selection,
+                                 const Report& report) {
+  ordered_json out{{"decision", selection.decision},
+                   {"load_tried", selection.tried_load},
+                   {"load_chosen", selection.load_chosen},
+                   {"validation_rows", selection.rows},
+                   {"mean_difference", selection.mean_difference},
+                   {"t", selection.t},
+                   {"threshold_t", kModelSelectionT}};
+  if (selection.tried_load) {
+    out["other_fit"] = ordered_json::parse(report(selection.other(), selection.other_table()));
+  }
+  return out.dump();
+}
 
 /// One line of Table 3 as text (um and mrad).
 std::string stats_line(const char* label, const PoseErrorStats& s);

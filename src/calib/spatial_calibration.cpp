@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "calibration_internal.hpp"
+#include "outlier_rule.hpp"
 #include "pcr/calib/calibrator.hpp"  // kRankThreshold
 #include "pcr/calib/jet_traits.hpp"  // before the core templates meet a Jet
 #include "pcr/calib/spatial_calibrator.hpp"
@@ -134,6 +135,7 @@ struct Problem {
 /// the load only: the extrinsics move the measurement, not the robot, so a step of theirs reuses
 /// the solution and its derivative.
 struct RowState {
+  std::string origin;  ///< "line 12" in its file, or "row 3" of the dataset
   SpatialJointVector q;
   SpatialPose<double> measured;
   SpatialForwardSolution solution;  ///< at the FK values `at`
@@ -335,6 +337,38 @@ bool stacked_jacobian(const Problem& problem, std::vector<RowState>& rows, const
   return jacobian->allFinite() && residual->allFinite();
 }
 
+/// Each row's whitened residual norm at u (NaN where FK fails).
+std::vector<double> residual_norms(const Problem& problem, std::vector<RowState>& rows,
+                                   const double* u) {
+  const std::vector<double> d = problem.deviations(u);
+  const SpatialRobotParams<double> robot = problem.robot(d.data());
+  std::vector<double> out;
+  for (RowState& row : rows) {
+    out.push_back(solve_row(problem, row, u, robot)
+                      ? row_residual<double>(row.solution.pose, robot.extrinsics, row.measured,
+                                             problem.weight, problem.scale)
+                            .norm()
+                      : calib_internal::kNaN);
+  }
+  return out;
+}
+
+/// A stage's robust loss (outlier_rule.hpp): the Huber scale of the rows' residuals at its start
+/// and the gross outliers it leaves out.
+struct StageLoss {
+  double scale = 0;
+  std::vector<bool> gross;
+};
+
+StageLoss stage_loss(const Problem& problem, std::vector<RowState>& rows, const double* u,
+                     double robust_scale) {
+  StageLoss loss;
+  const std::vector<double> norms = residual_norms(problem, rows, u);
+  loss.scale = calib_internal::huber_scale(robust_scale, norms, 6);
+  loss.gross = calib_internal::gross_outliers(norms, loss.scale);
+  return loss;
+}
+
 /// After each Levenberg-Marquardt iteration: the rows' anchors moved to an accepted step's
 /// parameters (u, updated every iteration; Ceres has evaluated the Jacobian there), and the
 /// options' progress line.
@@ -388,6 +422,8 @@ std::string in_words(const Eigen::VectorXd& direction, const std::vector<int>& f
 constexpr double kSeenFloor = 1.0;
 /// Rounds of a stage's active set (see calibrate_spatial).
 constexpr int kMaxBoundRounds = 4;
+/// Times a stage is solved again for a smaller Huber scale (the planar calibration's 8).
+constexpr int kMaxRescales = 8;
 
 struct StageSolve {
   int unseen = 0;  ///< directions held: the gauge and those not seen within their intervals
@@ -399,10 +435,12 @@ struct StageSolve {
 
 /// One Levenberg-Marquardt solve of the parameters `moving` (flat indices), from u (updated),
 /// its steps confined to the directions the data see at the start (singular values of the
-/// whitened Jacobian, in half-width units, above kSeenFloor and kRankThreshold of the largest).
+/// whitened Jacobian, in half-width units, above kSeenFloor and kRankThreshold of the largest),
+/// under the Huber loss of `loss` without its gross outliers.
 StageSolve solve_stage(const Problem& problem, std::vector<RowState>& rows,
                        const SpatialCalibrationOptions& options, const std::string& stage,
-                       const std::vector<int>& moving, std::vector<double>* u) {
+                       const std::vector<int>& moving, const StageLoss& loss,
+                       std::vector<double>* u) {
   StageSolve out;
   Eigen::MatrixXd jacobian;
   Eigen::VectorXd residual;
@@ -435,10 +473,10 @@ StageSolve solve_stage(const Problem& problem, std::vector<RowState>& rows,
   ceres::Problem ceres_problem(problem_options);
   ceres_problem.AddParameterBlock(u->data(), problem.count,
                                   new calib_internal::SubspaceManifold(basis, inverse));
-  for (RowState& row : rows) {
-    ceres::LossFunction* loss =
-        options.robust_scale > 0 ? new ceres::HuberLoss(options.robust_scale) : nullptr;
-    ceres_problem.AddResidualBlock(new RowCost(problem, row), loss, u->data());
+  for (std::size_t j = 0; j < rows.size(); ++j) {
+    if (loss.scale > 0 && loss.gross[j]) continue;
+    ceres::LossFunction* huber = loss.scale > 0 ? new ceres::HuberLoss(loss.scale) : nullptr;
+    ceres_problem.AddResidualBlock(new RowCost(problem, rows[j]), huber, u->data());
   }
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_QR;
@@ -585,8 +623,10 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
   result.orientation_weight = problem.weight;
   result.residual_scale = problem.scale;
 
-  // Every row on the nominal robot, in measurement order from home, as the robot came to it.
-  std::vector<RowState> rows(data.size());
+  // Every row on the nominal robot, in measurement order from home, as the robot came to it. A
+  // row it cannot reach is a typo, a wrong unit or another robot's: an InputError, or with
+  // drop_unreachable left out and listed (the planar calibration's rule).
+  std::vector<RowState> rows;
   SpatialForwardSequence sequence(nominal.params, options.fk, SpatialNoLoad(), SequenceMode::kPath);
   for (std::size_t j = 0; j < data.size(); ++j) {
     const SpatialForwardSolution& s = sequence.solve(data.q[j]);
@@ -594,15 +634,36 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
                                    ? "line " + std::to_string(data.line_numbers[j])
                                    : "row " + std::to_string(j + 1);
     if (!is_equilibrium(s.summary)) {
-      throw InputError("calibrate_spatial: " + origin +
-                       ": the nominal robot has no equilibrium at these joints (" +
-                       to_string(s.summary.status) + "): a typo, a wrong unit or another robot");
+      if (!options.drop_unreachable) {
+        throw InputError("calibrate_spatial: " + origin +
+                         ": the nominal robot has no equilibrium at these joints (" +
+                         to_string(s.summary.status) +
+                         "): a typo, a wrong unit or another robot. Leave such rows out with "
+                         "drop_unreachable (pcr_calibrate --drop-unreachable)");
+      }
+      std::string joints;
+      for (Eigen::Index i = 0; i < data.q[j].size(); ++i)
+        joints += (i ? ", " : "") + format_number(data.q[j](i));
+      result.dropped.push_back(origin + " (" + joints + "): " + to_string(s.summary.status));
+      continue;
     }
-    rows[j].q = data.q[j];
-    rows[j].measured = data.poses[j];
-    rows[j].solution = rows[j].anchor = rows[j].start = s;
-    rows[j].at.assign(
+    RowState& row = rows.emplace_back();
+    row.origin = origin;
+    row.q = data.q[j];
+    row.measured = data.poses[j];
+    row.solution = row.anchor = row.start = s;
+    row.at.assign(
         static_cast<std::size_t>(kSpatialRodParameters * n + (problem.count - problem.flat)), 0.0);
+  }
+  if (!result.dropped.empty()) {
+    result.warnings.push_back(std::to_string(result.dropped.size()) + " of " +
+                              std::to_string(data.size()) +
+                              " rows have no equilibrium on the nominal robot and were left out "
+                              "(drop_unreachable): " +
+                              listing(result.dropped));
+  }
+  if (rows.empty()) {
+    throw InputError("calibrate_spatial: no row has an equilibrium on the nominal robot");
   }
   problem.derivative_step_divisor = kStageDerivativeStepDivisor;
   if (problem.load) set_load_scales(problem, rows);
@@ -635,10 +696,10 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
         report.free_parameters.push_back(spatial_parameter_name(id));
       }
     }
-    if (6 * data.size() < free.size()) {
+    if (6 * rows.size() < free.size()) {
       throw InputError("calibrate_spatial: stage '" + stage.name + "' frees " +
-                       std::to_string(free.size()) + " parameters; " + std::to_string(data.size()) +
-                       " rows give only " + std::to_string(6 * data.size()) + " measured values");
+                       std::to_string(free.size()) + " parameters; " + std::to_string(rows.size()) +
+                       " rows give only " + std::to_string(6 * rows.size()) + " measured values");
     }
     if (free.empty()) {
       result.stages.push_back(report);
@@ -648,31 +709,40 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     // (an active set) and the others solved again, until none is past (Eq. 7). A bounded solve
     // would project each step onto the box, and with steps along singular vectors that mix many
     // parameters, one held coordinate shortens every step: Levenberg-Marquardt then crawls.
-    std::vector<int> moving = free;
-    for (int round = 0; round <= kMaxBoundRounds && !moving.empty(); ++round) {
-      const StageSolve solve = solve_stage(problem, rows, options, stage.name, moving, &u);
-      report.unseen_directions = solve.unseen;
-      report.initial_cost = round == 0 ? solve.initial_cost : report.initial_cost;
-      report.final_cost = solve.final_cost;
-      report.iterations += solve.iterations;
-      report.termination = solve.termination;
-      report.usable = solve.usable;
-      if (!solve.usable) break;
-      std::vector<int> past;
-      for (const int k : moving) {
-        double& value = u[static_cast<std::size_t>(k)];
-        if (!is_bounded(spatial_parameter_id(k, n).kind) || std::abs(value) <= stage.bounds_scale)
-          continue;
-        value = std::copysign(stage.bounds_scale, value);
-        past.push_back(k);
+    // The rounds run again while the Huber scale of their result's residuals shrinks by half
+    // (outlier_rule.hpp): a stage that starts far from the data first fits with a wide one.
+    StageLoss loss = stage_loss(problem, rows, u.data(), options.robust_scale);
+    for (int rescale = 0; rescale <= kMaxRescales; ++rescale) {
+      std::vector<int> moving = free;
+      for (int round = 0; round <= kMaxBoundRounds && !moving.empty(); ++round) {
+        const StageSolve solve = solve_stage(problem, rows, options, stage.name, moving, loss, &u);
+        report.unseen_directions = solve.unseen;
+        report.initial_cost = round == 0 && rescale == 0 ? solve.initial_cost : report.initial_cost;
+        report.final_cost = solve.final_cost;
+        report.iterations += solve.iterations;
+        report.termination = solve.termination;
+        report.usable = solve.usable;
+        if (!solve.usable) break;
+        std::vector<int> past;
+        for (const int k : moving) {
+          double& value = u[static_cast<std::size_t>(k)];
+          if (!is_bounded(spatial_parameter_id(k, n).kind) || std::abs(value) <= stage.bounds_scale)
+            continue;
+          value = std::copysign(stage.bounds_scale, value);
+          past.push_back(k);
+        }
+        if (past.empty()) break;
+        for (const int k : past) moving.erase(std::find(moving.begin(), moving.end(), k));
+        if (round == kMaxBoundRounds) {  // the last clamp is not solved again: say so
+          result.warnings.push_back("stage '" + stage.name +
+                                    "': parameters still past a bound after " +
+                                    std::to_string(kMaxBoundRounds) + " rounds were clamped");
+        }
       }
-      if (past.empty()) break;
-      for (const int k : past) moving.erase(std::find(moving.begin(), moving.end(), k));
-      if (round == kMaxBoundRounds) {  // the last clamp is not solved again: say so
-        result.warnings.push_back("stage '" + stage.name +
-                                  "': parameters still past a bound after " +
-                                  std::to_string(kMaxBoundRounds) + " rounds were clamped");
-      }
+      if (!report.usable) break;
+      const double used = loss.scale;
+      loss = stage_loss(problem, rows, u.data(), options.robust_scale);
+      if (!calib_internal::huber_scale_shrank(used, loss.scale)) break;
     }
     report.time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_started).count();
@@ -692,7 +762,9 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     std::vector<RowState> on_nominal = rows;  // the nominal geometry's solutions still start them
     std::vector<double> at(static_cast<std::size_t>(problem.count), 0.0);
     if (!extrinsics.empty() &&
-        solve_stage(problem, on_nominal, options, "extrinsics alone", extrinsics, &at).usable) {
+        solve_stage(problem, on_nominal, options, "extrinsics alone", extrinsics,
+                    stage_loss(problem, on_nominal, at.data(), options.robust_scale), &at)
+            .usable) {
       result.extrinsics_only = extrinsics_fit(at);
     }
   }
@@ -733,6 +805,23 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
   Eigen::MatrixXd jacobian;
   Eigen::VectorXd residual;
   if (stacked_jacobian(problem, rows, u.data(), &jacobian, &residual) && !free.empty()) {
+    // The measured errors at the result, every row, in SI units.
+    double position2 = 0, angle2 = 0;
+    std::vector<double> norms;
+    for (std::size_t j = 0; j < rows.size(); ++j) {
+      const Eigen::Index at = 6 * static_cast<Eigen::Index>(j);
+      position2 += residual.segment<3>(at).squaredNorm();
+      angle2 += residual.segment<3>(at + 3).squaredNorm();
+      norms.push_back(residual.segment<6>(at).norm());
+    }
+    const double m = static_cast<double>(rows.size());
+    result.rms_position = problem.scale * std::sqrt(position2 / m);
+    result.rms_angle = problem.scale / problem.weight * std::sqrt(angle2 / m);
+    // Outliers (outlier_rule.hpp): the rank, variance and covariance are the other rows'.
+    result.outlier_threshold = calib_internal::huber_scale(options.robust_scale, norms, 6);
+    calib_internal::leave_out_outliers(
+        result.outlier_threshold, 6, [&](std::size_t j) { return rows[j].origin; }, jacobian,
+        residual, result.outliers, result.warnings);
     Eigen::MatrixXd on_free(jacobian.rows(), static_cast<Eigen::Index>(free.size()));
     for (std::size_t c = 0; c < free.size(); ++c) on_free.col(c) = jacobian.col(free[c]);
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(on_free, Eigen::ComputeThinU | Eigen::ComputeFullV);
@@ -742,6 +831,8 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
     result.jacobian_rank = rank;
     const double dof = static_cast<double>(residual.size() - rank);
     result.residual_variance = dof > 0 ? residual.squaredNorm() / dof : calib_internal::kNaN;
+    result.residuals_exceed_noise =
+        calib_internal::residuals_exceed_noise(result.residual_variance, dof, result.warnings);
     std::vector<bool> identifiable(free.size(), true);
     for (Eigen::Index g = rank; g < static_cast<Eigen::Index>(free.size()); ++g) {
       const Eigen::VectorXd direction = svd.matrixV().col(g);
@@ -774,15 +865,6 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
         }
       }
     }
-    // The measured errors at the result, in SI units.
-    double position2 = 0, angle2 = 0;
-    for (std::size_t j = 0; j < rows.size(); ++j) {
-      position2 += residual.segment<3>(6 * static_cast<Eigen::Index>(j)).squaredNorm();
-      angle2 += residual.segment<3>(6 * static_cast<Eigen::Index>(j) + 3).squaredNorm();
-    }
-    const double m = static_cast<double>(rows.size());
-    result.rms_position = problem.scale * std::sqrt(position2 / m);
-    result.rms_angle = problem.scale / problem.weight * std::sqrt(angle2 / m);
   } else {
     result.warnings.push_back(
         "the identified model cannot be evaluated at every row: no standard deviations");

@@ -195,7 +195,11 @@ std::string spatial_calibration_report_json(const SpatialCalibrationResult& resu
                         {"m_y_Nm", result.load_moment.y()},
                         {"m_z_Nm", result.load_moment.z()}}},
                       {"residual_variance", result.residual_variance},
+                      {"residuals_exceed_noise", result.residuals_exceed_noise},
                       {"covariance_ok", result.covariance_ok},
+                      {"dropped_rows", result.dropped},
+                      {"outlier_rows", result.outliers},
+                      {"outlier_threshold", result.outlier_threshold},
                       {"rms_position_m", result.rms_position},
                       {"rms_angle_rad", result.rms_angle},
                       {"orientation_weight_m_per_rad", result.orientation_weight},
@@ -212,13 +216,17 @@ std::string spatial_calibration_report_json(const SpatialCalibrationResult& resu
 
 std::string spatial_residuals_csv(const SpatialCalibrationResult& result,
                                   const SpatialCalibrationTable& table,
-                                  const SpatialDataset& calibration, double robust_scale) {
+                                  const SpatialDataset& calibration) {
   const SpatialPredictionErrors& e = table.identified_calibration;
   return report_internal::residuals_csv_text(
       calibration.q, calibration.line_numbers, e.position, e.angle,
       report_internal::whitened_norms(e.position, e.angle, result.orientation_weight,
                                       result.residual_scale),
-      robust_scale, "e_angle");
+      result.outlier_threshold, "e_angle");
+}
+
+std::string model_selection_json(const SpatialModelSelection& selection) {
+  return report_internal::model_selection_json(selection, spatial_calibration_report_json);
 }
 
 }  // namespace pcr

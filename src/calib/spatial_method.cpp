@@ -53,14 +53,25 @@ SpatialMethodResult run_spatial_method(const SpatialRobotDescription& nominal,
   });
 
   stage.run(MethodStage::kCalibration, [&] {
-    result.calibration = calibrate_spatial(nominal, result.calibration_data, options.calibration);
+    if (options.model == CalibratedModel::kSelected) {
+      result.selection = calibrate_selecting_model(nominal, result.calibration_data,
+                                                   result.validation_data, options.calibration);
+      result.calibration = result.selection->chosen();
+    } else {
+      SpatialCalibrationOptions o = options.calibration;
+      if (options.model == CalibratedModel::kLoad) o.stages = with_load_stage(o.stages);
+      result.calibration = calibrate_spatial(nominal, result.calibration_data, o);
+    }
     result.identified = nominal;
     result.identified.params = result.calibration.identified;
   });
 
   stage.run(MethodStage::kValidation, [&] {
-    result.table = spatial_calibration_table(result.calibration, result.calibration_data,
-                                             result.validation_data, options.calibration.fk);
+    // The selection tabulated both fits on both sets already.
+    result.table = result.selection
+                       ? result.selection->chosen_table()
+                       : spatial_calibration_table(result.calibration, result.calibration_data,
+                                                   result.validation_data, options.calibration.fk);
   });
 
   stage.run(MethodStage::kAccuracy, [&] {

@@ -12,6 +12,8 @@
 
 namespace pcr {
 
+struct SpatialModelSelection;  // pcr/calib/model_selection.hpp
+
 /// The pose errors (position e_p in m, angle e_angle in rad) of the nominal model (the nominal
 /// geometry with the identified extrinsics, SpatialCalibrationResult::extrinsics_only, as the
 /// planar table's) and of the identified robot on both sets, row by row
@@ -50,10 +52,14 @@ std::string spatial_calibration_report_json(const SpatialCalibrationResult& resu
 /// `row,line,q1..qn,e_p,e_angle,residual_norm,outlier` (row: 1-based in the dataset; line: in its
 /// file, 0 if unknown; e_p in m, e_angle in rad, NaN where FK failed; residual_norm: the whitened
 /// residual sqrt(e_p^2 + (w e_angle)^2) / residual_scale at the result's resolved weight and
-/// scale; outlier: 1 beyond `robust_scale`, where the calibration's Huber loss starts, 0 for
-/// none).
+/// scale; outlier: 1 beyond result.outlier_threshold, as the planar residuals_csv).
 std::string spatial_residuals_csv(const SpatialCalibrationResult& result,
                                   const SpatialCalibrationTable& table,
-                                  const SpatialDataset& calibration, double robust_scale);
+                                  const SpatialDataset& calibration);
+
+/// A spatial model selection (pcr/calib/model_selection.hpp) as JSON text, as the planar
+/// model_selection_json: the decision and its numbers and, when the load model was fitted, the
+/// fit not chosen as spatial_calibration_report_json on the same sets ("other_fit").
+std::string model_selection_json(const SpatialModelSelection& selection);
 
 }  // namespace pcr

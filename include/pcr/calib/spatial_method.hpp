@@ -30,6 +30,11 @@ struct SpatialMethodOptions {
   /// The calibration configurations; the validation set is drawn with them.
   SpatialSamplingOptions sampling;
   int validation_count = kDefaultValidationCount;
+  /// What the calibration identifies (the planar MethodOptions::model): the stages, the stages
+  /// with the platform load ("load"), or the one of the two the validation set supports
+  /// (calibrate_selecting_model). The stages by default: a spatial calibration takes seconds, and
+  /// the selection may run it twice.
+  CalibratedModel model = CalibratedModel::kStages;
   SpatialCalibrationOptions calibration;
   /// The paths, their centre and orientation relative to the centre pose: the nominal robot's
   /// platform pose ^W T_P at the middle of the sampling box (a path given about W's origin runs
@@ -60,6 +65,8 @@ struct SpatialMethodResult {
   SpatialDataset calibration_data, validation_data;
   int unmeasured = 0;  ///< configurations of either set it did not measure
   SpatialCalibrationResult calibration;
+  /// The selection (model "selected"): both fits and the decision; `calibration` is the chosen.
+  std::optional<SpatialModelSelection> selection;
   SpatialCalibrationTable table;       ///< Table 3 on both sets
   SpatialRobotDescription identified;  ///< the nominal description with the identified parameters
   SpatialPose<double> centre;          ///< the paths' centre pose (see SpatialMethodOptions)
