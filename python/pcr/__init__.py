@@ -42,6 +42,7 @@ if has_calibration:
         ModelSelection,
         ParameterEstimate,
         PoseErrorStats,
+        SpatialModelSelection,
         StageReport,
         VirtualRobot,
         admissible_configuration,

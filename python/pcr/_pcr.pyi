@@ -671,6 +671,7 @@ def calibrate_spatial(nominal: SpatialRobot, q: ArrayLike, measured: ArrayLike,
                       orientation_weight: float = ..., residual_scale: float = ...,
                       robust_scale: float = 5.0, max_iterations: int = 100,
                       function_tolerance: float = 1e-8, compute_covariance: bool = True,
+                      drop_unreachable: bool = False,
                       progress: Optional[Callable[[str], None]] = None
                       ) -> tuple[SpatialRobot, dict[str, Any]]: ...
 def simulate_spatial_measurements(nominal: SpatialRobot, q: ArrayLike, *, seed: int = 1,
@@ -691,14 +692,41 @@ class ModelSelection:
     @property
     def decision(self) -> str: ...
 
+class SpatialModelSelection:  # ModelSelection's properties, for a spatial robot
+    @property
+    def load_chosen(self) -> bool: ...
+    @property
+    def tried_load(self) -> bool: ...
+    @property
+    def rows(self) -> int: ...
+    @property
+    def mean_difference(self) -> float: ...
+    @property
+    def t(self) -> float: ...
+    @property
+    def decision(self) -> str: ...
+
 MODEL_SELECTION_T: float  # 2.326, one-sided 1 %
 # Returns (identified Robot, chosen, the stages' result, the load model's or None, selection).
+@overload
 def calibrate_selecting_model(
         nominal: Robot, q: ArrayLike, measured: ArrayLike, validation_q: ArrayLike,
         validation_measured: ArrayLike, options: Optional[CalibrationOptions] = None, *,
         progress: Optional[Callable[[str], None]] = None, **changes: Any,
 ) -> tuple[Robot, CalibrationResult, CalibrationResult, Optional[CalibrationResult],
            ModelSelection]: ...
+# A spatial robot: keywords as calibrate_spatial's; the results as its dicts.
+@overload
+def calibrate_selecting_model(
+        nominal: SpatialRobot, q: ArrayLike, measured: ArrayLike, validation_q: ArrayLike,
+        validation_measured: ArrayLike, *,
+        stages: Optional[Union[Sequence[dict[str, Any]], StrPath]] = None,
+        orientation_weight: float = ..., residual_scale: float = ..., robust_scale: float = 5.0,
+        max_iterations: int = 100, function_tolerance: float = 1e-8,
+        compute_covariance: bool = True, drop_unreachable: bool = False,
+        progress: Optional[Callable[[str], None]] = None,
+) -> tuple[SpatialRobot, dict[str, Any], dict[str, Any], Optional[dict[str, Any]],
+           SpatialModelSelection]: ...
 def calibration_table(result: CalibrationResult, q: ArrayLike, measured: ArrayLike,
                       validation_q: Optional[ArrayLike] = None,
                       validation_measured: Optional[ArrayLike] = None) -> CalibrationTable: ...
@@ -872,6 +900,8 @@ class SpatialMethodResult:
     @property
     def calibration(self) -> dict[str, Any]: ...
     @property
+    def selection(self) -> Optional[SpatialModelSelection]: ...
+    @property
     def identified(self) -> SpatialRobot: ...
     @property
     def truth(self) -> SpatialRobot: ...
@@ -885,6 +915,7 @@ class SpatialMethodResult:
 def run_spatial_method(nominal: SpatialRobot, robot: SpatialVirtualRobot, *, count: int = 99,
                        validation_count: int = 56, design: str = "poisson-disc", seed: int = 1,
                        stages: Optional[Union[Sequence[dict[str, Any]], StrPath]] = None,
+                       model: str = "stages",
                        repeat: int = 30, square_poses: int = 40, circle_poses: int = 36,
                        helix_poses: int = 73, sensitivity: bool = True,
                        on_stage: Optional[Callable[[str], None]] = None,

@@ -2,6 +2,7 @@
 // Shared by the bindings of pcr::calib (wrap_calibration.cpp and the files of its topics): joints
 // and poses as row-major arrays, and the checked conversions of datasets and stages.
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -32,14 +33,38 @@ struct Calibration {
   std::vector<CalibrationSample> calibration;
 };
 
+/// A Python `progress` callable as a calibration's progress option. A Python exception in it must
+/// not unwind through Ceres: it is kept, later lines are dropped, and raise() raises it once the
+/// calibration has returned.
+struct ProgressRelay {
+  std::shared_ptr<std::unique_ptr<py::error_already_set>> error =
+      std::make_shared<std::unique_ptr<py::error_already_set>>();
+
+  /// The option (empty for None).
+  std::function<void(const std::string&)> callback(const py::object& progress) const {
+    if (progress.is_none()) return {};
+    return [progress, error = error](const std::string& line) {
+      py::gil_scoped_acquire acquire;
+      if (*error) return;
+      try {
+        progress(line);
+      } catch (py::error_already_set& e) {
+        *error = std::make_unique<py::error_already_set>(std::move(e));
+      }
+    };
+  }
+  void raise() {
+    if (*error) throw std::move(**error);
+  }
+};
+
 /// The CalibrationOptions of a call: `options` (None: the defaults) with the keyword changes made
 /// through the properties' setters (checked alike, no default written here), and `progress`.
 /// A Python exception in `progress` must not unwind through Ceres: it is kept, later lines are
 /// dropped, and raise_progress_error() raises it once the calibration has returned.
 struct CalledOptions {
   CalibrationOptions options;
-  std::shared_ptr<std::unique_ptr<py::error_already_set>> progress_error =
-      std::make_shared<std::unique_ptr<py::error_already_set>>();
+  ProgressRelay relay;
 
   CalledOptions(const char* function, const std::optional<CalibrationOptions>& given,
                 const py::object& progress, const py::kwargs& changes) {
@@ -54,22 +79,35 @@ struct CalledOptions {
       py::setattr(settings, item.first, item.second);
     }
     options = settings.cast<CalibrationOptions>();
-    if (progress.is_none()) return;
-    options.progress = [progress, error = progress_error](const std::string& line) {
-      py::gil_scoped_acquire acquire;
-      if (*error) return;
-      try {
-        progress(line);
-      } catch (py::error_already_set& e) {
-        *error = std::make_unique<py::error_already_set>(std::move(e));
-      }
-    };
+    options.progress = relay.callback(progress);
   }
 
-  void raise_progress_error() {
-    if (*progress_error) throw std::move(**progress_error);
-  }
+  void raise_progress_error() { relay.raise(); }
 };
+
+/// pcr.ModelSelection and pcr.SpatialModelSelection (pcr/calib/model_selection.hpp): the decision
+/// and its numbers, one set of properties for both.
+template <class Selection>
+void bind_model_selection_class(py::module_& m, const char* name, const char* doc) {
+  py::class_<Selection>(m, name, doc)
+      .def_property_readonly(
+          "load_chosen", [](const Selection& s) { return s.load_chosen; },
+          "the validation test kept the load model")
+      .def_property_readonly(
+          "tried_load", [](const Selection& s) { return s.tried_load; },
+          "the residuals exceeded the noise and the load model was fitted")
+      .def_property_readonly(
+          "rows", [](const Selection& s) { return s.rows; }, "validation rows in the test")
+      .def_property_readonly(
+          "mean_difference", [](const Selection& s) { return s.mean_difference; },
+          "mean over the rows of the stages' squared whitened error less the load model's")
+      .def_property_readonly(
+          "t", [](const Selection& s) { return s.t; },
+          "the paired t statistic (the load model is kept above pcr.MODEL_SELECTION_T)")
+      .def_property_readonly(
+          "decision", [](const Selection& s) { return s.decision; },
+          "the choice in words, with the numbers");
+}
 
 /// `nominal` with `params` (its name and uncertainty section kept).
 RobotDescription with_params(const RobotDescription& nominal, const RobotParams<double>& params);

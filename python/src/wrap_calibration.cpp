@@ -552,28 +552,10 @@ void bind_calibrate(py::module_& m) {
 
 /// pcr.ModelSelection, pcr.MODEL_SELECTION_T and pcr.calibrate_selecting_model.
 void bind_model_selection(py::module_& m) {
-  py::class_<ModelSelection>(m, "ModelSelection",
-                             "The calibration's stages against the load model, chosen on the "
-                             "validation set (pcr.calibrate_selecting_model).")
-      .def_property_readonly(
-          "load_chosen", [](const ModelSelection& s) { return s.load_chosen; },
-          "the validation test kept the load model")
-      .def_property_readonly(
-          "tried_load", [](const ModelSelection& s) { return s.tried_load; },
-          "the residuals exceeded the noise and the load model was fitted")
-      .def_property_readonly(
-          "rows", [](const ModelSelection& s) { return s.rows; }, "validation rows in the test")
-      .def_property_readonly(
-          "mean_difference", [](const ModelSelection& s) { return s.mean_difference; },
-          "mean over the rows of the stages' squared whitened error less the "
-          "load model's")
-      .def_property_readonly(
-          "t", [](const ModelSelection& s) { return s.t; },
-          "the paired t statistic (the load model is kept above "
-          "pcr.MODEL_SELECTION_T)")
-      .def_property_readonly(
-          "decision", [](const ModelSelection& s) { return s.decision; },
-          "the choice in words, with the numbers");
+  bind_model_selection_class<ModelSelection>(
+      m, "ModelSelection",
+      "The calibration's stages against the load model, chosen on the validation set "
+      "(pcr.calibrate_selecting_model).");
   m.attr("MODEL_SELECTION_T") = kModelSelectionT;
 
   m.def(

@@ -5,8 +5,10 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <utility>
 
 #include "calibration_bindings.hpp"
+#include "pcr/calib/model_selection.hpp"
 #include "pcr/calib/spatial_calibration_report.hpp"
 #include "pcr/calib/spatial_calibrator.hpp"
 #include "pcr/calib/spatial_virtual_robot.hpp"
@@ -39,6 +41,79 @@ SpatialDataset spatial_rows(const py::handle& q_in, const py::handle& measured_i
                                          quaternion_exp(Eigen::Vector3d(row[3], row[4], row[5]))});
   }
   return data;
+}
+
+/// The arguments pcr.calibrate_spatial and pcr.calibrate_selecting_model (a spatial robot) share:
+/// the datasets and the options.
+struct SpatialCall {
+  SpatialDataset calibration, validation;
+  SpatialCalibrationOptions options;
+  ProgressRelay relay;
+
+  SpatialCall(const SpatialRobotDescription& nominal, const py::object& q,
+              const py::object& measured, const py::object& validation_q,
+              const py::object& validation_measured, const py::object& stages,
+              double orientation_weight, double residual_scale, double robust_scale,
+              int max_iterations, double function_tolerance, bool compute_covariance,
+              bool drop_unreachable, const py::object& progress) {
+    if (validation_q.is_none() != validation_measured.is_none()) {
+      throw std::invalid_argument("validation_q and validation_measured: expected both or neither");
+    }
+    const int n = nominal.params.num_rods;
+    calibration = spatial_rows(q, measured, n, "q", "measured");
+    if (!validation_q.is_none()) {
+      validation =
+          spatial_rows(validation_q, validation_measured, n, "validation_q", "validation_measured");
+    }
+    if (!stages.is_none()) options.stages = stages_from(stages, /*spatial=*/true);
+    options.orientation_weight = orientation_weight;
+    options.residual_scale = residual_scale;
+    options.robust_scale = robust_scale;
+    options.max_iterations = max_iterations;
+    options.function_tolerance = function_tolerance;
+    options.compute_covariance = compute_covariance;
+    options.drop_unreachable = drop_unreachable;
+    checked_options(options);
+    options.progress = relay.callback(progress);
+  }
+};
+
+/// Defines `name`: nominal, q, measured, the validation rows (`validation`: their two py::arg),
+/// then pcr.calibrate_spatial's keyword arguments with their defaults; `run(nominal, call)`
+/// calibrates (the GIL released) and returns the Python result.
+template <class Run, class... Validation>
+void def_spatial_calibration(py::module_& m, const char* name, Run run, const char* doc,
+                             Validation... validation) {
+  const SpatialCalibrationOptions defaults;
+  m.def(
+      name,
+      [run](const SpatialRobotDescription& nominal, const py::object& q, const py::object& measured,
+            const py::object& validation_q, const py::object& validation_measured,
+            const py::object& stages, double orientation_weight, double residual_scale,
+            double robust_scale, int max_iterations, double function_tolerance,
+            bool compute_covariance, bool drop_unreachable, const py::object& progress) {
+        SpatialCall call(nominal, q, measured, validation_q, validation_measured, stages,
+                         orientation_weight, residual_scale, robust_scale, max_iterations,
+                         function_tolerance, compute_covariance, drop_unreachable, progress);
+        py::object out = run(nominal, call);
+        call.relay.raise();
+        return out;
+      },
+      py::arg("nominal"), py::arg("q"), py::arg("measured"), validation..., py::kw_only(),
+      py::arg("stages") = py::none(), py::arg("orientation_weight") = kNaN,
+      py::arg("residual_scale") = kNaN, py::arg("robust_scale") = defaults.robust_scale,
+      py::arg("max_iterations") = defaults.max_iterations,
+      py::arg("function_tolerance") = defaults.function_tolerance,
+      py::arg("compute_covariance") = defaults.compute_covariance,
+      py::arg("drop_unreachable") = defaults.drop_unreachable, py::arg("progress") = py::none(),
+      doc);
+}
+
+SpatialRobotDescription with_spatial_params(const SpatialRobotDescription& nominal,
+                                            const SpatialRobotParams<double>& params) {
+  SpatialRobotDescription out = nominal;  // uncertainty section kept
+  out.params = params;
+  return out;
 }
 
 /// Marker poses as an (N, 6) array (x, y, z, rx, ry, rz), NaN where `ok` is false.
@@ -97,6 +172,10 @@ py::dict spatial_calibration_dict(const SpatialCalibrationResult& result,
   out["jacobian_rank"] = result.jacobian_rank;
   out["unidentifiable"] = result.unidentifiable;
   out["residual_variance"] = result.residual_variance;
+  out["residuals_exceed_noise"] = result.residuals_exceed_noise;
+  out["dropped"] = result.dropped;
+  out["outliers"] = result.outliers;
+  out["outlier_threshold"] = result.outlier_threshold;
   out["covariance_ok"] = result.covariance_ok;
   out["covariance"] = result.covariance;  // parameters' order; NaN where not identifiable
   out["load_identified"] = result.load_identified;
@@ -120,76 +199,64 @@ void wrap_spatial_calibration(py::module_& m) {
       "default_spatial_stages", [] { return stages_list(default_spatial_stages()); },
       "The spatial calibration's default stages, a list of dicts (name, free, bounds_scale).");
 
-  m.def(
-      "calibrate_spatial",
-      [](const SpatialRobotDescription& nominal, const py::object& q, const py::object& measured,
-         const py::object& validation_q, const py::object& validation_measured,
-         const py::object& stages, double orientation_weight, double residual_scale,
-         double robust_scale, int max_iterations, double function_tolerance,
-         bool compute_covariance, const py::object& progress) {
-        if (validation_q.is_none() != validation_measured.is_none()) {
-          throw std::invalid_argument(
-              "validation_q and validation_measured: expected both or neither");
-        }
-        const int n = nominal.params.num_rods;
-        const SpatialDataset calibration = spatial_rows(q, measured, n, "q", "measured");
-        SpatialDataset validation;
-        if (!validation_q.is_none()) {
-          validation = spatial_rows(validation_q, validation_measured, n, "validation_q",
-                                    "validation_measured");
-        }
-        SpatialCalibrationOptions options;
-        if (!stages.is_none()) {
-          options.stages = stages_from(stages, /*spatial=*/true);
-        }
-        options.orientation_weight = orientation_weight;
-        options.residual_scale = residual_scale;
-        options.robust_scale = robust_scale;
-        options.max_iterations = max_iterations;
-        options.function_tolerance = function_tolerance;
-        options.compute_covariance = compute_covariance;
-        checked_options(options);
-        // A Python exception in `progress` must not unwind through Ceres: kept, raised after.
-        auto error = std::make_shared<std::unique_ptr<py::error_already_set>>();
-        if (!progress.is_none()) {
-          options.progress = [progress, error](const std::string& line) {
-            py::gil_scoped_acquire acquire;
-            if (*error) return;
-            try {
-              progress(line);
-            } catch (py::error_already_set& e) {
-              *error = std::make_unique<py::error_already_set>(std::move(e));
-            }
-          };
-        }
+  def_spatial_calibration(
+      m, "calibrate_spatial",
+      [](const SpatialRobotDescription& nominal, SpatialCall& call) -> py::object {
         SpatialCalibrationResult result;
         SpatialCalibrationTable table;
         {
           py::gil_scoped_release release;
-          result = calibrate_spatial(nominal, calibration, options);
-          table = spatial_calibration_table(result, calibration, validation, options.fk);
+          result = calibrate_spatial(nominal, call.calibration, call.options);
+          table =
+              spatial_calibration_table(result, call.calibration, call.validation, call.options.fk);
         }
-        if (*error) throw std::move(**error);
-        SpatialRobotDescription identified = nominal;  // uncertainty section kept
-        identified.params = result.identified;
-        return py::make_tuple(identified, spatial_calibration_dict(result, table));
+        return py::make_tuple(with_spatial_params(nominal, result.identified),
+                              spatial_calibration_dict(result, table));
       },
-      py::arg("nominal"), py::arg("q"), py::arg("measured"), py::arg("validation_q") = py::none(),
-      py::arg("validation_measured") = py::none(), py::kw_only(), py::arg("stages") = py::none(),
-      py::arg("orientation_weight") = kNaN, py::arg("residual_scale") = kNaN,
-      py::arg("robust_scale") = SpatialCalibrationOptions().robust_scale,
-      py::arg("max_iterations") = SpatialCalibrationOptions().max_iterations,
-      py::arg("function_tolerance") = SpatialCalibrationOptions().function_tolerance,
-      py::arg("compute_covariance") = true, py::arg("progress") = py::none(),
       "Staged, bounded identification of the spatial robot `nominal` (a SpatialRobot with an "
       "uncertainty section) from q (N, n) (m) and the measured marker poses (N, 6): x, y, z (m) "
       "and the rotation vector rx, ry, rz (rad), a spatial dataset's columns; the validation "
       "rows, when given, are scored in the report. stages: a list of dicts or a stages JSON "
       "file's path (None: default_spatial_stages()); orientation_weight and residual_scale: NaN "
-      "for the library's defaults. Returns (identified SpatialRobot, dict of the result's "
-      "fields: stages, parameters (name, unit, deviation, std, half_width, free, at_bound, "
-      "identifiable), unidentifiable, residual_variance, rms_position, rms_angle, warnings, "
-      "..., report (text) and report_json, what pcr_calibrate writes). Releases the GIL.");
+      "for the library's defaults; drop_unreachable: rows without an equilibrium on the nominal "
+      "robot are left out (listed in 'dropped') instead of a ValueError naming them. Returns "
+      "(identified SpatialRobot, dict of the result's fields: stages, parameters (name, unit, "
+      "deviation, std, half_width, free, at_bound, identifiable), unidentifiable, "
+      "residual_variance, residuals_exceed_noise, outliers, outlier_threshold, dropped, "
+      "rms_position, rms_angle, warnings, ..., report (text) and report_json, what "
+      "pcr_calibrate writes). Releases the GIL.",
+      py::arg("validation_q") = py::none(), py::arg("validation_measured") = py::none());
+
+  bind_model_selection_class<SpatialModelSelection>(
+      m, "SpatialModelSelection",
+      "A spatial calibration's stages against the load model, chosen on the validation set "
+      "(pcr.calibrate_selecting_model on a SpatialRobot).");
+  def_spatial_calibration(
+      m, "calibrate_selecting_model",
+      [](const SpatialRobotDescription& nominal, SpatialCall& call) -> py::object {
+        SpatialModelSelection selection;
+        {
+          py::gil_scoped_release release;
+          selection =
+              calibrate_selecting_model(nominal, call.calibration, call.validation, call.options);
+        }
+        py::object load = py::none();
+        if (selection.tried_load) {
+          load = spatial_calibration_dict(selection.load, selection.load_table);
+        }
+        return py::make_tuple(
+            with_spatial_params(nominal, selection.chosen().identified),
+            spatial_calibration_dict(selection.chosen(), selection.chosen_table()),
+            spatial_calibration_dict(selection.stages, selection.stages_table), load, selection);
+      },
+      "pcr.calibrate_spatial with model selection, for a SpatialRobot: when the residuals exceed "
+      "the noise (residuals_exceed_noise), the load model (the last stage also frees the "
+      "platform's constant force and moment) is fitted too and kept when a paired one-sided "
+      "t-test on the validation rows' squared whitened pose errors passes pcr.MODEL_SELECTION_T "
+      "(1 %). Keywords as pcr.calibrate_spatial's. Returns (identified SpatialRobot, the chosen "
+      "fit's dict, the stages' dict, the load model's dict or None, SpatialModelSelection). "
+      "Releases the GIL.",
+      py::arg("validation_q"), py::arg("validation_measured"));
 
   m.def(
       "simulate_spatial_measurements",

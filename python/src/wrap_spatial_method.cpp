@@ -139,6 +139,13 @@ void bind_spatial_method_result(py::module_& m) {
           "the calibration's fields as pcr.calibrate_spatial returns them (a dict; report_json "
           "holds Table 3 on both sets, pose_errors)")
       .def_property_readonly(
+          "selection",
+          [](const R& r) -> py::object {
+            if (!r.result.selection) return py::none();
+            return py::cast(*r.result.selection);
+          },
+          "the SpatialModelSelection (model 'selected'), else None")
+      .def_property_readonly(
           "identified", [](const R& r) { return r.result.identified; },
           "the identified robot, a SpatialRobot")
       .def_property_readonly(
@@ -189,14 +196,16 @@ void wrap_spatial_method(py::module_& m) {
       "run_spatial_method",
       [](const SpatialRobotDescription& nominal, SpatialVirtualRobot& robot, int count,
          int validation_count, const std::string& design, std::uint64_t seed,
-         const py::object& stages, int repeat, int square_poses, int circle_poses, int helix_poses,
-         bool sensitivity, const py::object& on_stage, const py::object& progress) {
+         const py::object& stages, const std::string& model, int repeat, int square_poses,
+         int circle_poses, int helix_poses, bool sensitivity, const py::object& on_stage,
+         const py::object& progress) {
         SpatialMethodOptions o;
         o.sampling.count = count;
         o.sampling.seed = seed;
         o.sampling.design = parse_sampling_design(design);
         o.validation_count = validation_count;
         if (!stages.is_none()) o.calibration.stages = stages_from(stages, /*spatial=*/true);
+        o.model = parse_calibrated_model(model);
         o.accuracy.repeat = repeat;
         o.square.num_poses = square_poses;
         o.circle.num_poses = circle_poses;
@@ -208,19 +217,8 @@ void wrap_spatial_method(py::module_& m) {
             on_stage(to_string(stage));
           };
         }
-        // A Python exception in `progress` must not unwind through Ceres: kept, raised after.
-        auto error = std::make_shared<std::unique_ptr<py::error_already_set>>();
-        if (!progress.is_none()) {
-          o.calibration.progress = [progress, error](const std::string& line) {
-            py::gil_scoped_acquire acquire;
-            if (*error) return;
-            try {
-              progress(line);
-            } catch (py::error_already_set& e) {
-              *error = std::make_unique<py::error_already_set>(std::move(e));
-            }
-          };
-        }
+        ProgressRelay relay;
+        o.calibration.progress = relay.callback(progress);
         checked_options(o);
         SpatialMethodRun run;
         run.nominal = nominal;
@@ -229,13 +227,14 @@ void wrap_spatial_method(py::module_& m) {
           py::gil_scoped_release release;
           run.result = run_spatial_method(nominal, robot, o);
         }
-        if (*error) throw std::move(**error);
+        relay.raise();
         return run;
       },
       py::arg("nominal"), py::arg("robot"), py::kw_only(),
       py::arg("count") = defaults.sampling.count,
       py::arg("validation_count") = defaults.validation_count, py::arg("design") = "poisson-disc",
       py::arg("seed") = defaults.sampling.seed, py::arg("stages") = py::none(),
+      py::arg("model") = calibrated_model_name(defaults.model),
       py::arg("repeat") = defaults.accuracy.repeat,
       py::arg("square_poses") = defaults.square.num_poses,
       py::arg("circle_poses") = defaults.circle.num_poses,
@@ -247,7 +246,9 @@ void wrap_spatial_method(py::module_& m) {
       "sampling (`count` calibration configurations by `design`, 'poisson-disc' or "
       "'d-optimal', and `validation_count` validation ones, drawn with `seed`), the robot's "
       "measurements (each set in visiting order), the staged calibration (`stages`: as "
-      "pcr.calibrate_spatial takes them; None: default_spatial_stages()), Table 3 on both sets, "
+      "pcr.calibrate_spatial takes them; None: default_spatial_stages(); `model`: 'stages', "
+      "'load' (the stages with the platform load) or 'selected', as pcr.run_method's), Table 3 "
+      "on both sets, "
       "and a square, a circle and a helix about the nominal robot's pose at the middle of the "
       "joint box commanded with both models (ISO 9283 in 3-D, `repeat` cycles): what `pcr demo "
       "--robot FILE` runs for a spatial file. on_stage: optional callable(str) called as each "

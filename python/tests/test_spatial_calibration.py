@@ -103,3 +103,47 @@ def test_run_spatial_method_is_the_steps_one_by_one():
     assert method.seconds["calibration"] > 0 and method.seconds["sensitivity"] == 0
     with pytest.raises(ValueError, match="helix.num_poses"):
         pcr.run_spatial_method(nominal, robot, helix_poses=0)
+
+
+def test_calibrate_spatial_names_outliers_and_drops_unreachable_rows(measured):
+    """The planar calibration's options on a spatial robot: drop_unreachable leaves out (and
+    names) a row without an equilibrium on the nominal robot, which is otherwise a ValueError; a
+    row measured 1 mm off is named an outlier."""
+    nominal, q, poses, _ = measured
+    poses = poses.copy()
+    poses[3, 1] += 1e-3
+    far = np.vstack([q, np.full((1, 6), -0.39)])  # rods 1 cm long: no equilibrium
+    far_poses = np.vstack([poses, poses[-1:]])
+    with pytest.raises(ValueError, match=f"row {len(far)}: the nominal robot has no equilibrium"):
+        pcr.calibrate_spatial(nominal, far, far_poses, stages=EXTRINSICS)
+    _, result = pcr.calibrate_spatial(nominal, far, far_poses, stages=EXTRINSICS,
+                                      drop_unreachable=True)
+    assert len(result["dropped"]) == 1 and result["dropped"][0].startswith(f"row {len(far)} (")
+    assert any("drop_unreachable" in w for w in result["warnings"])
+    # The extrinsics alone leave the rods' errors (tens of um): the Huber scale follows the rows'
+    # median up (beyond 5 noise units), and the 1 mm row stands out beyond it.
+    print("outliers:", result["outliers"], "threshold", result["outlier_threshold"])
+    assert "row 4" in [o.split(" (")[0] for o in result["outliers"]]
+    assert len(result["outliers"]) < len(q) // 2
+    assert result["outlier_threshold"] > 5.0
+    assert result["residuals_exceed_noise"]  # the geometry is not fitted
+    report = json.loads(result["report_json"])
+    assert report["outlier_rows"] == result["outliers"]
+    assert report["dropped_rows"] == result["dropped"]
+
+
+def test_calibrate_selecting_model_takes_a_spatial_robot(measured):
+    """pcr.calibrate_selecting_model on a SpatialRobot: the extrinsics alone leave residuals
+    beyond the noise, so the load model (the last stage also frees the platform wrench) is fitted
+    and tested on the validation rows; the results are calibrate_spatial's dicts."""
+    nominal, q, poses, _ = measured
+    identified, chosen, stages, load, selection = pcr.calibrate_selecting_model(
+        nominal, q[:16], poses[:16], q[16:], poses[16:], stages=EXTRINSICS)
+    assert isinstance(identified, pcr.SpatialRobot)
+    assert isinstance(selection, pcr.SpatialModelSelection)
+    print(selection.decision)
+    assert stages["residuals_exceed_noise"] and selection.tried_load
+    assert not stages["load_identified"] and load["load_identified"]
+    assert selection.rows == len(q) - 16
+    assert chosen["load_identified"] == selection.load_chosen
+    assert ("load model" if selection.load_chosen else "stages' model") in selection.decision

@@ -93,7 +93,6 @@ def test_the_attachment_scale_draws_the_truth_inside_the_scaled_intervals():
 @pytest.mark.parametrize("factors, message", [
     (dict(mount_tolerance=1e-4), "factor mount_tolerance = 0.0001 does not apply to the spatial"),
     (dict(load_force_x=1e-3), "factor load_force_x = 0.001 does not apply to the spatial"),
-    (dict(model="load"), "factor model = 'load' does not apply to the spatial"),
 ])
 def test_planar_factors_are_refused_for_a_spatial_robot(tmp_path, factors, message):
     row = study.run_trial({"robot": "continuum-stewart-gough", **factors}, seed=1)

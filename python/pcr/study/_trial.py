@@ -51,7 +51,8 @@ FACTORS = {
     "design": Factor(str, "poisson-disc", "", "choice of the configurations: 'poisson-disc' or "
                      "'d-optimal'", ("poisson-disc", "d-optimal")),
     "model": Factor(str, "stages", "", "the calibrated model: 'stages' (the paper's), 'load' (the "
-                    "last stage also frees a constant platform load) or 'selected' (the load "
+                    "last stage also frees a constant platform load: f_x, f_y, m_z planar, the six of "
+                    "a force and a moment spatial) or 'selected' (the load "
                     "model when the residuals exceed the noise and the validation set supports "
                     "it, pcr.calibrate_selecting_model)", ("stages", "load", "selected")),
     "attachment_scale": Factor(float, None, "",
@@ -84,7 +85,7 @@ _SPATIAL_ISO_STATS = ("ap_p", "rp_l")
 # The factors of one kind of robot only: set to another value than their default, they are
 # refused for the other kind.
 PLANAR_ONLY = ("mount_tolerance", "angle_tolerance", "length_tolerance", "diameter_tolerance",
-               "mount_measurement", "model", "diameter_spread", "load_force_x", "load_force_y",
+               "mount_measurement", "diameter_spread", "load_force_x", "load_force_y",
                "load_moment")
 SPATIAL_ONLY = ("attachment_scale", "payload", "rod_density")
 
@@ -153,8 +154,8 @@ def spatial_outcome_columns():
             columns += [f"accuracy.{path}.{model}.ap_abc_abs.{a}.max" for a in "abc"]
     columns += ["configurations.calibration", "configurations.validation",
                 "configurations.unreachable", "calibration.iterations",
-                "calibration.residual_variance", "calibration.free_parameters",
-                "calibration.jacobian_rank", "calibration.at_bound"]
+                "calibration.load_identified", "calibration.residual_variance",
+                "calibration.free_parameters", "calibration.jacobian_rank", "calibration.at_bound"]
     columns += [f"time.{t}_s" for t in _TIMES] + ["time_s"]
     return columns
 
@@ -402,8 +403,8 @@ def _run_spatial(factors, seed, design, row, stages):
     if factors["calibration_count"] is not None:
         counts["count"] = factors["calibration_count"]
     method = pcr.run_spatial_method(nominal, robot, design=factors["design"], seed=sampling_seed,
-                                    repeat=factors["repeat"], sensitivity=False,
-                                    on_stage=stages.enter, **counts)
+                                    model=factors["model"], repeat=factors["repeat"],
+                                    sensitivity=False, on_stage=stages.enter, **counts)
     for name in ("calibration", "validation"):
         row[f"configurations.{name}"] = len(method.measured[name][0])
     row["configurations.unreachable"] = method.unmeasured
@@ -411,6 +412,7 @@ def _run_spatial(factors, seed, design, row, stages):
     result = method.calibration
     report = json.loads(result["report_json"])
     row["calibration.iterations"] = sum(s["iterations"] for s in result["stages"])
+    row["calibration.load_identified"] = float(result["load_identified"])
     row["calibration.residual_variance"] = result["residual_variance"]
     row["calibration.free_parameters"] = result["free_count"]
     row["calibration.jacobian_rank"] = result["jacobian_rank"]
