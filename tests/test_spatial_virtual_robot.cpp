@@ -1,7 +1,8 @@
 // The virtual spatial robot (pcr/calib/spatial_virtual_robot.hpp) and the 6-D dataset file:
 // truths inside the intervals (and at their corners), one material and one wire, the unmodelled
-// effects on their own streams, the measurement against a CVODE FK of the truth seen through
-// Eigen's Isometry3d, the noise's declared spread, and the dataset's round trip and bad rows.
+// effects on their own streams and by name, the measurement against a CVODE FK of the truth seen
+// through Eigen's Isometry3d, the noise's declared spread, and the dataset's round trip and bad
+// rows.
 
 #include <gtest/gtest.h>
 
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "pcr/calib/dataset.hpp"
+#include "pcr/calib/named_effects.hpp"
 #include "pcr/calib/spatial_virtual_robot.hpp"
 #include "scratch_directory.hpp"
 #include "spatial_test_support.hpp"
@@ -130,6 +132,56 @@ TEST(SpatialVirtualRobot, EffectsKeepTheirOwnStreams) {
       EXPECT_NE(std::string(e.what()).find("rod 0"), std::string::npos) << e.what();
     }
   }
+}
+
+// pcr demo --effects NAMES on either robot: one mapping (pcr/calib/named_effects.hpp). A name
+// means the same on both; "diameters" gives the spatial rods unequal diameters, each drawn on its
+// own about the one wire's, and nothing else moves.
+TEST(SpatialVirtualRobot, NamedEffectsMeanWhatThePlanarNamesMean) {
+  const pcr::UnmodelledEffects planar = pcr::planar_effects_named({"all"}, "--effects");
+  EXPECT_TRUE(planar.misalignments && planar.unequal_diameters && planar.external_load);
+  const pcr::SpatialUnmodelledEffects all = pcr::spatial_effects_named({"all"}, "--effects");
+  EXPECT_EQ(all.misalignment_half_width, 5e-3);  // the paper's 5 mrad, as the planar one's
+  EXPECT_EQ(all.misalignment_half_width, planar.misalignment_half_width);
+  EXPECT_EQ(all.diameter_half_width, 10e-6);
+  EXPECT_EQ(all.payload, 0.1);
+  EXPECT_LT(all.rod_density, 0);  // not a named effect: the rods as described
+  const pcr::SpatialUnmodelledEffects load = pcr::spatial_effects_named({"load"}, "--effects");
+  EXPECT_EQ(load.payload, 0.1);
+  EXPECT_EQ(load.misalignment_half_width, 0);
+  EXPECT_EQ(load.diameter_half_width, 0);
+  EXPECT_EQ(pcr::describe(pcr::SpatialUnmodelledEffects()), "none");
+  EXPECT_EQ(pcr::describe(load), "a 0.1 kg payload at P's origin");
+  try {
+    pcr::spatial_effects_named({"load", "gravity"}, "--effects");
+    ADD_FAILURE() << "an unknown effect accepted";
+  } catch (const pcr::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--effects: unknown unmodelled effect 'gravity'"),
+              std::string::npos)
+        << e.what();
+  }
+
+  const pcr::SpatialRobotDescription nominal = pcr::continuum_stewart_gough_description();
+  const int n = nominal.params.num_rods;
+  const pcr::SpatialVirtualRobot plain(nominal);
+  pcr::SpatialVirtualRobotOptions options;
+  options.effects = pcr::spatial_effects_named({"diameters"}, "--effects");
+  const pcr::SpatialVirtualRobot unequal(nominal, options);
+  const std::vector<double> a = deviations_of(plain), b = deviations_of(unequal);
+  double spread = 0;  // of the rods' diameters
+  for (int k = 0; k < pcr::num_spatial_parameters(n); ++k) {
+    const SpatialParameterId id = pcr::spatial_parameter_id(k, n);
+    if (id.kind == SpatialParameterKind::kDiameter) {
+      EXPECT_LE(std::abs(b[k] - a[k]), 10e-6) << k;
+      EXPECT_NE(b[k], a[k]) << k;
+      spread = std::max(
+          spread,
+          std::abs(b[k] - b[static_cast<std::size_t>(k - id.rod * pcr::kSpatialRodParameters)]));
+    } else {
+      EXPECT_EQ(b[k], a[k]) << k;
+    }
+  }
+  EXPECT_GT(spread, 1e-6);  // no longer one wire
 }
 
 TEST(SpatialVirtualRobot, MeasuresTheTruthsEquilibriumFromTheTracker) {

@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "pcr/calib/accuracy.hpp"
+#include "pcr/calib/named_effects.hpp"
 
 namespace {
 
@@ -78,16 +79,7 @@ void run_accuracy(const AccuracyArguments& args) {
     vr.noise_position = args.noise_position;
     vr.noise_angle = args.noise_angle;
     vr.solver = args.solve.options();
-    for (const std::string& e : args.effects) {
-      if (e == "misalignments")
-        vr.effects.misalignments = true;
-      else if (e == "diameters")
-        vr.effects.unequal_diameters = true;
-      else if (e == "load")
-        vr.effects.external_load = true;
-      else
-        throw InputError("--effects: unknown effect '" + e + "' (misalignments, diameters, load)");
-    }
+    vr.effects = planar_effects_named(args.effects, "--effects");
     if (!args.solve.force.empty() || args.solve.moment != 0) {
       // A known load: the model commands with it and the virtual robot carries it.
       vr.effects.external_load = true;
@@ -177,7 +169,8 @@ void register_accuracy_command(CLI::App& app) {
       ->check(within(pcr::VirtualRobotOptions::kNoiseAngle))
       ->capture_default_str();
   cmd->add_option("--effects", args->effects,
-                  "unmodelled effects of the virtual robot: misalignments, diameters, load")
+                  "unmodelled effects of the virtual robot: misalignments, diameters, load, all "
+                  "(pcr/calib/named_effects.hpp)")
       ->delimiter(',');
   cmd->add_option("--frame", args->frame,
                   "map camera measurements to W with the 'model' extrinsics (the paper's way, "

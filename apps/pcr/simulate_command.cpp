@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "pcr/calib/dataset.hpp"
+#include "pcr/calib/named_effects.hpp"
 #include "pcr/calib/virtual_robot.hpp"
 
 namespace {
@@ -31,18 +32,9 @@ void run_simulate(const SimulateArguments& args) {
   options.noise_angle = args.noise_angle;
   options.solver = args.solve.options();
   UnmodelledEffects& fx = options.effects;
+  fx = planar_effects_named(args.effects, "--effects");
   fx.misalignment_half_width = args.misalignment;
   fx.diameter_half_width = args.diameter_spread;
-  for (const std::string& e : args.effects) {
-    if (e == "misalignments")
-      fx.misalignments = true;
-    else if (e == "diameters")
-      fx.unequal_diameters = true;
-    else if (e == "load")
-      fx.external_load = true;
-    else
-      throw InputError("--effects: unknown effect '" + e + "' (misalignments, diameters, load)");
-  }
   if (!args.solve.force.empty() || args.solve.moment != 0) {
     fx.external_load = true;
     fx.load = args.solve.load();
@@ -97,7 +89,8 @@ void register_simulate_command(CLI::App& app) {
       ->check(within(pcr::VirtualRobotOptions::kNoiseAngle))
       ->capture_default_str();
   cmd->add_option("--effects", args->effects,
-                  "unmodelled effects to switch on: misalignments, diameters, load")
+                  "unmodelled effects to switch on: misalignments, diameters, load, all "
+                  "(pcr/calib/named_effects.hpp)")
       ->delimiter(',');
   cmd->add_option("--misalignment", args->misalignment,
                   "extra half-width on beta_i and gamma_i with 'misalignments' (rad)")

@@ -876,8 +876,8 @@ def run_method(nominal: Robot, robot: VirtualRobot, options: Optional[Calibratio
 class SpatialVirtualRobot:
     def __init__(self, nominal: SpatialRobot, *, seed: int = 1, truth_at_fraction: float = 0.0,
                  noise_position: float = ..., noise_angle: float = 1.2e-6, payload: float = 0.0,
-                 misalignment_half_width: float = 0.0, rod_density: float = -1.0,
-                 options: Optional[SolverOptions] = None) -> None: ...
+                 misalignment_half_width: float = 0.0, diameter_half_width: float = 0.0,
+                 rod_density: float = -1.0, options: Optional[SolverOptions] = None) -> None: ...
     @property
     def nominal(self) -> SpatialRobot: ...
     @property

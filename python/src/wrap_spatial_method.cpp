@@ -55,7 +55,8 @@ void bind_spatial_virtual_robot(py::module_& m) {
       "uncertainty intervals, measured by a noisy tracker (pcr::SpatialVirtualRobot).")
       .def(py::init([](const SpatialRobotDescription& nominal, std::uint64_t seed,
                        double truth_at_fraction, double noise_position, double noise_angle,
-                       double payload, double misalignment_half_width, double rod_density,
+                       double payload, double misalignment_half_width,
+                       double diameter_half_width, double rod_density,
                        const std::optional<SolverOptions>& solver) {
              SpatialVirtualRobotOptions o;
              o.seed = seed;
@@ -64,6 +65,7 @@ void bind_spatial_virtual_robot(py::module_& m) {
              o.noise_angle = noise_angle;
              o.effects.payload = payload;
              o.effects.misalignment_half_width = misalignment_half_width;
+             o.effects.diameter_half_width = diameter_half_width;
              o.effects.rod_density = rod_density;
              o.solver = options_or_default(solver, SpatialVirtualRobotOptions().solver);
              return SpatialVirtualRobot(nominal, checked_options(o));
@@ -74,6 +76,7 @@ void bind_spatial_virtual_robot(py::module_& m) {
            py::arg("noise_angle") = SpatialVirtualRobotOptions().noise_angle,
            py::arg("payload") = SpatialUnmodelledEffects().payload,
            py::arg("misalignment_half_width") = SpatialUnmodelledEffects().misalignment_half_width,
+           py::arg("diameter_half_width") = SpatialUnmodelledEffects().diameter_half_width,
            py::arg("rod_density") = SpatialUnmodelledEffects().rod_density,
            py::arg("options") = py::none(),
            "Draws the truth from `nominal` (a SpatialRobot with an uncertainty section): uniform "
@@ -81,7 +84,8 @@ void bind_spatial_virtual_robot(py::module_& m) {
            "noise_position (m; NaN: the paper's repeatability scaled to the robot's rod length) "
            "and noise_angle (rad) are standard deviations. Unmodelled effects: payload (kg at P's "
            "origin), misalignment_half_width (rad, U(-h, h) on each base turn component beyond "
-           "the intervals), rod_density (kg/m^3 of the truth's rods; < 0: as described).")
+           "the intervals), diameter_half_width (m, U(-h, h) on each rod's d on its own, beyond the "
+           "one wire's draw), rod_density (kg/m^3 of the truth's rods; < 0: as described).")
       .def_property_readonly(
           "nominal", [](const SpatialVirtualRobot& v) { return v.nominal(); },
           "the nominal description (a copy)")

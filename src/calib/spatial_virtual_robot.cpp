@@ -67,6 +67,15 @@ SpatialVirtualRobot::SpatialVirtualRobot(const SpatialRobotDescription& nominal,
       }
     }
   }
+  if (fx.diameter_half_width > 0) {
+    std::seed_seq seq{options.seed, std::uint64_t{0x6469616d}};  // "diam"
+    std::mt19937_64 r(seq);
+    for (int i = 0; i < n; ++i) {
+      double& diameter = d[static_cast<std::size_t>(
+          kSpatialRodParameters * i + static_cast<int>(SpatialParameterKind::kDiameter))];
+      diameter = internal::draw_within(r, diameter, fx.diameter_half_width);
+    }
+  }
   truth_.params = spatial_with_deviations(nominal.params, d.data());
   truth_.params.platform_mass += fx.payload;
   if (fx.rod_density >= 0) {

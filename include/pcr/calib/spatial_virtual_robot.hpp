@@ -18,7 +18,9 @@
 //
 // Unmodelled effects, each independent of the others: a payload (a mass the nominal model does
 // not know, at P's origin), misaligned holes (an extra U(-h_m, h_m) on every base turn component,
-// beyond the intervals), and rods whose weight the model leaves out (the truth's density).
+// beyond the intervals), unequal rods (an extra, independent U(-h_d, h_d) on each rod's d, beyond
+// the one wire's draw), and rods whose weight the model leaves out (the truth's density).
+// pcr/calib/named_effects.hpp names them as pcr demo --effects does.
 
 #include <cstdint>
 #include <random>
@@ -42,16 +44,20 @@ struct SpatialUnmodelledEffects {
   double payload = 0.0;  ///< kg added at P's origin
   /// rad: each base turn component gets an extra U(-h, h) (0: none)
   double misalignment_half_width = 0.0;
+  /// m: each rod's d gets an extra, independent U(-h, h) (0: none, one wire)
+  double diameter_half_width = 0.0;
   /// kg/m^3: the truth's rod density (< 0: as described). A model that leaves the rods' weight
   /// out has density 0, and its truth this.
   double rod_density = -1.0;
 
   static constexpr OptionRange kPayload{"payload", 0, 1e3, "kg"};
   static constexpr OptionRange kMisalignmentHalfWidth{"misalignment_half_width", 0, 0.1, "rad"};
+  static constexpr OptionRange kDiameterHalfWidth{"diameter_half_width", 0, 1e-3, "m"};
   static constexpr OptionRange kRodDensity{"rod_density", -1, 1e5, "kg/m^3"};
   bool is_valid(std::string* error = nullptr) const {
     return kPayload.check(payload, error, "effects.") &&
            kMisalignmentHalfWidth.check(misalignment_half_width, error, "effects.") &&
+           kDiameterHalfWidth.check(diameter_half_width, error, "effects.") &&
            kRodDensity.check(rod_density, error, "effects.");
   }
 };
