@@ -123,7 +123,7 @@ TEST(Demo, NoVisionRunIntoAFreshDirectoryWritesItsReport) {
 
 /// `pcr demo --robot` with a spatial robot file: the whole method on a virtual robot drawn from
 /// it (pcr::run_spatial_method), its report at the noise floor sqrt(3) sigma (211 nm for the
-/// reference robot) and its six paths.
+/// reference robot) and its six paths; then the same robot with an unmodelled payload.
 TEST(Demo, SpatialRobotFileRunsTheSpatialMethod) {
   // Its Table 2 alone is 728 FK solves with derivatives: 3 s in Release, minutes under the
   // sanitizers (the spatial method's code runs there in test_spatial_trajectory's evaluation).
@@ -181,12 +181,57 @@ TEST(Demo, SpatialRobotFileRunsTheSpatialMethod) {
   std::stringstream report_md;
   report_md << md.rdbuf();
   EXPECT_NE(report_md.str().find("[figures.md](figures.md)"), std::string::npos);
+  EXPECT_EQ(report["unmodelled_effects"].size(), 0u);
+
+  // The same robot (its truth, configurations and noise: each effect has its own stream) with
+  // the named effect "load", a 100 g payload the model does not know (pcr/calib/named_effects.hpp),
+  // and the load stage: the nominal model's error grows, the stage finds the payload's weight
+  // within its uncertainty, and the identified model stays at the floor.
+  const fs::path loaded = scratch.path() / "load";
+  ASSERT_EQ(
+      run_demo(scratch, "--robot " + std::string(PCR_SOURCE_DIR) +
+                            "/robots/continuum-stewart-gough.json --output " + loaded.string() +
+                            " --calibration 40 --validation 12 --repeat 3 --poses 8 "
+                            "--effects load --identify-load"),
+      0);
+  const nlohmann::json with_load = read_json(loaded / "report.json");
+  EXPECT_EQ(with_load["unmodelled_effects"], nlohmann::json::array({"load"}));
+  EXPECT_EQ(with_load["unmodelled_effect_sizes"]["payload_kg"].get<double>(), 0.1);
+  const double added = read_json(loaded / "truth.json")["platform_mass"].get<double>() -
+                       read_json(out / "truth.json")["platform_mass"].get<double>();
+  EXPECT_NEAR(added, 0.1, 1e-15);
+  const auto& loaded_errors = with_load["calibration"]["pose_errors"];
+  const auto rms = [](const nlohmann::json& e, const char* set) {
+    return e[set]["rms_position_m"].get<double>();
+  };
+  EXPECT_GT(rms(loaded_errors, "nominal_model_validation_set"),
+            rms(errors, "nominal_model_validation_set"));
+  EXPECT_LT(rms(loaded_errors, "identified_model_validation_set"), 2 * floor);
+  ASSERT_TRUE(with_load["calibration"]["platform_load"]["identified"].get<bool>());
+  bool found = false;
+  for (const auto& p : with_load["calibration"]["parameters"]) {
+    if (p["name"] != "load_f_z") continue;
+    found = true;
+    const double weight = 0.1 * 9.81;  // N, the reference robot's gravity
+    EXPECT_NEAR(p["deviation"].get<double>(), -weight, 3.5 * p["std"].get<double>());
+    EXPECT_LT(p["std"].get<double>(), 0.2 * weight);
+  }
+  EXPECT_TRUE(found);
+  std::ifstream loaded_md(loaded / "report.md");
+  std::stringstream loaded_text;
+  loaded_text << loaded_md.rdbuf();
+  EXPECT_NE(loaded_text.str().find("Unmodelled effects: load (a 0.1 kg payload at P's origin)"),
+            std::string::npos)
+      << loaded_text.str().substr(0, 600);
 }
 
 TEST(Demo, RejectsAnUnknownEffect) {
   const pcr::test::ScratchDirectory scratch("demo");
   EXPECT_NE(run_demo(scratch, "--effects gravity --output " + scratch.file("x")), 0);
   EXPECT_FALSE(fs::exists(scratch.path() / "x" / "report.json"));
+  // The load stage is the spatial demo's: the planar one chooses its model on the validation set.
+  EXPECT_NE(run_demo(scratch, "--identify-load --no-vision --output " + scratch.file("y")), 0);
+  EXPECT_FALSE(fs::exists(scratch.path() / "y" / "report.json"));
 }
 
 }  // namespace

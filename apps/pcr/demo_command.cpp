@@ -20,6 +20,7 @@
 
 #include "commands.hpp"
 #include "pcr/calib/method.hpp"
+#include "pcr/calib/named_effects.hpp"
 #include "pcr/calib/spatial_method.hpp"
 #include "pcr/spatial/robot_io.hpp"
 #ifdef PCR_HAS_VISION
@@ -44,20 +45,9 @@ struct DemoArgs {
   int path_poses = 40;
   bool vision = true;
   bool quiet = false;
-  std::vector<std::string> effects;  ///< unmodelled effects of the virtual robot
+  std::vector<std::string> effects;  ///< unmodelled effects of the virtual robot, by name
+  bool identify_load = false;        ///< spatial: the last stage also frees a platform load
 };
-
-/// The virtual robot's unmodelled effects from --effects names.
-pcr::UnmodelledEffects parse_effects(const std::vector<std::string>& names) {
-  pcr::UnmodelledEffects effects;
-  for (const std::string& name : names) {
-    const bool all = name == "all";
-    if (all || name == "misalignments") effects.misalignments = true;
-    if (all || name == "diameters") effects.unequal_diameters = true;
-    if (all || name == "load") effects.external_load = true;
-  }
-  return effects;
-}
 
 /// Stage-by-stage progress on stderr, with the time each stage took. The stages are named once,
 /// in order, when it is made: their count is the list's.
@@ -469,6 +459,11 @@ void finish_report(const fs::path& out, std::chrono::steady_clock::time_point st
 
 void run_demo(const DemoArgs& args) {
   const auto start = std::chrono::steady_clock::now();
+  if (args.identify_load) {
+    throw pcr::InputError(
+        "--identify-load: for a spatial robot (the planar demo chooses the load model on its "
+        "validation set)");
+  }
   const fs::path out = prepare_output(args.output);
   // Every file goes in place at the end, when all were written: a failed or interrupted demo
   // leaves the files of the previous run as they were.
@@ -499,7 +494,7 @@ void run_demo(const DemoArgs& args) {
       args.robot.empty() ? pcr::default_robot() : pcr::load_robot(args.robot);
   pcr::VirtualRobotOptions vr_options;
   vr_options.seed = args.seed;
-  vr_options.effects = parse_effects(args.effects);
+  vr_options.effects = pcr::planar_effects_named(args.effects, "--effects");
   pcr::VirtualRobot robot(design, vr_options);
   pcr::save_robot(design, (out / "design.json").string());
   pcr::save_robot(robot.truth(), (out / "truth.json").string());
@@ -599,8 +594,6 @@ void run_demo(const DemoArgs& args) {
 /// the same report directory, its tables for a spatial robot; figures.md as the planar one's.
 void run_spatial_demo(const DemoArgs& args) {
   const auto start = std::chrono::steady_clock::now();
-  if (!args.effects.empty())
-    throw pcr::InputError("--effects: the built-in planar robot's; not for a spatial robot");
   const pcr::SpatialRobotDescription nominal = pcr::load_spatial_robot(args.robot);
   if (!nominal.uncertainty) {
     throw pcr::InputError(args.robot +
@@ -616,6 +609,7 @@ void run_spatial_demo(const DemoArgs& args) {
       args.quiet);
   pcr::SpatialVirtualRobotOptions vr_options;
   vr_options.seed = args.seed;
+  vr_options.effects = pcr::spatial_effects_named(args.effects, "--effects");
   pcr::SpatialVirtualRobot robot(nominal, vr_options);
   pcr::save_spatial_robot(nominal, (out / "nominal.json").string());
   pcr::save_spatial_robot(robot.truth(), (out / "truth.json").string());
@@ -626,6 +620,8 @@ void run_spatial_demo(const DemoArgs& args) {
   method.validation_count = args.validation_count;
   method.accuracy.repeat = args.repeat;
   method.square.num_poses = method.circle.num_poses = method.helix.num_poses = args.path_poses;
+  if (args.identify_load)
+    method.calibration.stages = pcr::with_load_stage(method.calibration.stages);
   if (!args.quiet)
     method.calibration.progress = [](const std::string& l) { std::cerr << "      " << l << "\n"; };
   method.on_stage_begin = [&](pcr::MethodStage) { progress.begin(); };
@@ -635,11 +631,21 @@ void run_spatial_demo(const DemoArgs& args) {
   json report;
   report["robot"] = args.robot;
   report["seed"] = args.seed;
+  report["unmodelled_effects"] = args.effects;
+  report["unmodelled_effect_sizes"] = {
+      {"payload_kg", vr_options.effects.payload},
+      {"misalignment_half_width_rad", vr_options.effects.misalignment_half_width},
+      {"diameter_half_width_m", vr_options.effects.diameter_half_width}};
+  report["identify_load"] = args.identify_load;
   report["noise"] = {{"position_m", robot.noise_position()}, {"angle_rad", vr_options.noise_angle}};
   std::string md =
       "# pcr demo: the method of Mauze et al. (2021) on a virtual spatial robot "
       "drawn from " +
-      args.robot + "\n\nSeed " + std::to_string(args.seed) +
+      args.robot + "\n\nSeed " + std::to_string(args.seed) + ". Unmodelled effects: " +
+      (args.effects.empty() ? std::string("none")
+                            : CLI::detail::join(args.effects, ", ") + " (" +
+                                  pcr::describe(vr_options.effects) + ")") +
+      (args.identify_load ? "; the last calibration stage also identifies a platform load" : "") +
       fmt(". Measurement noise %.3g nm and %.3g urad per axis (the noise floor of "
           "an rms error: %.3g nm, %.3g urad). Units: um and mrad in Table 4, SI in "
           "every file. Figures: [figures.md](figures.md), drawn from these files by "
@@ -726,10 +732,14 @@ void register_demo_command(CLI::App& app) {
       ->check(pcr::cli::within(pcr::SquarePath::kNumPoses))
       ->capture_default_str();
   cmd->add_option("--effects", args->effects,
-                  "unmodelled effects of the virtual robot: misalignments (beta, gamma), diameters "
-                  "(unequal), load (on the platform), all")
+                  "unmodelled effects of the virtual robot (pcr/calib/named_effects.hpp): "
+                  "misalignments (holes turned beyond their intervals), diameters (unequal rods), "
+                  "load (unknown to the model: planar 5 mN, spatial a 100 g payload), all")
       ->delimiter(',')
-      ->check(CLI::IsMember({"misalignments", "diameters", "load", "all"}));
+      ->check(CLI::IsMember(pcr::unmodelled_effect_names()));
+  cmd->add_flag("--identify-load", args->identify_load,
+                "spatial robot: the last calibration stage also identifies a constant platform "
+                "load (the load stage)");
   cmd->add_flag("!--no-vision", args->vision, "start from the design instead of measuring");
   cmd->add_flag("--quiet", args->quiet, "no progress on stderr");
   cmd->callback([args]() {
