@@ -32,8 +32,7 @@ def _parser():
         formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="run (or resume) a study into a Parquet dataset")
-    r.add_argument("study", help="a TOML file, or a built-in study: tolerance, configurations, "
-                   "unmodelled")
+    r.add_argument("study", help="a TOML file, or a built-in study (pcr-study list)")
     r.add_argument("--output", required=True, help="directory of the results (Parquet dataset)")
     r.add_argument("--trials", type=_positive, help="trials per combination of levels "
                    "(default: the study's)")

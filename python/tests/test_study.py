@@ -56,8 +56,8 @@ def _without_times(table):
 # ---- definitions ---------------------------------------------------------------------------
 
 def test_builtin_studies_load_and_list_their_trials():
-    assert study.builtin_studies() == ["configurations", "tolerance", "tolerance-spatial",
-                                       "unmodelled"]
+    assert study.builtin_studies() == ["configurations", "design-spatial", "tolerance",
+                                       "tolerance-spatial", "unmodelled"]
     s = study.Study.load("tolerance")
     assert s.levels == {"mount_tolerance": [40e-6, 160e-6, 640e-6]} and s.trials == 50
     assert s.factors["calibration_count"] == 99 and s.factors["validation_count"] == 56

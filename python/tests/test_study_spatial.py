@@ -109,3 +109,26 @@ def test_spatial_factors_are_refused_for_a_planar_robot():
     assert "factor attachment_scale = 2.0 does not apply to the planar robot" in row["failure"]
     row = study.run_trial({"payload": 0.01}, seed=1)
     assert "factor payload = 0.01 does not apply to the planar robot" in row["failure"]
+
+
+def test_the_design_spatial_study_runs_both_designs_on_the_same_robots(tmp_path):
+    """The built-in design-spatial study cut to one replicate of 20 configurations (2 trials):
+    both designs run on the same truth, the D-optimal one chosen among its candidates, and both
+    identify the robot far below the nominal geometry's error."""
+    definition = study.Study.load("design-spatial")
+    assert definition.levels == {"design": ["poisson-disc", "d-optimal"],
+                                 "calibration_count": [20, 40, 60]}
+    assert definition.trials == 20 and definition.factors["robot"] == "continuum-stewart-gough"
+    tiny = definition.replace(trials=1, levels={**definition.levels, "calibration_count": [20]},
+                              factors={**definition.factors, "validation_count": 10, "repeat": 2})
+    table = study.run(tiny, tmp_path / "out", workers=1, progress=False)
+    assert len(table) == 2 and table["failure"].isna().all(), list(table["failure"])
+    assert list(table["design"]) == ["poisson-disc", "d-optimal"]
+    # One replicate: one seed, so one truth and one tracker for both designs.
+    assert table["seed"].nunique() == 1
+    assert (table["configurations.calibration"] + table["configurations.unreachable"] >= 20).all()
+    v = "table3.identified_model_validation_set"
+    n = "table3.nominal_model_validation_set"
+    print(table[["design", f"{v}.rms_position_m", f"{v}.rms_angle_rad", f"{n}.rms_position_m",
+                 "calibration.jacobian_rank", "noise.floor_position_m", "time_s"]].to_string())
+    assert (table[f"{n}.rms_position_m"] > 10 * table[f"{v}.rms_position_m"]).all()

@@ -62,7 +62,8 @@ FACTORS = {
     "misalignment": Factor(float, 0.0, "rad",
                            "unmodelled: U(-h, h) added to beta and gamma (planar), to each base "
                            "turn component (spatial)"),
-    "diameter_spread": Factor(float, 0.0, "m", "unmodelled: U(-h, h) added to each rod's d"),
+    "diameter_spread": Factor(float, 0.0, "m", "unmodelled: U(-h, h) added to each rod's d, on "
+                              "its own (planar and spatial)"),
     "load_force_x": Factor(float, 0.0, "N", "unmodelled: a constant force on the platform"),
     "load_force_y": Factor(float, 0.0, "N", "unmodelled: a constant force on the platform"),
     "load_moment": Factor(float, 0.0, "N m", "unmodelled: a constant moment on the platform"),
@@ -85,8 +86,7 @@ _SPATIAL_ISO_STATS = ("ap_p", "rp_l")
 # The factors of one kind of robot only: set to another value than their default, they are
 # refused for the other kind.
 PLANAR_ONLY = ("mount_tolerance", "angle_tolerance", "length_tolerance", "diameter_tolerance",
-               "mount_measurement", "diameter_spread", "load_force_x", "load_force_y",
-               "load_moment")
+               "mount_measurement", "load_force_x", "load_force_y", "load_moment")
 SPATIAL_ONLY = ("attachment_scale", "payload", "rod_density")
 
 
@@ -390,7 +390,8 @@ def _run_spatial(factors, seed, design, row, stages):
         int(s) for s in np.random.SeedSequence(seed).generate_state(4, dtype=np.uint64))
     nominal = _with_attachment_scale(design, factors["attachment_scale"])
     camera = dict(seed=truth_seed, payload=factors["payload"],
-                  misalignment_half_width=factors["misalignment"])
+                  misalignment_half_width=factors["misalignment"],
+                  diameter_half_width=factors["diameter_spread"])
     for name in ("noise_position", "noise_angle", "rod_density"):
         if factors[name] is not None:
             camera[name] = factors[name]
