@@ -53,39 +53,39 @@ void bind_spatial_virtual_robot(py::module_& m) {
       m, "SpatialVirtualRobot",
       "A simulated spatial robot: a truth drawn from the nominal description inside its "
       "uncertainty intervals, measured by a noisy tracker (pcr::SpatialVirtualRobot).")
-      .def(py::init([](const SpatialRobotDescription& nominal, std::uint64_t seed,
-                       double truth_at_fraction, double noise_position, double noise_angle,
-                       double payload, double misalignment_half_width,
-                       double diameter_half_width, double rod_density,
-                       const std::optional<SolverOptions>& solver) {
-             SpatialVirtualRobotOptions o;
-             o.seed = seed;
-             o.truth_at_fraction = truth_at_fraction;
-             o.noise_position = noise_position;
-             o.noise_angle = noise_angle;
-             o.effects.payload = payload;
-             o.effects.misalignment_half_width = misalignment_half_width;
-             o.effects.diameter_half_width = diameter_half_width;
-             o.effects.rod_density = rod_density;
-             o.solver = options_or_default(solver, SpatialVirtualRobotOptions().solver);
-             return SpatialVirtualRobot(nominal, checked_options(o));
-           }),
-           py::arg("nominal"), py::kw_only(), py::arg("seed") = SpatialVirtualRobotOptions().seed,
-           py::arg("truth_at_fraction") = SpatialVirtualRobotOptions().truth_at_fraction,
-           py::arg("noise_position") = kNaN,
-           py::arg("noise_angle") = SpatialVirtualRobotOptions().noise_angle,
-           py::arg("payload") = SpatialUnmodelledEffects().payload,
-           py::arg("misalignment_half_width") = SpatialUnmodelledEffects().misalignment_half_width,
-           py::arg("diameter_half_width") = SpatialUnmodelledEffects().diameter_half_width,
-           py::arg("rod_density") = SpatialUnmodelledEffects().rod_density,
-           py::arg("options") = py::none(),
-           "Draws the truth from `nominal` (a SpatialRobot with an uncertainty section): uniform "
-           "inside the intervals, or with truth_at_fraction f > 0 at +- f half-widths. "
-           "noise_position (m; NaN: the paper's repeatability scaled to the robot's rod length) "
-           "and noise_angle (rad) are standard deviations. Unmodelled effects: payload (kg at P's "
-           "origin), misalignment_half_width (rad, U(-h, h) on each base turn component beyond "
-           "the intervals), diameter_half_width (m, U(-h, h) on each rod's d on its own, beyond the "
-           "one wire's draw), rod_density (kg/m^3 of the truth's rods; < 0: as described).")
+      .def(
+          py::init([](const SpatialRobotDescription& nominal, std::uint64_t seed,
+                      double truth_at_fraction, double noise_position, double noise_angle,
+                      double payload, double misalignment_half_width, double diameter_half_width,
+                      double rod_density, const std::optional<SolverOptions>& solver) {
+            SpatialVirtualRobotOptions o;
+            o.seed = seed;
+            o.truth_at_fraction = truth_at_fraction;
+            o.noise_position = noise_position;
+            o.noise_angle = noise_angle;
+            o.effects.payload = payload;
+            o.effects.misalignment_half_width = misalignment_half_width;
+            o.effects.diameter_half_width = diameter_half_width;
+            o.effects.rod_density = rod_density;
+            o.solver = options_or_default(solver, SpatialVirtualRobotOptions().solver);
+            return SpatialVirtualRobot(nominal, checked_options(o));
+          }),
+          py::arg("nominal"), py::kw_only(), py::arg("seed") = SpatialVirtualRobotOptions().seed,
+          py::arg("truth_at_fraction") = SpatialVirtualRobotOptions().truth_at_fraction,
+          py::arg("noise_position") = kNaN,
+          py::arg("noise_angle") = SpatialVirtualRobotOptions().noise_angle,
+          py::arg("payload") = SpatialUnmodelledEffects().payload,
+          py::arg("misalignment_half_width") = SpatialUnmodelledEffects().misalignment_half_width,
+          py::arg("diameter_half_width") = SpatialUnmodelledEffects().diameter_half_width,
+          py::arg("rod_density") = SpatialUnmodelledEffects().rod_density,
+          py::arg("options") = py::none(),
+          "Draws the truth from `nominal` (a SpatialRobot with an uncertainty section): uniform "
+          "inside the intervals, or with truth_at_fraction f > 0 at +- f half-widths. "
+          "noise_position (m; NaN: the paper's repeatability scaled to the robot's rod length) "
+          "and noise_angle (rad) are standard deviations. Unmodelled effects: payload (kg at P's "
+          "origin), misalignment_half_width (rad, U(-h, h) on each base turn component beyond "
+          "the intervals), diameter_half_width (m, U(-h, h) on each rod's d on its own, beyond the "
+          "one wire's draw), rod_density (kg/m^3 of the truth's rods; < 0: as described).")
       .def_property_readonly(
           "nominal", [](const SpatialVirtualRobot& v) { return v.nominal(); },
           "the nominal description (a copy)")
