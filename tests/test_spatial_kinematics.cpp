@@ -452,16 +452,17 @@ TEST(SpatialKinematics, RandomRobotsMatchCvode) {
 // The cold start on more robots drawn around the reference (3 to 6 rods, every kind of rod,
 // gravity and payload on and off) at random joints within +-10 mm, each solution checked by a
 // CVODE FK from it. A mechanism at its joints (the joints do not fix the pose) must say so.
-// Measured: 22 of 24 solved and stable, 7 of them by continuation, within 3.1e-10 m and 7.3e-9 rad
-// of CVODE; robots 10 (five rods) and 23 (six rods) fail. The bound is the known limit
-// docs/kinematics.md states.
+// Measured: 93 of 96 solved and stable, within 3.3e-10 m and 8.5e-9 rad of CVODE; robots 39, 50
+// and 67 fail (the bowed start's trace circles between two folds, or creeps, until its budget
+// is spent). Without the bowed start's trace through folds (spatial_trace_bowed_start) 90: it
+// solves robots 10, 23 and 54. The bound is the known limit docs/kinematics.md states.
 TEST(SpatialKinematics, ColdStartOnMoreRandomRobots) {
   std::mt19937_64 rng(2027);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const SolverOptions options;
   PoseError worst;
   int bowed = 0, most_evaluations = 0, failed = 0, mechanisms = 0;
-  constexpr int kRobots = 24;
+  constexpr int kRobots = 96;
   for (int trial = 0; trial < kRobots; ++trial) {
     const int n = 3 + trial % 4;
     SpatialJointVector q;
@@ -502,7 +503,7 @@ TEST(SpatialKinematics, ColdStartOnMoreRandomRobots) {
       "cold FK of %d random robots: %d failed, %d mechanisms, %d by continuation; at most %d "
       "evaluations; within %.2e m, %.2e rad of a CVODE FK\n",
       kRobots, failed, mechanisms, bowed, most_evaluations, worst.position, worst.angle);
-  EXPECT_LE(failed, 2);
+  EXPECT_LE(failed, kRobots / 20);
 }
 
 // ---- Inverse kinematics -------------------------------------------------------------------------

@@ -1,11 +1,9 @@
 #pragma once
 // Spatial FK and IK through folds: pseudo-arclength continuation (pcr/internal/arclength.hpp's
 // trace_curve, the rule the planar core follows) along the straight input path from a warm start,
-// on the spatial shooting problems of pcr/spatial/kinematics.hpp. The curve's local coordinates
-// are those of spatial_newton: the scaled wrench (and joint) steps and the platform's turn on the
-// right as a rotation vector (Problem::retract), then t; the unit quaternion itself never enters
-// the bordered system. Header-only, no heap, no exceptions, at most
-// SolverOptions::max_arclength_steps points.
+// on the spatial shooting problems of pcr/spatial/kinematics.hpp, as the curve that header defines
+// (SpatialArclengthCurve, which the bowed cold start traces too). Header-only, no heap, no
+// exceptions, at most SolverOptions::max_arclength_steps points.
 
 #include <Eigen/Core>
 #include <Eigen/LU>
@@ -17,13 +15,6 @@
 namespace pcr {
 namespace internal {
 
-/// A point of a spatial curve of solutions: the shooting point and where its input lies on the
-/// path.
-struct SpatialCurvePoint {
-  SpatialShootingPoint<double> x;
-  double t = 0;
-};
-
 /// FK's input path: the joints from q0 to q1 on a line.
 struct SpatialJointPath {
   SpatialJointVector q0;
@@ -32,9 +23,10 @@ struct SpatialJointPath {
   void place(SpatialShootingPoint<double>& x, double t) const {
     for (int i = 0; i < q0.size(); ++i) x.q[i] = q0(i) + t * dq(i);
   }
+  void prepare(double) const {}
   /// d residual / d t at x, the point `problem` last evaluated.
   SpatialVector rate(const SpatialForwardProblem& problem, const SpatialShootingPoint<double>& x,
-                     double) const {
+                     double, SolverSummary&) const {
     return problem.input_jacobian(x) * dq;
   }
 };
@@ -49,66 +41,16 @@ struct SpatialPoseCurvePath {
     return spatial_imposed_pose(num_rods, path.at(t), current);
   }
   void place(SpatialShootingPoint<double>& x, double t) const { x.pose = imposed(x.pose, t); }
+  void prepare(double) const {}
   /// d residual / d t at x, the point `problem` last evaluated: the pose columns times the imposed
   /// pose's rate, by a central difference of the path (a closed form, no rod integrated).
   SpatialVector rate(const SpatialInverseProblem& problem, const SpatialShootingPoint<double>& x,
-                     double t) const {
+                     double t, SolverSummary&) const {
     constexpr double h = 1e-6;
     const Eigen::Matrix<double, 6, 1> rate =
         problem.pose_step(imposed(x.pose, t - h), imposed(x.pose, t + h)) / (2 * h);
     return problem.pose_jacobian(x) * rate;
   }
-};
-
-/// A spatial shooting problem along its input path, as the curve trace_curve follows.
-template <class Problem, class InputPath>
-class SpatialArclengthCurve {
- public:
-  using Point = SpatialCurvePoint;
-  using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxSpatialUnknowns + 1, 1>;
-  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxSpatialUnknowns + 1,
-                               kMaxSpatialUnknowns + 1>;
-
-  SpatialArclengthCurve(Problem& problem, const InputPath& path) : problem_(problem), path_(path) {}
-
-  int size() const { return problem_.size(); }
-  double t(const Point& p) const { return p.t; }
-
-  /// The unknowns retracted as spatial_newton steps them, the input moved along its path.
-  Point advance(const Point& p, const Vector& step) const {
-    const int n = size();
-    Point out;
-    out.t = p.t + step(n);
-    out.x = problem_.retract(p.x, SpatialVector(step.head(n)));
-    path_.place(out.x, out.t);
-    return out;
-  }
-
-  Vector offset(const Point& from, const Point& to) const {
-    const int n = size();
-    Vector d(n + 1);
-    d << problem_.step_between(from.x, to.x), to.t - from.t;
-    return d;
-  }
-
-  bool bordered(const Point& p, const Vector& tangent, Vector& g, Matrix& m,
-                SolverSummary& summary) {
-    const int n = size();
-    SpatialVector r;
-    SpatialJacobian J;
-    problem_.evaluate(p.x, r, &J);
-    ++summary.residual_evaluations;
-    m.resize(n + 1, n + 1);
-    m.topLeftCorner(n, n) = J;
-    m.topRightCorner(n, 1) = path_.rate(problem_, p.x, p.t);
-    m.bottomRows(1) = tangent.transpose();
-    g.head(n) = r;
-    return m.allFinite() && r.allFinite();
-  }
-
- private:
-  Problem& problem_;
-  const InputPath& path_;
 };
 
 /// FK or IK from `warm` (a solution at the path's start) along `path` by pseudo-arclength

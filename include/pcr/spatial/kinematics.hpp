@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pcr/internal/arclength.hpp"
 #include "pcr/internal/branch_rule.hpp"
 #include "pcr/internal/rod_step_ladder.hpp"
 #include "pcr/internal/solver_linkage.hpp"
@@ -507,116 +508,70 @@ inline bool spatial_inputs_valid(const SpatialRobotParams<double>& robot,
          q.allFinite() && options.is_valid();
 }
 
-/// The robot whose equilibrium at x's joints is x's pose with unloaded rods: each rod integrated
-/// from its proximal end with no wrench (straight, or its intrinsic shape), and the platform
-/// attachment and tip frame moved to where it ends, seen from x's pose; no gravity, mass or
-/// external load. The start of the bowed cold start (spatial_homotopy_solve).
-inline SpatialRobotParams<double> spatial_relaxed_robot(const SpatialRobotParams<double>& robot,
-                                                        const SpatialShootingPoint<double>& x,
-                                                        int rod_steps) {
-  SpatialRobotParams<double> relaxed = robot;
-  relaxed.gravity.setZero();
-  relaxed.platform_mass = 0;
-  relaxed.external_force.setZero();
-  relaxed.external_moment.setZero();
-  const Matrix3<double> R = x.pose.rotation();
-  for (int i = 0; i < robot.num_rods; ++i) {
-    const SpatialLimbParams<double>& limb = robot.limb(i);
-    const SpatialRodState<double> tip =
-        integrate_spatial_rod(spatial_proximal_state(limb, x.q[i], SpatialWrench<double>()),
-                              limb.rod_at(x.q[i]), Vector3<double>::Zero().eval(), rod_steps);
-    relaxed.limb(i).B = R.transpose() * (tip.position - x.pose.position);
-    relaxed.limb(i).tip_orientation = quaternion_of<double>(R.transpose() * tip.rotation());
-  }
-  return relaxed;
-}
+/// A point of a spatial curve of solutions: the shooting point and where its input lies on the
+/// path.
+struct SpatialCurvePoint {
+  SpatialShootingPoint<double> x;
+  double t = 0;
+};
 
-/// The robot a fraction t of the way from `from` to `to` (which differ in the platform
-/// attachments, tip frames and loads): those blended linearly, the tip frames on the shortest
-/// arc; `to` itself at t = 1.
-inline SpatialRobotParams<double> spatial_blended_robot(const SpatialRobotParams<double>& from,
-                                                        const SpatialRobotParams<double>& to,
-                                                        double t) {
-  if (t >= 1.0) return to;
-  const auto blend = [t](const auto& a, const auto& b) { return (a + t * (b - a)).eval(); };
-  SpatialRobotParams<double> out = to;
-  for (int i = 0; i < to.num_rods; ++i) {
-    const Vector4<double>& a = from.limb(i).tip_orientation;
-    const Vector4<double>& b = to.limb(i).tip_orientation;
-    const Eigen::Quaterniond turn =
-        Eigen::Quaterniond(a(0), a(1), a(2), a(3))
-            .normalized()
-            .slerp(t, Eigen::Quaterniond(b(0), b(1), b(2), b(3)).normalized());
-    out.limb(i).B = blend(from.limb(i).B, to.limb(i).B);
-    out.limb(i).tip_orientation = Vector4<double>(turn.w(), turn.x(), turn.y(), turn.z());
-  }
-  out.gravity = blend(from.gravity, to.gravity);
-  out.platform_mass = from.platform_mass + t * (to.platform_mass - from.platform_mass);
-  out.external_force = blend(from.external_force, to.external_force);
-  out.external_moment = blend(from.external_moment, to.external_moment);
-  return out;
-}
+/// A spatial shooting problem along its input path, as the curve trace_curve
+/// (pcr/internal/arclength.hpp) follows. Its local coordinates are spatial_newton's (the scaled
+/// wrench and joint steps, the platform's turn on the right as a rotation vector:
+/// Problem::retract), then t; the unit quaternion itself never enters the bordered system.
+/// InputPath: place(x, t) (the inputs x carries, at t), prepare(t) (those the problem holds, at t)
+/// and rate(problem, x, t, summary) (d residual / d t at x, after prepare(t) and an evaluation at
+/// x).
+template <class Problem, class InputPath>
+class SpatialArclengthCurve {
+ public:
+  using Point = SpatialCurvePoint;
+  using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxSpatialUnknowns + 1, 1>;
+  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxSpatialUnknowns + 1,
+                               kMaxSpatialUnknowns + 1>;
 
-/// The point a fraction f of the step from `before` to `last` beyond `last` (a secant predictor):
-/// wrenches and position extrapolated linearly, the orientation turned on by f times the turn
-/// between them.
-inline SpatialShootingPoint<double> spatial_secant_prediction(
-    int num_rods, const SpatialShootingPoint<double>& before,
-    const SpatialShootingPoint<double>& last, double f) {
-  SpatialShootingPoint<double> out = last;
-  for (int i = 0; i < num_rods; ++i) {
-    out.wrenches[i].force += f * (last.wrenches[i].force - before.wrenches[i].force);
-    out.wrenches[i].moment += f * (last.wrenches[i].moment - before.wrenches[i].moment);
-  }
-  out.pose.position += f * (last.pose.position - before.pose.position);
-  const Vector4<double>& h = before.pose.orientation;
-  const Vector4<double> turn =
-      quaternion_product<double>(Vector4<double>(h(0), -h(1), -h(2), -h(3)), last.pose.orientation);
-  const Vector4<double> turned = quaternion_product<double>(
-      last.pose.orientation, quaternion_exp<double>((f * quaternion_log<double>(turn)).eval()));
-  out.pose.orientation = turned / turned.norm();
-  return out;
-}
+  SpatialArclengthCurve(Problem& problem, const InputPath& path) : problem_(problem), path_(path) {}
 
-/// The bowed cold start: FK at x's joints by natural continuation from the relaxed robot
-/// (spatial_relaxed_robot, of which x with no wrenches is the equilibrium) to the robot itself
-/// (spatial_blended_robot), each step from a secant predictor, halved on failure and doubled (up to
-/// a half) on success. Where straight rods are too far from the equilibrium for Newton, the rods
-/// bow gradually as the attachments move into place and the loads come on; the path can turn
-/// sharply (one random robot around the reference took 137 steps), so it has kColdIterationFactor
-/// times options.max_continuation_steps. kConverged with x the robot's equilibrium.
-inline SolveStatus spatial_homotopy_solve(const SpatialRobotParams<double>& robot,
-                                          SpatialShootingPoint<double>& x, int rod_steps,
-                                          const SolverOptions& options, SolverSummary& summary) {
-  for (int i = 0; i < robot.num_rods; ++i) x.wrenches[i] = SpatialWrench<double>();
-  const SpatialRobotParams<double> relaxed = spatial_relaxed_robot(robot, x, rod_steps);
-  Eigen::PartialPivLU<SpatialJacobian> lu;
-  SpatialShootingPoint<double> before = x;
-  double t = 0.0, t_before = -1.0, dt = 0.25, initial_norm, final_norm;
-  for (int step = 0; t < 1.0 && step < kColdIterationFactor * options.max_continuation_steps;
-       ++step) {
-    ++summary.continuation_steps;
-    const double t_next = std::min(1.0, t + dt);
-    const SpatialRobotParams<double> at = spatial_blended_robot(relaxed, robot, t_next);
-    SpatialForwardProblem problem(at, rod_steps);
-    SpatialShootingPoint<double> trial =
-        t_before < 0
-            ? x
-            : spatial_secant_prediction(robot.num_rods, before, x, (t_next - t) / (t - t_before));
-    if (spatial_newton(problem, trial, options, options.max_continuation_iterations, summary, lu,
-                       initial_norm, final_norm) == SolveStatus::kConverged) {
-      before = x;
-      t_before = t;
-      x = trial;
-      t = t_next;
-      dt = std::min(2.0 * dt, 0.5);
-    } else {
-      dt *= 0.5;
-      if (dt < options.min_continuation_step) break;
-    }
+  int size() const { return problem_.size(); }
+  double t(const Point& p) const { return p.t; }
+
+  /// The unknowns retracted as spatial_newton steps them, the input moved along its path.
+  Point advance(const Point& p, const Vector& step) const {
+    const int n = size();
+    Point out;
+    out.t = p.t + step(n);
+    out.x = problem_.retract(p.x, SpatialVector(step.head(n)));
+    path_.place(out.x, out.t);
+    return out;
   }
-  return t >= 1.0 ? SolveStatus::kConverged : SolveStatus::kMaxIterations;
-}
+
+  Vector offset(const Point& from, const Point& to) const {
+    const int n = size();
+    Vector d(n + 1);
+    d << problem_.step_between(from.x, to.x), to.t - from.t;
+    return d;
+  }
+
+  bool bordered(const Point& p, const Vector& tangent, Vector& g, Matrix& m,
+                SolverSummary& summary) {
+    const int n = size();
+    SpatialVector r;
+    SpatialJacobian J;
+    path_.prepare(p.t);
+    problem_.evaluate(p.x, r, &J);
+    ++summary.residual_evaluations;
+    m.resize(n + 1, n + 1);
+    m.topLeftCorner(n, n) = J;
+    m.topRightCorner(n, 1) = path_.rate(problem_, p.x, p.t, summary);
+    m.bottomRows(1) = tangent.transpose();
+    g.head(n) = r;
+    return m.allFinite() && r.allFinite();
+  }
+
+ private:
+  Problem& problem_;
+  const InputPath& path_;
+};
 
 /// A solution's configuration from the point x of `problem` (forward or inverse).
 template <class Problem, class Solution>
@@ -642,14 +597,15 @@ PCR_SOLVER_INLINE SpatialForwardSolution spatial_forward_kinematics(
     const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
     const SpatialForwardSolution& warm_start, const SolverOptions& options = SolverOptions());
 
-/// Forward kinematics from a cold start, from up to three starts in turn: Newton from the
+/// Forward kinematics from a cold start, from up to four starts in turn: Newton from the
 /// straight-rod guess at q (straight_rods_guess); with options.continuation, the bowed cold start
-/// (spatial_homotopy_solve: from the robot of which straight rods at q are the equilibrium to the
-/// robot itself); then the home solution (q = 0, from its straight-rod guess) followed by natural
-/// continuation in joint space from 0 to q. Each start's solution is refined
-/// (spatial_refine_rod_steps) and checked. Newton from straight rods can land on a far,
-/// strongly bent equilibrium, so with SolverOptions::check_stability a start that gives an
-/// unstable one is not the answer while a later start may give a stable one: the first stable
+/// (spatial_homotopy_solve: natural continuation from the robot of which straight rods at q are
+/// the equilibrium to the robot itself); the home solution (q = 0, from its straight-rod guess)
+/// followed by natural continuation in joint space from 0 to q; and, where the bowed start stalled
+/// at a fold, its curve traced on through the fold (spatial_trace_bowed_start). Each start's
+/// solution is refined (spatial_refine_rod_steps) and checked. Newton from straight rods can land
+/// on a far, strongly bent equilibrium, so with SolverOptions::check_stability a start that gives
+/// an unstable one is not the answer while a later start may give a stable one: the first stable
 /// solution is returned, else the first converged one. The solves from straight rods have
 /// kColdIterationFactor times options.max_iterations. A failure reports the first start's status;
 /// the summary counts the work of every start tried.
@@ -1064,6 +1020,181 @@ spatial_inverse_kinematics(const SpatialRobotParams<double>& robot, const Spatia
 #if PCR_SOLVER_DEFINITIONS
 // The bodies of the entry points declared above (pcr/internal/solver_linkage.hpp).
 
+namespace internal {
+
+/// The robot whose equilibrium at x's joints is x's pose with unloaded rods: each rod integrated
+/// from its proximal end with no wrench (straight, or its intrinsic shape), and the platform
+/// attachment and tip frame moved to where it ends, seen from x's pose; no gravity, mass or
+/// external load. The start of the bowed cold start (spatial_homotopy_solve).
+inline SpatialRobotParams<double> spatial_relaxed_robot(const SpatialRobotParams<double>& robot,
+                                                        const SpatialShootingPoint<double>& x,
+                                                        int rod_steps) {
+  SpatialRobotParams<double> relaxed = robot;
+  relaxed.gravity.setZero();
+  relaxed.platform_mass = 0;
+  relaxed.external_force.setZero();
+  relaxed.external_moment.setZero();
+  const Matrix3<double> R = x.pose.rotation();
+  for (int i = 0; i < robot.num_rods; ++i) {
+    const SpatialLimbParams<double>& limb = robot.limb(i);
+    const SpatialRodState<double> tip =
+        integrate_spatial_rod(spatial_proximal_state(limb, x.q[i], SpatialWrench<double>()),
+                              limb.rod_at(x.q[i]), Vector3<double>::Zero().eval(), rod_steps);
+    relaxed.limb(i).B = R.transpose() * (tip.position - x.pose.position);
+    relaxed.limb(i).tip_orientation = quaternion_of<double>(R.transpose() * tip.rotation());
+  }
+  return relaxed;
+}
+
+/// The robot a fraction t of the way from `from` to `to` (which differ in the platform
+/// attachments, tip frames and loads): those blended linearly, the tip frames on the shortest
+/// arc; `to` itself at t = 1, and extrapolated past it (where a traced curve steps beyond t = 1).
+inline SpatialRobotParams<double> spatial_blended_robot(const SpatialRobotParams<double>& from,
+                                                        const SpatialRobotParams<double>& to,
+                                                        double t) {
+  if (t == 1.0) return to;
+  const auto blend = [t](const auto& a, const auto& b) { return (a + t * (b - a)).eval(); };
+  SpatialRobotParams<double> out = to;
+  for (int i = 0; i < to.num_rods; ++i) {
+    const Vector4<double>& a = from.limb(i).tip_orientation;
+    const Vector4<double>& b = to.limb(i).tip_orientation;
+    const Eigen::Quaterniond turn =
+        Eigen::Quaterniond(a(0), a(1), a(2), a(3))
+            .normalized()
+            .slerp(t, Eigen::Quaterniond(b(0), b(1), b(2), b(3)).normalized());
+    out.limb(i).B = blend(from.limb(i).B, to.limb(i).B);
+    out.limb(i).tip_orientation = Vector4<double>(turn.w(), turn.x(), turn.y(), turn.z());
+  }
+  out.gravity = blend(from.gravity, to.gravity);
+  out.platform_mass = from.platform_mass + t * (to.platform_mass - from.platform_mass);
+  out.external_force = blend(from.external_force, to.external_force);
+  out.external_moment = blend(from.external_moment, to.external_moment);
+  return out;
+}
+
+/// The point a fraction f of the step from `before` to `last` beyond `last` (a secant predictor):
+/// wrenches and position extrapolated linearly, the orientation turned on by f times the turn
+/// between them.
+inline SpatialShootingPoint<double> spatial_secant_prediction(
+    int num_rods, const SpatialShootingPoint<double>& before,
+    const SpatialShootingPoint<double>& last, double f) {
+  SpatialShootingPoint<double> out = last;
+  for (int i = 0; i < num_rods; ++i) {
+    out.wrenches[i].force += f * (last.wrenches[i].force - before.wrenches[i].force);
+    out.wrenches[i].moment += f * (last.wrenches[i].moment - before.wrenches[i].moment);
+  }
+  out.pose.position += f * (last.pose.position - before.pose.position);
+  const Vector4<double>& h = before.pose.orientation;
+  const Vector4<double> turn =
+      quaternion_product<double>(Vector4<double>(h(0), -h(1), -h(2), -h(3)), last.pose.orientation);
+  const Vector4<double> turned = quaternion_product<double>(
+      last.pose.orientation, quaternion_exp<double>((f * quaternion_log<double>(turn)).eval()));
+  out.pose.orientation = turned / turned.norm();
+  return out;
+}
+
+/// The bowed cold start's input path: the robot blended a fraction t of the way from `from` to
+/// `to` (spatial_blended_robot), held in `at`, which the traced problem solves. The rate is a
+/// central difference of the blend: two residual evaluations without sensitivities.
+struct SpatialHomotopyPath {
+  const SpatialRobotParams<double>& from;
+  const SpatialRobotParams<double>& to;
+  SpatialRobotParams<double>& at;
+
+  void place(SpatialShootingPoint<double>&, double) const {}
+  void prepare(double t) const { at = spatial_blended_robot(from, to, t); }
+  SpatialVector rate(const SpatialForwardProblem& problem, const SpatialShootingPoint<double>& x,
+                     double t, SolverSummary& summary) const {
+    constexpr double h = 1e-6;  // the blend is smooth in t: an error of order h^2
+    SpatialVector plus, minus;
+    prepare(t + h);
+    problem.evaluate(x, plus, nullptr);
+    prepare(t - h);
+    problem.evaluate(x, minus, nullptr);
+    prepare(t);
+    summary.residual_evaluations += 2;
+    return (plus - minus) / (2 * h);
+  }
+};
+
+/// Where the bowed cold start's natural continuation stopped short of the robot itself: the
+/// relaxed robot it starts from and the last equilibrium it reached, a fraction t of the way.
+struct SpatialBowedStall {
+  SpatialRobotParams<double> relaxed;
+  SpatialCurvePoint last;
+};
+
+/// The bowed cold start: FK at x's joints by natural continuation from the relaxed robot
+/// (spatial_relaxed_robot, of which x with no wrenches is the equilibrium) to the robot itself
+/// (spatial_blended_robot), each step from a secant predictor, halved on failure and doubled (up to
+/// a half) on success. Where straight rods are too far from the equilibrium for Newton, the rods
+/// bow gradually as the attachments move into place and the loads come on; the path can turn
+/// sharply (one random robot around the reference took 137 steps), so it has kColdIterationFactor
+/// times options.max_continuation_steps. kConverged with x the robot's equilibrium; otherwise
+/// `stall` says where it stopped (spatial_trace_bowed_start goes on from there).
+inline SolveStatus spatial_homotopy_solve(const SpatialRobotParams<double>& robot,
+                                          SpatialShootingPoint<double>& x, int rod_steps,
+                                          const SolverOptions& options, SolverSummary& summary,
+                                          SpatialBowedStall& stall) {
+  for (int i = 0; i < robot.num_rods; ++i) x.wrenches[i] = SpatialWrench<double>();
+  stall.relaxed = spatial_relaxed_robot(robot, x, rod_steps);
+  const SpatialRobotParams<double>& relaxed = stall.relaxed;
+  Eigen::PartialPivLU<SpatialJacobian> lu;
+  SpatialShootingPoint<double> before = x;
+  double t = 0.0, t_before = -1.0, dt = 0.25, initial_norm, final_norm;
+  for (int step = 0; t < 1.0 && step < kColdIterationFactor * options.max_continuation_steps;
+       ++step) {
+    ++summary.continuation_steps;
+    const double t_next = std::min(1.0, t + dt);
+    const SpatialRobotParams<double> at = spatial_blended_robot(relaxed, robot, t_next);
+    SpatialForwardProblem problem(at, rod_steps);
+    SpatialShootingPoint<double> trial =
+        t_before < 0
+            ? x
+            : spatial_secant_prediction(robot.num_rods, before, x, (t_next - t) / (t - t_before));
+    if (spatial_newton(problem, trial, options, options.max_continuation_iterations, summary, lu,
+                       initial_norm, final_norm) == SolveStatus::kConverged) {
+      before = x;
+      t_before = t;
+      x = trial;
+      t = t_next;
+      dt = std::min(2.0 * dt, 0.5);
+    } else {
+      dt *= 0.5;
+      if (dt < options.min_continuation_step) break;
+    }
+  }
+  stall.last = SpatialCurvePoint{x, t};
+  return t >= 1.0 ? SolveStatus::kConverged : SolveStatus::kMaxIterations;
+}
+
+/// The bowed cold start on from where its natural continuation stalled, at a fold of the blend
+/// (the rods snap through as the attachments move into place): the curve of equilibria traced
+/// through it by pseudo-arclength steps (trace_curve, at most options.max_arclength_steps points)
+/// until the blend comes to the robot itself again, forward, and x solved there. kConverged with
+/// x the robot's equilibrium, which after folds may be an unstable one.
+inline SolveStatus spatial_trace_bowed_start(const SpatialRobotParams<double>& robot,
+                                             const SpatialBowedStall& stall,
+                                             SpatialShootingPoint<double>& x, int rod_steps,
+                                             const SolverOptions& options, SolverSummary& summary) {
+  SpatialRobotParams<double> at = spatial_blended_robot(stall.relaxed, robot, stall.last.t);
+  SpatialForwardProblem traced(at, rod_steps);
+  const SpatialHomotopyPath path{stall.relaxed, robot, at};
+  SpatialArclengthCurve<SpatialForwardProblem, SpatialHomotopyPath> curve(traced, path);
+  SpatialCurvePoint point = stall.last;
+  const ArclengthTrace trace = trace_curve(
+      curve, point, options, summary, options.max_arclength_steps, [](const SpatialCurvePoint&) {});
+  if (!trace.reached) return SolveStatus::kMaxIterations;
+  x = point.x;
+  SpatialForwardProblem problem(robot, rod_steps);
+  Eigen::PartialPivLU<SpatialJacobian> lu;
+  double initial_norm, final_norm;
+  return spatial_newton(problem, x, options, options.max_iterations, summary, lu, initial_norm,
+                        final_norm);
+}
+
+}  // namespace internal
+
 PCR_SOLVER_INLINE SpatialForwardSolution
 spatial_forward_kinematics(const SpatialRobotParams<double>& robot, const SpatialJointVector& q,
                            const SpatialForwardSolution& warm_start, const SolverOptions& options) {
@@ -1103,7 +1234,9 @@ spatial_forward_kinematics(const SpatialRobotParams<double>& robot, const Spatia
   direct.continuation = false;
   direct.max_iterations = kColdIterationFactor * options.max_iterations;
   const SpatialJointVector home = SpatialJointVector::Zero(robot.num_rods);
-  enum class Start { kStraight, kBowed, kFromHome };
+  enum class Start { kStraight, kBowed, kFromHome, kBowedTraced };
+  internal::SpatialBowedStall stall;
+  bool stalled = false;
   // Solves x at q from `start` (x set here), in problem at its starting step count.
   const auto solve_from = [&](Start start, internal::SpatialForwardProblem& problem,
                               SpatialShootingPoint<double>& x) {
@@ -1112,10 +1245,18 @@ spatial_forward_kinematics(const SpatialRobotParams<double>& robot, const Spatia
       case Start::kStraight:
         x = straight_rods_guess(robot, q);
         return internal::spatial_solve_path(problem, x, q, q, out.warm, direct, summary);
-      case Start::kBowed: {
-        x = straight_rods_guess(robot, q);
-        const SolveStatus status =
-            internal::spatial_homotopy_solve(robot, x, problem.rod_steps(), options, summary);
+      case Start::kBowed:
+      case Start::kBowedTraced: {
+        SolveStatus status;
+        if (start == Start::kBowed) {
+          x = straight_rods_guess(robot, q);
+          status = internal::spatial_homotopy_solve(robot, x, problem.rod_steps(), options, summary,
+                                                    stall);
+          stalled = status != SolveStatus::kConverged;
+        } else {
+          status = internal::spatial_trace_bowed_start(robot, stall, x, problem.rod_steps(),
+                                                       options, summary);
+        }
         if (status != SolveStatus::kConverged) return status;
         // There: its Jacobian and tangent, for the refinement.
         return internal::spatial_solve_path(problem, x, q, q, out.warm, direct, summary);
@@ -1132,9 +1273,11 @@ spatial_forward_kinematics(const SpatialRobotParams<double>& robot, const Spatia
   };
   SpatialForwardSolution unstable;  // the first converged start's, when it is unstable
   SolveStatus first = SolveStatus::kMaxIterations;
-  for (const Start start : {Start::kStraight, Start::kBowed, Start::kFromHome}) {
+  for (const Start start :
+       {Start::kStraight, Start::kBowed, Start::kFromHome, Start::kBowedTraced}) {
     if (start != Start::kStraight && !options.continuation) break;
-    if (start == Start::kFromHome && q.isZero(0.0)) break;
+    if (start == Start::kFromHome && q.isZero(0.0)) continue;
+    if (start == Start::kBowedTraced && !stalled) break;
     internal::SpatialForwardProblem problem(robot, internal::starting_rod_steps(options, 0));
     SpatialShootingPoint<double> x;
     out.summary.status = solve_from(start, problem, x);
