@@ -750,7 +750,10 @@ TEST_F(SpatialVisionCli, MeasuredAttachmentPointsContainTheRenderedTruth) {
   expect_failure(run("measure --design '" + kSpatialRobot + "' --points '" + path("points.json") +
                      "' --camera '" + path("camera.yaml") + "' --base-image '" + path("base.png") +
                      "'" + bad_out),
-                 {"--platform-image is required"});
+                 {"--platform-image is required", "spatial"});
+  expect_failure(run("measure --camera '" + path("camera.yaml") + "' --image '" + path("base.png") +
+                     "'" + bad_out),
+                 {"--mounts is required"});  // the built-in design is planar
   nlohmann::json five = truth.layout;
   five["rods"].erase(5);
   std::ofstream(path("five.json")) << five.dump();

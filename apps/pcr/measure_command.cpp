@@ -37,9 +37,11 @@ void run_spatial_measure(const MeasureArguments& args) {
   for (const auto& [option, value] : {std::pair<const char*, std::string>{"--points", args.points},
                                       {"--base-image", args.base_image},
                                       {"--platform-image", args.platform_image}}) {
-    if (value.empty())
-      throw InputError("pcr measure: " + args.design + " is a spatial robot: " + option +
-                       " is required");
+    if (value.empty()) {  // a usage error, as CLI11's for the options every robot needs
+      throw CLI::RequiredError(
+          std::string(option) + " is required: " + args.design + " is a spatial robot",
+          CLI::ExitCodes::RequiredError);
+    }
   }
   const SpatialRobotDescription design = load_spatial_robot(args.design);
   const AttachmentLayout layout = load_attachment_layout(args.points, args.family);
@@ -118,7 +120,7 @@ void register_measure_command(CLI::App& app) {
     for (const auto& [option, value] :
          {std::pair<const char*, std::string>{"--mounts", args->mounts},
           {"--image", args->image}}) {
-      if (value.empty()) throw InputError(std::string("pcr measure: ") + option + " is required");
+      if (value.empty()) throw CLI::RequiredError(option);  // as when they were required options
     }
     const RobotDescription design = load_robot_or_default(args->design);
     const MountLayout layout = load_mounts(args->mounts, args->family);
