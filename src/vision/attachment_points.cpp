@@ -100,8 +100,7 @@ AttachmentMeasurement measure_attachment_points(
     const std::string& platform_source, const AttachmentLayout& layout, const CameraModel& camera,
     const SpatialRobotDescription& design, const MeasureOptions& options) {
   const int n = design.params.num_rods;
-  if (layout.num_rods() != n ||
-      layout.attachments.size() != static_cast<std::size_t>(layout.num_rods())) {
+  if (layout.num_rods() != n) {
     throw InputError(layout.source + ": rods: " + std::to_string(layout.num_rods()) +
                      " rods, but the design '" + design.name + "' has " + std::to_string(n));
   }
