@@ -15,8 +15,10 @@
 #include "pcr/calib/spatial_virtual_robot.hpp"
 #include "pcr/input_error.hpp"
 #include "pcr/spatial/robot_io.hpp"
+#include "pcr/vision/attachment_points.hpp"
 #include "pcr/vision/render.hpp"
 #include "pcr/vision/tag_board.hpp"
+#include "umeyama_reference.hpp"
 
 namespace pcr::vision {
 namespace {
@@ -365,6 +367,177 @@ TEST(SpatialVision, AttachmentPointsFromTheirOwnTagsWithinTheirCovariance) {
               worst.c_str());
 }
 
+// ---- Registration into W and P ------------------------------------------------------------------
+
+// The design's holes moved by a known rigid motion (a camera frame) and registered back: the
+// motion and the points come back exactly, and the covariance of isotropic point noise
+// (sigma^2 I) becomes sigma^2 (I - Pi), Pi the orthogonal projector onto the design's
+// infinitesimal rigid motions (the registration absorbs those), built here from its basis
+// [I, -[d_i]x]; its trace is sigma^2 (3n - 6).
+TEST(SpatialVision, RegistrationRecoversAKnownRigidMotionAndProjectsOutItsNoise) {
+  const SpatialRobotParams<double> design = continuum_stewart_gough();
+  const int n = design.num_rods;
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(2.1, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()).toRotationMatrix();
+  const Eigen::Vector3d t(0.03, -0.02, 0.61);  // ^S T_W
+  constexpr double sigma = 20e-6;
+  std::vector<Eigen::Vector3d> holes;
+  std::vector<TagPoint> points(static_cast<std::size_t>(n));
+  std::vector<TagPointMeasurement> measured;
+  for (int i = 0; i < n; ++i) {
+    holes.push_back(design.limb(i).A);
+    TagPointMeasurement m;
+    m.position = R * design.limb(i).A + t;
+    m.covariance = sigma * sigma * Eigen::Matrix3d::Identity();
+    measured.push_back(m);
+  }
+  const PointRegistration r = register_points(points, measured, holes, 3.0, "holes");
+  EXPECT_LT((r.camera_T_frame.position - t).norm(), 1e-12);
+  EXPECT_LT((r.camera_T_frame.rotation() - R).norm(), 1e-12);
+  EXPECT_LT(r.rms, 1e-12);
+  Eigen::MatrixXd basis(3 * n, 6);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d& d = holes[static_cast<std::size_t>(i)];
+    Eigen::Matrix3d cross;
+    cross << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
+    basis.block<3, 3>(3 * i, 0).setIdentity();
+    basis.block<3, 3>(3 * i, 3) = -cross;
+  }
+  const Eigen::MatrixXd projector =
+      basis * (basis.transpose() * basis).inverse() * basis.transpose();
+  const Eigen::MatrixXd expected =
+      sigma * sigma * (Eigen::MatrixXd::Identity(3 * n, 3 * n) - projector);
+  for (int i = 0; i < n; ++i) {
+    EXPECT_LT((r.points[static_cast<std::size_t>(i)] - holes[static_cast<std::size_t>(i)]).norm(),
+              1e-12);
+    for (int k = 0; k < 3; ++k) {  // no tolerances: 3 sigma
+      EXPECT_NEAR(r.half_widths[static_cast<std::size_t>(i)][k],
+                  3 * std::sqrt(expected(3 * i + k, 3 * i + k)), 1e-9);
+    }
+  }
+  EXPECT_LT((r.covariance - expected).norm(), 1e-6 * expected.norm());
+  EXPECT_NEAR(r.covariance.trace(), sigma * sigma * (3 * n - 6), 1e-6 * sigma * sigma);
+  // An offset tolerance adds its worst case through the same map: 10 um along one tag's x axis.
+  points[2].offset_uncertainty = Eigen::Vector3d(10e-6, 0, 0);
+  measured[2].tag.camera_T_board.orientation = Eigen::Vector4d(1, 0, 0, 0);  // the tag's x = S's
+  const PointRegistration toleranced = register_points(points, measured, holes, 3.0, "holes");
+  Eigen::MatrixXd rotate = Eigen::MatrixXd::Zero(3 * n, 3 * n);  // S -> W, point by point
+  for (int i = 0; i < n; ++i) rotate.block<3, 3>(3 * i, 3 * i) = R.transpose();
+  const Eigen::MatrixXd to_frame = (Eigen::MatrixXd::Identity(3 * n, 3 * n) - projector) * rotate;
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(toleranced.half_widths[static_cast<std::size_t>(i)][k] -
+                      r.half_widths[static_cast<std::size_t>(i)][k],
+                  10e-6 * std::abs(to_frame(3 * i + k, 6)), 1e-10);
+}
+
+// The virtual robot's truth (every A_i and B_i at 0.8 of its 0.1 mm half-widths from the design),
+// its base seen from 0.4 m and its platform from 0.35 m at a random pose (as the attachment-point
+// test), measured and registered onto the design: each point against the truth registered the
+// same way (Eigen's Umeyama fit of the truth onto the design), within its half-widths and within
+// chi-square(3)'s 0.99999 quantile of its propagated covariance. A second layout states each
+// offset 40 um off along the tag's x (within its 50 um offset_uncertainty): its points stay within
+// their half-widths, which now hold the offsets' worst case.
+TEST(SpatialVision, AttachmentPointsRegisteredIntoWAndPWithinTheirHalfWidths) {
+  const SpatialRobotDescription nominal = continuum_stewart_gough_description();
+  const int n = nominal.params.num_rods;
+  std::mt19937_64 rng(41);
+  std::uniform_real_distribution<double> joint(-0.005, 0.008);
+  double worst_d2 = 0, sum_d2 = 0, worst_ratio = 0, worst_toleranced = 0, rms_A = 0, rms_B = 0;
+  std::string worst;
+  Eigen::Vector3d sum_half_A = Eigen::Vector3d::Zero(), sum_half_B = Eigen::Vector3d::Zero();
+  int count = 0;
+  constexpr int kTruths = 2;
+  for (int truth_seed = 0; truth_seed < kTruths; ++truth_seed) {
+    SpatialVirtualRobotOptions options;
+    options.seed = 11 + truth_seed;
+    options.truth_at_fraction = 0.8;
+    SpatialVirtualRobot robot(nominal, options);
+    const SpatialRobotParams<double>& truth = robot.truth().params;
+    const std::vector<TagPoint> points = attachment_points(truth);
+    AttachmentLayout layout, shifted;
+    layout.source = shifted.source = "layout";
+    layout.holes.assign(points.begin(), points.begin() + n);
+    layout.attachments.assign(points.begin() + n, points.end());
+    shifted = layout;
+    for (std::vector<TagPoint>* group : {&shifted.holes, &shifted.attachments}) {
+      for (TagPoint& p : *group) {
+        p.offset.x() += 40e-6;
+        p.offset_uncertainty = Eigen::Vector3d::Constant(50e-6);
+      }
+    }
+    SpatialJointVector q(n);
+    for (int i = 0; i < n; ++i) q(i) = joint(rng);
+    const SpatialVirtualMeasurement pose = robot.measure(q);
+    ASSERT_TRUE(pose.ok);
+    // The images: the tags of `group` in W (`platform` the identity) or on the platform.
+    const auto image = [&](const std::vector<TagPoint>& group, const SpatialPose<double>& platform,
+                           double height, unsigned seed) {
+      Scene scene = platform_scene(platform, height);
+      for (const TagPoint& p : group)
+        scene.tags_3d.push_back(
+            RenderTag3d{p.tag.family, p.tag.id, p.tag.size_m, platform * p.tag.pose});
+      RenderOptions opt;
+      opt.supersampling = 2;
+      opt.blur_sigma_px = 0.8;
+      opt.noise_sigma = 0.02;
+      opt.white = 0.85;
+      opt.seed = seed;
+      return render_scene(scene, opt);
+    };
+    const GrayImage base = image(layout.holes, SpatialPose<double>{}, 0.4, 70 + truth_seed);
+    const GrayImage top = image(layout.attachments, pose.platform,
+                                pose.platform.position.z() + 0.35, 80 + truth_seed);
+    const Scene camera = platform_scene(SpatialPose<double>{});
+    const AttachmentMeasurement m = measure_attachment_points(base, "base.png", top, "platform.png",
+                                                              layout, camera.camera, nominal);
+    const AttachmentMeasurement ms = measure_attachment_points(
+        base, "base.png", top, "platform.png", shifted, camera.camera, nominal);
+    rms_A += m.A.rms / kTruths;
+    rms_B += m.B.rms / kTruths;
+    for (int end = 0; end < 2; ++end) {
+      const PointRegistration& r = end ? m.B : m.A;
+      const PointRegistration& rs = end ? ms.B : ms.A;
+      std::vector<Eigen::Vector3d> design, truths;
+      for (int i = 0; i < n; ++i) {
+        design.push_back(end ? nominal.params.limb(i).B : nominal.params.limb(i).A);
+        truths.push_back(end ? truth.limb(i).B : truth.limb(i).A);
+      }
+      const std::vector<Eigen::Vector3d> reference = pcr::test::umeyama_registered(truths, design);
+      for (int i = 0; i < n; ++i) {
+        const std::size_t k = static_cast<std::size_t>(i);
+        const std::string name = std::string(end ? "B" : "A") + std::to_string(i + 1) + " truth " +
+                                 std::to_string(truth_seed);
+        const Eigen::Vector3d e = r.points[k] - reference[k];
+        const Eigen::Matrix3d S = r.covariance.block<3, 3>(3 * i, 3 * i);
+        const double d2 = e.dot(S.ldlt().solve(e));
+        EXPECT_LT(d2, kChiSquare3Quantile99999) << name << ": error " << e.transpose();
+        worst_d2 = std::max(worst_d2, d2);
+        sum_d2 += d2;
+        ++count;
+        (end ? sum_half_B : sum_half_A) += r.half_widths[k] / (kTruths * n);
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_LE(std::abs(e[a]), r.half_widths[k][a]) << name << " axis " << a;
+          if (std::abs(e[a]) / r.half_widths[k][a] > worst_ratio) {
+            worst_ratio = std::abs(e[a]) / r.half_widths[k][a];
+            worst = name + " axis " + "xyz"[a];
+          }
+          const double es = rs.points[k][a] - reference[k][a];
+          EXPECT_LE(std::abs(es), rs.half_widths[k][a]) << name << " (shifted) axis " << a;
+          worst_toleranced = std::max(worst_toleranced, std::abs(es) / rs.half_widths[k][a]);
+        }
+      }
+    }
+  }
+  std::printf(
+      "%d points: mean d2 %.2f (chi-square 3: 3), worst %.2f; worst |error| / half-width %.2f "
+      "(%s; %.2f with the offsets' tolerances); registration rms A %.1f um, B %.1f um\n"
+      "mean half-widths A %.0f %.0f %.0f um, B %.0f %.0f %.0f um\n",
+      count, sum_d2 / count, worst_d2, worst_ratio, worst.c_str(), worst_toleranced, rms_A * 1e6,
+      rms_B * 1e6, sum_half_A.x() * 1e6, sum_half_A.y() * 1e6, sum_half_A.z() * 1e6,
+      sum_half_B.x() * 1e6, sum_half_B.y() * 1e6, sum_half_B.z() * 1e6);
+}
+
 // The message names the image (or the board) and the value.
 void expect_input_error(const std::function<void()>& call, const std::vector<std::string>& named) {
   try {
@@ -424,6 +597,80 @@ TEST(SpatialVision, BadBoardsAndImagesAreNamed) {
   // Too few corners for a pose.
   expect_input_error([&] { fit_board_pose({}, {}, board, scene.camera, "none.png"); },
                      {"none.png", "0 tag corners"});
+}
+
+// The attachment layout file's errors name the file, the field and the value; the measurement's
+// name the layout file and the design (a rod count that differs) or the image and the point (a tag
+// not in view).
+TEST(SpatialVision, BadAttachmentLayoutsAndImagesAreNamed) {
+  const auto layout_text = [](const std::string& rods) {
+    return "{\"format\": \"pcr-attachment-points\", \"tag_size\": 0.04, \"rods\": [" + rods + "]}";
+  };
+  const auto rod = [](int a, int b, const std::string& extra = "") {
+    return "{\"A\": {\"id\": " + std::to_string(a) + ", \"offset\": [0.025, 0, 0]" + extra +
+           "}, \"B\": {\"id\": " + std::to_string(b) +
+           ", \"tag_size\": 0.03, \"offset\": [0, -0.02, 0]}}";
+  };
+  const AttachmentLayout good = parse_attachment_layout(
+      layout_text(rod(20, 30, ", \"offset_uncertainty\": [1e-5, 1e-5, 0]") + "," + rod(21, 31)),
+      "points.json");
+  ASSERT_EQ(good.num_rods(), 2);
+  EXPECT_EQ(good.holes[1].name, "A2");
+  EXPECT_EQ(good.attachments[0].tag.id, 30);
+  EXPECT_DOUBLE_EQ(good.attachments[0].tag.size_m, 0.03);
+  EXPECT_DOUBLE_EQ(good.holes[0].tag.size_m, 0.04);
+  EXPECT_DOUBLE_EQ(good.holes[0].offset_uncertainty.x(), 1e-5);
+  EXPECT_DOUBLE_EQ(good.attachments[0].offset.y(), -0.02);
+  const auto bad = [&](const std::string& text, const std::vector<std::string>& named) {
+    expect_input_error([&] { parse_attachment_layout(text, "points.json"); }, named);
+  };
+  bad(layout_text(rod(20, 30) + "," + rod(21, 31, ", \"ofset\": 1")),
+      {"points.json", "rods[1].A.ofset", "unknown field"});
+  bad(layout_text(rod(20, 30) + "," + rod(21, 20)),
+      {"points.json", "rods[1].B.id", "twice", "rods[0].A.id"});
+  bad(layout_text(rod(20, 5000)), {"points.json", "rods[0].B.id", "5000"});
+  bad(layout_text(rod(20, 30, ", \"offset_uncertainty\": [1e-5, -1e-5, 0]")),
+      {"points.json", "rods[0].A.offset_uncertainty[1]", "-1e-05"});
+  bad(layout_text(rod(20, 30, ", \"family\": \"tag99h9\"")),
+      {"points.json", "rods[0].A.family", "tag99h9"});
+  bad("{\"rods\": [{\"A\": {\"id\": 1, \"offset\": [0, 0, 0]}, \"B\": {\"id\": 2, "
+      "\"offset\": [0, 0, 0]}}]}",
+      {"points.json", "rods[0].A.tag_size", "missing"});
+  bad(layout_text("{\"A\": {\"id\": 1, \"offset\": [0, 0, 0]}}"),
+      {"points.json", "rods[0].B", "missing"});
+  bad(layout_text(""), {"points.json", "rods", "non-empty"});
+
+  // The measurement: a layout of 2 rods for the 6-rod design; a hole whose tag is not in view.
+  const SpatialRobotDescription design = continuum_stewart_gough_description();
+  const std::vector<TagPoint> points = attachment_points(design.params);
+  AttachmentLayout layout;
+  layout.source = "points.json";
+  layout.holes.assign(points.begin(), points.begin() + 6);
+  layout.attachments.assign(points.begin() + 6, points.end());
+  Scene scene = platform_scene(SpatialPose<double>{}, 0.4);
+  for (const TagPoint& p : layout.holes)
+    scene.tags_3d.push_back(RenderTag3d{p.tag.family, p.tag.id, p.tag.size_m, p.tag.pose});
+  RenderOptions opt;
+  opt.supersampling = 2;
+  const GrayImage base = render_scene(scene, opt);
+  expect_input_error(
+      [&] {
+        measure_attachment_points(base, "base.png", base, "top.png", good, scene.camera, design);
+      },
+      {"points.json", "2 rods", "continuum-stewart-gough", "has 6"});
+  AttachmentLayout hidden = layout;
+  hidden.holes[3].tag.id = 77;
+  expect_input_error(
+      [&] {
+        measure_attachment_points(base, "base.png", base, "top.png", hidden, scene.camera, design);
+      },
+      {"base.png", "point A4", "id 77", "not found"});
+  // The base's tags are not the platform's: the platform image is named with its first point.
+  expect_input_error(
+      [&] {
+        measure_attachment_points(base, "base.png", base, "top.png", layout, scene.camera, design);
+      },
+      {"top.png", "point B1", "not found"});
 }
 
 }  // namespace

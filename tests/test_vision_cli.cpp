@@ -1,12 +1,13 @@
 // `pcr render`, `pcr measure`, `pcr camera` and `pcr measure-poses` run as programs: one rendered
 // robot measured end to end against the render's ground truth (a planar robot's description, a
-// spatial robot's platform poses), every bad input docs/vision.md lists ("Command-line checks")
-// exiting non-zero with a message naming the mount, the file, the row or the id and writing no
-// output, and a camera calibrated from rendered chessboards.
+// spatial robot's platform poses and its attachment points), every bad input docs/vision.md lists
+// ("Command-line checks") exiting non-zero with a message naming the mount, the file, the row or
+// the id and writing no output, and a camera calibrated from rendered chessboards.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -18,11 +19,13 @@
 
 #include "pcr/csv_io.hpp"
 #include "pcr/robot_io.hpp"
+#include "pcr/spatial/robot_io.hpp"
 #include "pcr/vision/camera.hpp"
 #include "pcr/vision/image.hpp"
 #include "pcr/vision/mounts.hpp"
 #include "pcr/vision/render.hpp"
 #include "scratch_directory.hpp"
+#include "umeyama_reference.hpp"
 
 namespace {
 
@@ -614,6 +617,166 @@ TEST_F(SpatialVisionCli, BadInputsNameTheFileRowAndValue) {
           path("camera.yaml") + "' --input '" + rows + "' --output '" + rows + "'");
   EXPECT_NE(r.status, 0) << r.all();
   EXPECT_EQ(slurp(rows), before);
+}
+
+// ---- A spatial robot's attachment points: `pcr measure` on a spatial design
+// ----------------------
+
+// The truth: the design's holes A_i and points B_i each moved by up to 80 um along each axis
+// (within the file's 0.1 mm half-widths). Next to each, a tag face up (40 mm on the base; 30 mm on
+// the platform, 5 mm above the point), its centre 25 mm (20 mm) from the point along the ring's
+// tangent away from the nearest other point, turned 0.35 rad off it (edges off the pixel grid).
+// The layout file gives each point in its tag's frame; the images: the base from 0.4 m, the
+// platform at a pose ^W T_P from 0.35 m above it, both with the fixture's camera.
+struct AttachmentScene {
+  std::vector<Eigen::Vector3d> A, B;  // the truth, in W and P
+  nlohmann::json layout;
+};
+
+AttachmentScene attachment_scene(const SpatialRobotParams<double>& design, const Frame& platform,
+                                 const CameraModel& camera, const std::string& base_png,
+                                 const std::string& platform_png) {
+  AttachmentScene out;
+  const int n = design.num_rods;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d move(std::cos(1.7 * i), std::sin(2.3 * i + 0.4), std::cos(0.9 * i + 1));
+    out.A.push_back(design.limb(i).A + 80e-6 * move);
+    out.B.push_back(design.limb(i).B - 80e-6 * move.reverse());
+  }
+  out.layout = {{"format", "pcr-attachment-points"}, {"version", 1}, {"tag_size", 0.03}};
+  out.layout["rods"] = nlohmann::json::array();
+  for (int i = 0; i < n; ++i) out.layout["rods"].push_back(nlohmann::json::object());
+  for (int end = 0; end < 2; ++end) {
+    const std::vector<Eigen::Vector3d>& points = end ? out.B : out.A;
+    Scene scene;
+    scene.camera = camera;
+    scene.plane = PlanePose::looking_down(end ? platform.t.z() + 0.35 : 0.4, 0.05, -0.03);
+    const Frame world_T_frame = end ? platform : Frame{};
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3d& p = points[static_cast<std::size_t>(i)];
+      int nearest = i == 0 ? 1 : 0;
+      for (int j = 0; j < n; ++j)
+        if (j != i && (points[static_cast<std::size_t>(j)] - p).norm() <
+                          (points[static_cast<std::size_t>(nearest)] - p).norm())
+          nearest = j;
+      Eigen::Vector3d away = Eigen::Vector3d::UnitZ().cross(p).normalized();
+      if (away.dot(points[static_cast<std::size_t>(nearest)] - p) > 0) away = -away;
+      const Frame tag{
+          Eigen::AngleAxisd(std::atan2(away.y(), away.x()) + 0.35, Eigen::Vector3d::UnitZ())
+              .toRotationMatrix(),
+          p + (end ? 0.02 : 0.025) * away + Eigen::Vector3d(0, 0, end ? 0.005 : 0.0)};
+      const Frame in_world = world_T_frame * tag;
+      scene.tags_3d.push_back(
+          RenderTag3d{kDefaultTagFamily, (end ? 30 : 20) + i, end ? 0.03 : 0.04,
+                      SpatialPose<double>{in_world.t, quaternion_wxyz(in_world.R)}});
+      const Eigen::Vector3d offset = tag.R.transpose() * (p - tag.t);
+      out.layout["rods"][static_cast<std::size_t>(i)][end ? "B" : "A"] = {
+          {"id", (end ? 30 : 20) + i}, {"offset", {offset.x(), offset.y(), offset.z()}}};
+      if (!end) out.layout["rods"][static_cast<std::size_t>(i)]["A"]["tag_size"] = 0.04;
+    }
+    RenderOptions opt;
+    opt.supersampling = 2;
+    opt.blur_sigma_px = 0.8;
+    opt.noise_sigma = 0.02;
+    opt.white = 0.85;
+    opt.seed = 60 + end;
+    write_png(render_scene(scene, opt), end ? platform_png : base_png);
+  }
+  return out;
+}
+
+// Render, then `pcr measure` on the spatial design: the written file's A_i and B_i contain the
+// truth registered onto the design (W and P as the command defines them) within their written
+// half-widths, which are those of an image (tens of um), not the design's; everything else is the
+// design's. Then the command's own checks: a planar option on a spatial design, an image missing,
+// a layout of another rod count, the output over an input.
+TEST_F(SpatialVisionCli, MeasuredAttachmentPointsContainTheRenderedTruth) {
+  const SpatialRobotDescription design = load_spatial_robot(kSpatialRobot);
+  const Frame platform{Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                           Eigen::AngleAxisd(0.04, Eigen::Vector3d::UnitX()).toRotationMatrix(),
+                       {0.004, -0.003, 0.38}};
+  const AttachmentScene truth = attachment_scene(
+      design.params, platform, load_camera(path("camera.yaml")), path("base.png"), path("top.png"));
+  std::ofstream(path("points.json")) << truth.layout.dump(2);
+  const std::string inputs = "measure --design '" + kSpatialRobot + "' --points '" +
+                             path("points.json") + "' --camera '" + path("camera.yaml") +
+                             "' --base-image '" + path("base.png") + "' --platform-image '" +
+                             path("top.png") + "'";
+  const Result r = run(inputs + " --output '" + path("measured.json") + "'");
+  ASSERT_EQ(r.status, 0) << r.all();
+  EXPECT_NE(r.out.find("registration rms: A"), std::string::npos) << r.out;
+  const SpatialRobotDescription measured = load_spatial_robot(path("measured.json"));
+  ASSERT_TRUE(measured.uncertainty.has_value());
+  const int n = design.params.num_rods;
+  std::vector<Eigen::Vector3d> design_A, design_B;
+  for (int i = 0; i < n; ++i) {
+    design_A.push_back(design.params.limb(i).A);
+    design_B.push_back(design.params.limb(i).B);
+  }
+  const std::vector<Eigen::Vector3d> A = pcr::test::umeyama_registered(truth.A, design_A),
+                                     B = pcr::test::umeyama_registered(truth.B, design_B);
+  double worst = 0;
+  for (int i = 0; i < n; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    const SpatialLimbParams<double>& m = measured.params.limb(i);
+    const SpatialRodUncertainty& u = measured.uncertainty->rods[k];
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_LE(std::abs(m.A[a] - A[k][a]), u.A[a]) << "A" << i + 1 << " axis " << a;
+      EXPECT_LE(std::abs(m.B[a] - B[k][a]), u.B[a]) << "B" << i + 1 << " axis " << a;
+      worst = std::max(
+          {worst, std::abs(m.A[a] - A[k][a]) / u.A[a], std::abs(m.B[a] - B[k][a]) / u.B[a]});
+      // An image's: most in depth (one tag's tilt), which an off-axis ray turns partly into x, y.
+      EXPECT_LT(u.A[a], 1.5e-3) << "A" << i + 1;
+      EXPECT_LT(u.B[a], 1.5e-3) << "B" << i + 1;
+    }
+    EXPECT_LT(u.A.head<2>().maxCoeff(), 0.5e-3) << "A" << i + 1;
+    EXPECT_LT(u.B.head<2>().maxCoeff(), 0.5e-3) << "B" << i + 1;
+    // The rest is the design's.
+    EXPECT_EQ(m.rod.length, design.params.limb(i).rod.length);
+    EXPECT_TRUE(m.base_orientation == design.params.limb(i).base_orientation);
+    EXPECT_EQ(u.length, design.uncertainty->rods[k].length);
+    EXPECT_TRUE(u.base_rotation == design.uncertainty->rods[k].base_rotation);
+  }
+  EXPECT_TRUE(measured.params.extrinsics.tracker.position ==
+              design.params.extrinsics.tracker.position);
+  EXPECT_TRUE(measured.uncertainty->tracker == design.uncertainty->tracker);
+  std::printf("worst |error| / half-width %.2f; pcr measure printed:\n%s", worst, r.out.c_str());
+
+  // A planar robot's option, a missing image, another rod count, a planar design, the output
+  // over an input (which stays as it was).
+  const std::string bad_out = " --output '" + path("bad_out.json") + "'";
+  expect_failure(run(inputs + " --image '" + path("base.png") + "'" + bad_out),
+                 {"spatial robot", "--image"});
+  expect_failure(run("measure --design '" + kSpatialRobot + "' --points '" + path("points.json") +
+                     "' --camera '" + path("camera.yaml") + "' --base-image '" + path("base.png") +
+                     "'" + bad_out),
+                 {"--platform-image is required", "spatial"});
+  expect_failure(run("measure --camera '" + path("camera.yaml") + "' --image '" + path("base.png") +
+                     "'" + bad_out),
+                 {"--mounts is required"});  // the built-in design is planar
+  nlohmann::json five = truth.layout;
+  five["rods"].erase(5);
+  std::ofstream(path("five.json")) << five.dump();
+  expect_failure(run("measure --design '" + kSpatialRobot + "' --points '" + path("five.json") +
+                     "' --camera '" + path("camera.yaml") + "' --base-image '" + path("base.png") +
+                     "' --platform-image '" + path("top.png") + "'" + bad_out),
+                 {"five.json", "5 rods", "has 6"});
+  nlohmann::json misspelt = truth.layout;
+  misspelt["rods"][2]["B"]["ofset"] = misspelt["rods"][2]["B"]["offset"];
+  std::ofstream(path("misspelt_points.json")) << misspelt.dump();
+  expect_failure(
+      run("measure --design '" + kSpatialRobot + "' --points '" + path("misspelt_points.json") +
+          "' --camera '" + path("camera.yaml") + "' --base-image '" + path("base.png") +
+          "' --platform-image '" + path("top.png") + "'" + bad_out),
+      {"misspelt_points.json", "rods[2].B.ofset", "unknown field"});
+  expect_failure(run("measure --design '" + std::string(PCR_SOURCE_DIR) +
+                     "/robots/femto-3pf.json' --points '" + path("points.json") + "' --camera '" +
+                     path("camera.yaml") + "' --base-image '" + path("base.png") +
+                     "' --platform-image '" + path("top.png") + "'" + bad_out),
+                 {"femto-3pf.json", "planar", "--mounts"});
+  const std::string before = slurp(path("points.json"));
+  EXPECT_NE(run(inputs + " --output '" + path("points.json") + "'").status, 0);
+  EXPECT_EQ(slurp(path("points.json")), before);
 }
 
 }  // namespace

@@ -317,6 +317,13 @@ Eigen::VectorXd clamp_outputs(const MountLayout& layout, const RobotParams<doubl
 
 }  // namespace
 
+Eigen::VectorXd measured_half_widths(const Eigen::MatrixXd& covariance,
+                                     const Eigen::MatrixXd& tolerance_jacobian,
+                                     const Eigen::VectorXd& tolerances, double coverage_factor) {
+  return coverage_factor * covariance.diagonal().cwiseMax(0).cwiseSqrt() +
+         tolerance_jacobian.cwiseAbs() * tolerances;
+}
+
 RobotMeasurement measure_robot(const GrayImage& image, const std::string& source,
                                const MountLayout& layout, const CameraModel& camera,
                                const RobotParams<double>& design, const MeasureOptions& options) {
@@ -362,9 +369,8 @@ RobotMeasurement measure_robot(const GrayImage& image, const std::string& source
     return J;
   };
   const Eigen::MatrixXd Jm = jac(true), Jo = jac(false);
-  const Eigen::VectorXd var = (Jm * result.fit.covariance * Jm.transpose()).diagonal();
-  const Eigen::VectorXd half =
-      options.coverage_factor * var.cwiseMax(0).cwiseSqrt() + Jo.cwiseAbs() * oh;
+  const Eigen::VectorXd half = measured_half_widths(Jm * result.fit.covariance * Jm.transpose(), Jo,
+                                                    oh, options.coverage_factor);
   for (int i = 0; i < n; ++i) {
     LimbMeasurement& l = result.limbs[i];
     l.A = y.segment<2>(6 * i);

@@ -111,6 +111,14 @@ std::vector<TagDetection> match_mounts(const std::vector<TagDetection>& detectio
                                        const MountLayout& layout, const GrayImage& image,
                                        const std::string& image_source);
 
+/// Step 4's half-widths, for every measured value y: k sigma of its linearly propagated
+/// covariance (`covariance`, already propagated; k = `coverage_factor`) plus the worst case of the
+/// tolerances t propagated linearly (`tolerance_jacobian` = dy / dt): k sqrt(C_jj) + sum |J_jk|
+/// t_k. The planar and the spatial registrations both use it.
+Eigen::VectorXd measured_half_widths(const Eigen::MatrixXd& covariance,
+                                     const Eigen::MatrixXd& tolerance_jacobian,
+                                     const Eigen::VectorXd& tolerances, double coverage_factor);
+
 /// Detects, fits and registers onto `design`. `image_source` names the image in messages.
 RobotMeasurement measure_robot(const GrayImage& image, const std::string& image_source,
                                const MountLayout& layout, const CameraModel& camera,

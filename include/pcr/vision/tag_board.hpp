@@ -110,6 +110,9 @@ struct TagPoint {
   std::string name;                 ///< for messages ("A1", "B3")
   BoardTag tag;                     ///< its pose is not used (the tag's own frame)
   Eigen::Vector3d offset{0, 0, 0};  ///< the point in the tag frame (m)
+  /// The offset's half-widths along the tag's axes (m): how well the point is known next to its
+  /// tag (registration adds them worst case, as the planar clamp_offset_uncertainty).
+  Eigen::Vector3d offset_uncertainty{0, 0, 0};
 };
 
 struct TagPointMeasurement {
