@@ -274,7 +274,8 @@ void Identification::update_loss_scale() {
 
 void Identification::exclude_gross_outliers() {
   std::fill(gross_.begin(), gross_.end(), false);
-  if (row_norms_.size() == gross_.size()) gross_ = gross_outliers(row_norms_, loss_scale_);
+  if (row_norms_.size() == gross_.size())
+    gross_ = gross_outliers(row_norms_, loss_scale_, options_.robust_scale, 3);
 }
 
 }  // namespace calib_internal

@@ -13,23 +13,36 @@ namespace {
 /// The median of the norm of a whitened `block`-vector at the noise (a chi distribution's).
 double median_norm_at_noise(int block) { return block == 6 ? 2.3126 : 1.538; }
 
+/// The median of the finite norms (NaN: none).
+double median_of_evaluated(const std::vector<double>& norms) {
+  std::vector<double> evaluated;
+  for (const double norm : norms)
+    if (std::isfinite(norm)) evaluated.push_back(norm);
+  if (evaluated.empty()) return kNaN;
+  std::nth_element(evaluated.begin(), evaluated.begin() + evaluated.size() / 2, evaluated.end());
+  return evaluated[evaluated.size() / 2];
+}
+
 }  // namespace
 
 double huber_scale(double robust_scale, const std::vector<double>& norms, int block) {
   if (!(robust_scale > 0)) return 0.0;
-  std::vector<double> evaluated;
-  for (const double norm : norms)
-    if (std::isfinite(norm)) evaluated.push_back(norm);
-  if (evaluated.empty()) return robust_scale;
-  std::nth_element(evaluated.begin(), evaluated.begin() + evaluated.size() / 2, evaluated.end());
-  const double median = evaluated[evaluated.size() / 2];
+  const double median = median_of_evaluated(norms);
+  if (!std::isfinite(median)) return robust_scale;
   return robust_scale * std::max(1.0, median / median_norm_at_noise(block));
 }
 
-std::vector<bool> gross_outliers(const std::vector<double>& norms, double scale) {
+std::vector<bool> gross_outliers(const std::vector<double>& norms, double scale,
+                                 double robust_scale, int block) {
   std::vector<bool> gross(norms.size(), false);
   if (!(scale > 0)) return gross;
-  for (std::size_t j = 0; j < norms.size(); ++j) gross[j] = !(norms[j] <= kGrossOutlier * scale);
+  double threshold = kGrossOutlier * scale;
+  const double median = median_of_evaluated(norms);
+  if (median > median_norm_at_noise(block)) {  // still far
+    threshold = std::min(threshold,
+                         std::max(kGrossOutlierOfTypical * median, kGrossOutlier * robust_scale));
+  }
+  for (std::size_t j = 0; j < norms.size(); ++j) gross[j] = !(norms[j] <= threshold);
   return gross;
 }
 

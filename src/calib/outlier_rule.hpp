@@ -15,6 +15,10 @@ namespace pcr::calib_internal {
 /// the stage (see gross_outliers).
 inline constexpr double kGrossOutlier = 100;
 
+/// While the model is still far (the rows' median residual above its value at the noise), a row
+/// beyond this many times the median row is left out too (see gross_outliers).
+inline constexpr double kGrossOutlierOfTypical = 10;
+
 /// The Huber scale: `robust_scale` declared noise units, or as many times the rows' typical
 /// residual when the model is still far (a stage that starts from the nominal geometry sees
 /// micrometres on every row): a row is an outlier against the others, not against a floor the
@@ -28,9 +32,17 @@ double huber_scale(double robust_scale, const std::vector<double>& norms, int bl
 /// `scale` (a measurement of another equilibrium branch, a row millimetres off), or not evaluated.
 /// The Huber cost grows linearly in the residual: one such row outweighs all the others together,
 /// and Ceres' relative convergence test then stops on decreases many noise units large (a planar
-/// row 10 mm off: the validation mean at 0.073 um instead of the floor). They remain among the
-/// rows the result reports, and the next stage looks at them again. None when `scale` is 0.
-std::vector<bool> gross_outliers(const std::vector<double>& norms, double scale);
+/// row 10 mm off: the validation mean at 0.073 um instead of the floor). While the model is far,
+/// the Huber scale is wide (huber_scale) and a row a millimetre off sits within a hundred of it
+/// (a spatial stage starting 52 um off: a row 1 mm off is 19 typical rows, 9 Huber scales), yet
+/// its linear cost still outweighs the others and stalls the stage with the geometry at its
+/// bounds. So a row beyond kGrossOutlierOfTypical times the median row is left out as well (but
+/// not one within kGrossOutlier times `robust_scale` noise units); near the noise the first rule
+/// alone holds. A row left out of a stage's start is looked at again when the stage is solved
+/// again with a narrower scale, by the next stage and at the result.
+/// None when `scale` is 0.
+std::vector<bool> gross_outliers(const std::vector<double>& norms, double scale,
+                                 double robust_scale, int block);
 
 /// Whether a stage solved with the Huber scale `used` is solved again with `now`, the scale of
 /// its result's residuals: the scale follows the residuals down while it shrinks by half (a stage

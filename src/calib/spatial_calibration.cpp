@@ -365,7 +365,7 @@ StageLoss stage_loss(const Problem& problem, std::vector<RowState>& rows, const 
   StageLoss loss;
   const std::vector<double> norms = residual_norms(problem, rows, u);
   loss.scale = calib_internal::huber_scale(robust_scale, norms, 6);
-  loss.gross = calib_internal::gross_outliers(norms, loss.scale);
+  loss.gross = calib_internal::gross_outliers(norms, loss.scale, robust_scale, 6);
   return loss;
 }
 
