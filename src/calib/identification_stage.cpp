@@ -269,11 +269,13 @@ StageReport Identification::run_stage(const CalibrationStage& stage, bool last, 
   last_free_ = free;
   last_bounds_scale_ = stage.bounds_scale;
   // The Huber scale follows the residuals down (a stage that starts far from the data first
-  // fits with a wide one): while it shrinks by half, the stage is solved again with it.
+  // fits with a wide one): while it shrinks by half, the stage is solved again with it
+  // (solve_stage_again).
   const double used = loss_scale_;
   if (rescale < 8 && used > 0) {
     update_loss_scale();
-    if (huber_scale_shrank(used, loss_scale_)) {
+    if (solve_stage_again(used, loss_scale_, row_norms_,
+                          gross_outliers(row_norms_, loss_scale_, options_.robust_scale, 3))) {
       const StageReport again = run_stage(stage, last, rescale + 1);
       report.final_cost = again.final_cost;
       report.termination = again.termination;

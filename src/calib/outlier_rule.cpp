@@ -46,6 +46,15 @@ std::vector<bool> gross_outliers(const std::vector<double>& norms, double scale,
   return gross;
 }
 
+bool solve_stage_again(double used, double now, const std::vector<double>& norms,
+                       const std::vector<bool>& gross) {
+  if (!(used > 0 && now < 0.5 * used)) return false;
+  for (std::size_t j = 0; j < norms.size(); ++j) {
+    if (!(j < gross.size() && gross[j]) && norms[j] > now) return true;
+  }
+  return false;
+}
+
 void leave_out_outliers(double threshold, int block,
                         const std::function<std::string(std::size_t)>& origin, Eigen::MatrixXd& J,
                         Eigen::VectorXd& r, std::vector<std::string>& outliers,

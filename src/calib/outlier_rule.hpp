@@ -45,9 +45,13 @@ std::vector<bool> gross_outliers(const std::vector<double>& norms, double scale,
                                  double robust_scale, int block);
 
 /// Whether a stage solved with the Huber scale `used` is solved again with `now`, the scale of
-/// its result's residuals: the scale follows the residuals down while it shrinks by half (a stage
-/// that starts far from the data first fits with a wide one).
-inline bool huber_scale_shrank(double used, double now) { return used > 0 && now < 0.5 * used; }
+/// its result's residual `norms` (its gross outliers `gross`, gross_outliers with `now`): the
+/// scale follows the residuals down while it shrinks by half (a stage that starts far from the
+/// data first fits with a wide one), unless no row it keeps lies beyond `now`. Every such row then
+/// sits in the quadratic part of both losses, so the result already solves the stage with `now`
+/// (a stage that converged onto the noise: one solve, not two).
+bool solve_stage_again(double used, double now, const std::vector<double>& norms,
+                       const std::vector<bool>& gross);
 
 /// Outliers at the result: the rows (blocks of `block` values of `r`) whose whitened residual norm
 /// exceeds `threshold` (> 0) are named in `outliers` ("line 12 (850 x the noise)", `origin` of the

@@ -358,14 +358,15 @@ std::vector<double> residual_norms(const Problem& problem, std::vector<RowState>
 struct StageLoss {
   double scale = 0;
   std::vector<bool> gross;
+  std::vector<double> norms;  ///< each row's whitened residual norm there
 };
 
 StageLoss stage_loss(const Problem& problem, std::vector<RowState>& rows, const double* u,
                      double robust_scale) {
   StageLoss loss;
-  const std::vector<double> norms = residual_norms(problem, rows, u);
-  loss.scale = calib_internal::huber_scale(robust_scale, norms, 6);
-  loss.gross = calib_internal::gross_outliers(norms, loss.scale, robust_scale, 6);
+  loss.norms = residual_norms(problem, rows, u);
+  loss.scale = calib_internal::huber_scale(robust_scale, loss.norms, 6);
+  loss.gross = calib_internal::gross_outliers(loss.norms, loss.scale, robust_scale, 6);
   return loss;
 }
 
@@ -742,7 +743,7 @@ SpatialCalibrationResult calibrate_spatial(const SpatialRobotDescription& nomina
       if (!report.usable) break;
       const double used = loss.scale;
       loss = stage_loss(problem, rows, u.data(), options.robust_scale);
-      if (!calib_internal::huber_scale_shrank(used, loss.scale)) break;
+      if (!calib_internal::solve_stage_again(used, loss.scale, loss.norms, loss.gross)) break;
     }
     report.time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_started).count();
